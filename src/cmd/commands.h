@@ -1,0 +1,31 @@
+// weft command line: one binary, one registration function per subcommand group.
+//
+// Each add*Command() declares its flags on a CLI11 subcommand and installs a
+// callback that validates them and calls the library. User errors are thrown
+// as weft::InputError; main() turns them into "weft: error: ..." and exit 2.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "weft/fiber/fiber_params.h"
+
+namespace weft::cmd {
+
+// --preset NAME | --params FILE, shared by every command that needs fiber parameters.
+struct MaterialOptions {
+    std::string preset;
+    std::string paramsFile;
+
+    void add(CLI::App& app, bool withPly);
+    // The fiber parameters named by the flags; InputError when neither or both are given.
+    FiberParams fiber() const;
+};
+
+// Parses "X,Y,Z" into three finite numbers; InputError naming `flag` otherwise.
+Vec3 parseVec3(const std::string& text, const std::string& flag);
+
+void addFiberCommands(CLI::App& app);
+void addPlyCommand(CLI::App& app);
+
+}  // namespace weft::cmd

@@ -1,0 +1,102 @@
+// weft fiber eval | sample: probes of the fiber BCSDF on NumPy arrays.
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "weft/core/error.h"
+#include "weft/core/npy.h"
+#include "weft/fiber/fiber_bcsdf.h"
+
+namespace weft::cmd {
+
+namespace {
+
+// Row `row` of PAIRS as a unit vector; inputs may be float32, so a deviation
+// from unit length up to 1e-3 is accepted and normalised away.
+Vec3 unitVectorAt(const NpyMatrix& m, size_t row, size_t col, const std::string& path) {
+    const Vec3 v{m(row, col), m(row, col + 1), m(row, col + 2)};
+    const double len = length(v);
+    if (!isFinite(v) || !(std::fabs(len - 1.0) <= 1e-3)) {
+        std::ostringstream msg;
+        msg << path << ": row " << row << ": " << (col == 0 ? "wi" : "wo") << " = " << v
+            << " is not a unit vector (length must be within 1e-3 of 1)";
+        throw InputError(msg.str());
+    }
+    return v / len;
+}
+
+struct EvalOptions {
+    MaterialOptions material;
+    std::string in, out;
+};
+
+struct SampleOptions {
+    MaterialOptions material;
+    std::string wi, out;
+    int64_t count = 0;
+    uint64_t seed = 0;
+};
+
+void runEval(const EvalOptions& o) {
+    const FiberBcsdf fiber(o.material.fiber());
+    const NpyMatrix pairs = readNpyMatrix(o.in, 6, "wi, wo pairs");
+    std::vector<double> values(pairs.rows * 3);
+    for (size_t i = 0; i < pairs.rows; ++i) {
+        const Rgb f = fiber.eval(unitVectorAt(pairs, i, 0, o.in), unitVectorAt(pairs, i, 3, o.in));
+        for (int c = 0; c < 3; ++c) values[3 * i + c] = f[c];
+    }
+    writeNpy(o.out, values.data(), {pairs.rows, 3});
+}
+
+void runSample(const SampleOptions& o) {
+    const FiberBcsdf fiber(o.material.fiber());
+    const Vec3 wiRaw = parseVec3(o.wi, "--wi");
+    if (!(length(wiRaw) > 0)) throw InputError("--wi must be a non-zero vector");
+    const Vec3 wi = normalize(wiRaw);
+    std::vector<double> rows(static_cast<size_t>(o.count) * 7);
+    for (int64_t i = 0; i < o.count; ++i) {
+        // One stream per sample index: the output does not depend on chunking.
+        Rng rng(static_cast<uint64_t>(i), o.seed);
+        const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
+        const BsdfSample s = fiber.sample(wi, u, rng);
+        double* r = &rows[7 * i];
+        r[0] = s.wo.x, r[1] = s.wo.y, r[2] = s.wo.z;
+        r[3] = s.weight.r, r[4] = s.weight.g, r[5] = s.weight.b;
+        r[6] = s.pdf;
+    }
+    writeNpy(o.out, rows.data(), {static_cast<size_t>(o.count), 7});
+}
+
+}  // namespace
+
+void addFiberCommands(CLI::App& app) {
+    CLI::App* fiber = app.add_subcommand(
+        "fiber", "Probe the fiber BCSDF (Khungurn et al. 2015) in its local frame: tangent = +x, "
+                 "azimuth in the y-z plane");
+    fiber->require_subcommand(1);
+
+    auto evalOpts = std::make_shared<EvalOptions>();
+    CLI::App* eval = fiber->add_subcommand(
+        "eval", "eval(wi, wo) RGB including cos(theta_o) for every row of an (n,6) array");
+    evalOpts->material.add(*eval, false);
+    eval->add_option("--in", evalOpts->in, "(n,6) float32/float64 .npy: rows wi(3), wo(3)")
+        ->required();
+    eval->add_option("--out", evalOpts->out, "(n,3) float64 .npy of RGB values")->required();
+    eval->callback([evalOpts] { runEval(*evalOpts); });
+
+    auto sampleOpts = std::make_shared<SampleOptions>();
+    CLI::App* sample = fiber->add_subcommand(
+        "sample", "draw outgoing directions for one wi: rows wo(3), weight RGB(3), pdf(1)");
+    sampleOpts->material.add(*sample, false);
+    sample->add_option("--wi", sampleOpts->wi, "incident direction X,Y,Z (normalised)")->required();
+    sample->add_option("--count", sampleOpts->count, "number of samples")
+        ->required()
+        ->check(CLI::Range(int64_t{1}, int64_t{100000000}));
+    sample->add_option("--seed", sampleOpts->seed, "random seed")->default_val(0);
+    sample->add_option("--out", sampleOpts->out, "(N,7) float64 .npy")->required();
+    sample->callback([sampleOpts] { runSample(*sampleOpts); });
+}
+
+}  // namespace weft::cmd

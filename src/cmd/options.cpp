@@ -1,0 +1,40 @@
+#include <cmath>
+#include <sstream>
+
+#include "commands.h"
+#include "weft/core/error.h"
+
+namespace weft::cmd {
+
+void MaterialOptions::add(CLI::App& app, bool withPly) {
+    std::string names;
+    for (const auto& p : materialPresets()) names += (names.empty() ? "" : ", ") + std::string(p.name);
+    app.add_option("--preset", preset,
+                   std::string("material of the paper's Table 3: ") + names +
+                       (withPly ? " (fiber and ply parameters)" : ""));
+    app.add_option("--params", paramsFile,
+                   "fiber parameters as JSON: {\"c_r\":[r,g,b],\"c_tt\":[r,g,b],"
+                   "\"beta_r_deg\":x,\"beta_tt_deg\":x,\"gamma_tt_deg\":x}");
+}
+
+FiberParams MaterialOptions::fiber() const {
+    if (preset.empty() == paramsFile.empty())
+        throw InputError("give exactly one of --preset NAME or --params FILE");
+    if (!preset.empty()) return findMaterialPreset(preset).fiber;
+    return FiberParams::fromJsonFile(paramsFile);
+}
+
+Vec3 parseVec3(const std::string& text, const std::string& flag) {
+    std::istringstream in(text);
+    double v[3];
+    char comma;
+    bool ok = static_cast<bool>(in >> v[0] >> comma) && comma == ',' &&
+              static_cast<bool>(in >> v[1] >> comma) && comma == ',' &&
+              static_cast<bool>(in >> v[2]);
+    in >> std::ws;
+    if (!ok || !in.eof() || !std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
+        throw InputError(flag + " \"" + text + "\": expected three finite numbers X,Y,Z");
+    return {v[0], v[1], v[2]};
+}
+
+}  // namespace weft::cmd

@@ -1,0 +1,213 @@
+#include "weft/core/file.h"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <initializer_list>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "weft/core/error.h"
+
+namespace weft {
+namespace {
+
+using namespace std::string_view_literals;
+namespace fs = std::filesystem;
+
+class FileTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        dir_ = fs::path(::testing::TempDir()) /
+               ("weft_file_test." + std::to_string(::getpid()) + "." + info->name());
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override {
+        fs::permissions(dir_, fs::perms::owner_all, fs::perm_options::add);
+        fs::remove_all(dir_);
+    }
+    std::string path(const std::string& name) const { return (dir_ / name).string(); }
+    // Names of the entries of dir (not recursive), sorted.
+    static std::vector<std::string> entries(const fs::path& dir) {
+        std::vector<std::string> names;
+        for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename());
+        std::sort(names.begin(), names.end());
+        return names;
+    }
+
+    fs::path dir_;
+};
+
+void expectInputError(const std::function<void()>& f, std::initializer_list<std::string> parts) {
+    try {
+        f();
+        ADD_FAILURE() << "expected an InputError";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        for (const std::string& p : parts)
+            EXPECT_NE(msg.find(p), std::string::npos)
+                << "message '" << msg << "' lacks '" << p << "'";
+    }
+}
+
+TEST_F(FileTest, WriteThenReadBinaryBytes) {
+    const std::string p = path("a.bin");
+    const std::string_view bytes = "ab\0c\n\xff\r\n"sv;
+    writeFileAtomic(p, bytes);
+    EXPECT_EQ(readFile(p), bytes);
+    // Overwrite with something shorter; nothing of the old content remains.
+    writeFileAtomic(p, "x");
+    EXPECT_EQ(readFile(p), "x");
+    writeFileAtomic(p, "");
+    EXPECT_EQ(readFile(p), "");
+    // No temporary files are left behind.
+    EXPECT_EQ(entries(dir_), std::vector<std::string>{"a.bin"});
+}
+
+TEST_F(FileTest, WriteLargeFile) {
+    std::string big(5 << 20, '\0');
+    for (size_t i = 0; i < big.size(); ++i) big[i] = static_cast<char>(i * 131 % 251);
+    const std::string p = path("big.bin");
+    writeFileAtomic(p, big);
+    EXPECT_EQ(readFile(p), big);
+}
+
+TEST_F(FileTest, WriteWithoutDirectoryComponent) {
+    const fs::path old = fs::current_path();
+    fs::current_path(dir_);
+    writeFileAtomic("plain.txt", "hello");
+    EXPECT_EQ(readFile("plain.txt"), "hello");
+    fs::current_path(old);
+    EXPECT_EQ(entries(dir_), std::vector<std::string>{"plain.txt"});
+}
+
+TEST_F(FileTest, WriteFailuresNamePathAndReason) {
+    const std::string missing = path("no/such/dir/out.txt");
+    expectInputError([&] { writeFileAtomic(missing, "x"); },
+                     {missing, "No such file or directory"});
+    EXPECT_EQ(entries(dir_), std::vector<std::string>{});
+
+    // The target is an existing directory: the rename fails, the temporary
+    // file is removed.
+    const std::string sub = path("sub");
+    fs::create_directory(sub);
+    expectInputError([&] { writeFileAtomic(sub, "x"); }, {sub, "Is a directory"});
+    EXPECT_EQ(entries(dir_), std::vector<std::string>{"sub"});
+    expectInputError([&] { writeFileAtomic(sub + "/", "x"); }, {sub + "/"});
+    expectInputError([&] { writeFileAtomic("", "x"); }, {"empty path"});
+
+    if (::geteuid() != 0) {  // root ignores permissions
+        const std::string ro = path("ro");
+        fs::create_directory(ro);
+        fs::permissions(ro, fs::perms::owner_read | fs::perms::owner_exec);
+        expectInputError([&] { writeFileAtomic(ro + "/f.txt", "x"); },
+                         {ro + "/f.txt", "Permission denied"});
+        fs::permissions(ro, fs::perms::owner_all);
+        EXPECT_EQ(entries(ro), std::vector<std::string>{});
+    }
+}
+
+TEST_F(FileTest, ReadFailuresNamePath) {
+    const std::string missing = path("missing.txt");
+    expectInputError([&] { readFile(missing); }, {missing, "No such file or directory"});
+    expectInputError([&] { readFile(dir_.string()); }, {dir_.string(), "Is a directory"});
+}
+
+TEST_F(FileTest, ConcurrentWritersNeverTearTheFile) {
+    const std::string p = path("shared.txt");
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t) {
+        threads.emplace_back([&, t] {
+            const std::string content(10000 + t, static_cast<char>('a' + t));
+            for (int i = 0; i < 20; ++i) writeFileAtomic(p, content);
+        });
+    }
+    for (std::thread& th : threads) th.join();
+    const std::string final = readFile(p);
+    ASSERT_GE(final.size(), 10000u);
+    const size_t t = final.size() - 10000;
+    ASSERT_LT(t, 4u);
+    EXPECT_EQ(final, std::string(10000 + t, static_cast<char>('a' + t)));
+    EXPECT_EQ(entries(dir_), std::vector<std::string>{"shared.txt"});
+}
+
+TEST_F(FileTest, TempDirCommitCreatesFinalDirectory) {
+    const std::string finalPath = path("out");
+    {
+        TempDirCommit out(finalPath);
+        EXPECT_EQ(out.path(), finalPath + ".tmp." + std::to_string(::getpid()));
+        EXPECT_EQ(out.finalPath(), finalPath);
+        EXPECT_TRUE(fs::is_directory(out.path()));
+        EXPECT_FALSE(fs::exists(finalPath));
+        writeFileAtomic(out.path() + "/a.txt", "A");
+        EXPECT_FALSE(out.committed());
+        out.commit();
+        EXPECT_TRUE(out.committed());
+        expectInputError([&] { out.commit(); }, {finalPath, "already committed"});
+    }
+    EXPECT_EQ(readFile(finalPath + "/a.txt"), "A");
+    EXPECT_EQ(entries(dir_), std::vector<std::string>{"out"});
+}
+
+TEST_F(FileTest, TempDirCommitReplacesExistingDirectory) {
+    const std::string finalPath = path("out");
+    fs::create_directories(finalPath + "/nested");
+    writeFileAtomic(finalPath + "/old.txt", "old");
+    writeFileAtomic(finalPath + "/nested/deep.txt", "old");
+    {
+        TempDirCommit out(finalPath + "/");  // a trailing slash is fine
+        EXPECT_EQ(out.finalPath(), finalPath);
+        writeFileAtomic(out.path() + "/new.txt", "new");
+        // Until commit, the old directory is untouched.
+        EXPECT_EQ(readFile(finalPath + "/old.txt"), "old");
+        out.commit();
+    }
+    EXPECT_EQ(entries(finalPath), std::vector<std::string>{"new.txt"});
+    EXPECT_EQ(entries(dir_), std::vector<std::string>{"out"});
+}
+
+TEST_F(FileTest, TempDirCommitCleansUpWithoutCommit) {
+    const std::string finalPath = path("out");
+    std::string tempPath;
+    try {
+        TempDirCommit out(finalPath);
+        tempPath = out.path();
+        fs::create_directories(tempPath + "/a/b");
+        writeFileAtomic(tempPath + "/a/b/c.txt", "partial");
+        throw std::runtime_error("render failed");
+    } catch (const std::runtime_error&) {
+    }
+    EXPECT_FALSE(fs::exists(tempPath));
+    EXPECT_FALSE(fs::exists(finalPath));
+    EXPECT_EQ(entries(dir_), std::vector<std::string>{});
+
+    // A stale temporary directory from an earlier run is replaced.
+    fs::create_directories(tempPath + "/stale");
+    {
+        TempDirCommit out(finalPath);
+        EXPECT_EQ(entries(out.path()), std::vector<std::string>{});
+    }
+}
+
+TEST_F(FileTest, TempDirCommitErrorsNamePath) {
+    const std::string noParent = path("missing/out");
+    expectInputError([&] { TempDirCommit out(noParent); }, {noParent, "No such file"});
+    expectInputError([&] { TempDirCommit out(""); }, {"invalid output directory"});
+
+    const std::string notDir = path("file.txt");
+    writeFileAtomic(notDir, "x");
+    TempDirCommit out(notDir);
+    expectInputError([&] { out.commit(); }, {notDir, "not a directory"});
+    EXPECT_FALSE(out.committed());
+    EXPECT_EQ(readFile(notDir), "x");
+}
+
+}  // namespace
+}  // namespace weft

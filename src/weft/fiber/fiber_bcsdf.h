@@ -1,0 +1,65 @@
+// weft/fiber/fiber_bcsdf.h — the Khungurn et al. (2015) fiber scattering model.
+//
+// S_f(wi, wo) = sum_{k in R, TT} M_k(theta_i, theta_o) N_k(phi_i, phi_o)  (paper eq. 2-4)
+//   M_R  = F(theta_i) g(theta_o; -theta_i, beta_R)
+//   M_TT = C_TT (1 - F(theta_i)) g(theta_o; -theta_i, beta_TT)
+//   N_R  = 1 / (2 pi),  N_TT = vonMises(phi_o; phi_i + pi, 1 / gamma_TT^2)
+//   F(theta) = C_R + (1 - C_R)(1 - cos theta)^5  (Schlick, per channel)
+// with g normalised against cos^2 on [-pi/2, pi/2] (longitudinal.h), so the
+// directional albedo is exactly F + (1 - F) C_TT.
+//
+// Frame (DESIGN.md 2, the `weft fiber` probes): the fiber tangent is +x;
+// theta = asin(w.x); phi = atan2(w.z, w.y) is the azimuth in the y-z plane.
+// eval() includes cos(theta_o). sample() picks R or TT in proportion to their
+// channel-averaged albedo, then samples theta_o exactly from g cos^2 and phi_o
+// uniformly (R) or from the von Mises lobe (TT); pdf() is that mixture's
+// density in solid angle (the (theta, phi) density divided by cos theta_o).
+#pragma once
+
+#include "weft/core/bsdf.h"
+#include "weft/fiber/fiber_params.h"
+#include "weft/fiber/longitudinal.h"
+#include "weft/fiber/von_mises.h"
+
+namespace weft {
+
+class FiberBcsdf {
+public:
+    static constexpr int kLobeR = 0;
+    static constexpr int kLobeTT = 1;
+
+    // Validates the parameters (InputError) and tabulates the normalisers.
+    explicit FiberBcsdf(const FiberParams& params);
+
+    const FiberParams& params() const { return params_; }
+
+    Rgb eval(const Vec3& wi, const Vec3& wo) const;
+    double pdf(const Vec3& wi, const Vec3& wo) const;
+    BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u) const;
+    // Same, with a caller-owned generator for the rejection steps (random walks).
+    BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) const;
+
+    // Analytic directional albedo F(theta_i) + (1 - F(theta_i)) C_TT.
+    Rgb albedo(const Vec3& wi) const;
+    // Schlick term F(theta) per channel (paper eq. 4).
+    Rgb fresnel(double cosTheta) const;
+
+private:
+    // Longitudinal angle of a direction and its projection on the normal
+    // plane (y, z); azimuth differences come from dot products of the
+    // projections, so no atan2 for phi is needed.
+    struct Angles {
+        double sinTheta, cosTheta, theta;
+        double y, z;
+    };
+    static Angles anglesOf(const Vec3& w);
+    // Probability of picking the R lobe for this incident angle.
+    double probabilityR(const Rgb& f) const;
+    void evalAndPdf(const Angles& in, const Angles& out, Rgb* value, double* density) const;
+
+    FiberParams params_;
+    LongitudinalGaussian gR_, gTT_;
+    VonMises nTT_;
+};
+
+}  // namespace weft

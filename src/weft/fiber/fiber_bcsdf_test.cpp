@@ -1,0 +1,268 @@
+#include "weft/fiber/fiber_bcsdf.h"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <functional>
+#include <vector>
+
+#include "weft/core/chi2.h"
+#include "weft/core/error.h"
+#include "weft/core/math.h"
+#include "weft/core/test_util.h"
+
+namespace weft {
+namespace {
+
+Vec3 fiberDirection(double thetaDeg, double phiDeg) {
+    const double t = radians(thetaDeg), p = radians(phiDeg);
+    return {std::sin(t), std::cos(t) * std::cos(p), std::cos(t) * std::sin(p)};
+}
+
+// Integral over the sphere of f(w) dw, by product Gauss-Legendre in
+// (theta, phi): 180 panels of 8 nodes in theta (finer than the narrowest 1
+// degree lobe) and the periodic trapezoid rule with 512 nodes in phi.
+template <typename F>
+auto integrateSphere(const F& f) {
+    static const double x[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
+                                0.9602898564975363};
+    static const double w[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
+                                0.1012285362903763};
+    const int panels = 180, phiNodes = 128;
+    const double width = kPi / panels;
+    decltype(f(Vec3{})) sum{};
+    for (int p = 0; p < panels; ++p) {
+        for (int k = 0; k < 8; ++k) {
+            const double theta = -kHalfPi + (p + 0.5) * width + (k < 4 ? -1 : 1) * x[k % 4] * width / 2;
+            const double weight = w[k % 4] * width / 2 * std::cos(theta) * kTwoPi / phiNodes;
+            for (int j = 0; j < phiNodes; ++j) {
+                const double phi = -kPi + kTwoPi * (j + 0.5) / phiNodes;
+                const Vec3 d{std::sin(theta), std::cos(theta) * std::cos(phi),
+                             std::cos(theta) * std::sin(phi)};
+                sum += f(d) * weight;
+            }
+        }
+    }
+    return sum;
+}
+
+const std::vector<double> kIncidentThetaDeg = {0, 15, -30, 45, -60, 75, 85, -89, 89.9};
+
+TEST(FiberBcsdf, WhiteFurnaceAlbedoIsFresnelPlusTransmission) {
+    for (const auto& preset : materialPresets()) {
+        const FiberBcsdf fiber(preset.fiber);
+        for (double thetaDeg : kIncidentThetaDeg) {
+            const Vec3 wi = fiberDirection(thetaDeg, 37.0);
+            const Rgb integral = integrateSphere([&](const Vec3& wo) { return fiber.eval(wi, wo); });
+            // DESIGN.md 3: albedo = F + (1 - F) C_TT, F = Schlick(theta_i).
+            const double k = std::pow(1.0 - std::cos(radians(thetaDeg)), 5.0);
+            for (int c = 0; c < 3; ++c) {
+                const double f = preset.fiber.cR[c] + (1 - preset.fiber.cR[c]) * k;
+                EXPECT_NEAR(integral[c], f + (1 - f) * preset.fiber.cTT[c], 1e-3)
+                    << preset.name << " theta_i = " << thetaDeg << " channel " << c;
+            }
+        }
+    }
+}
+
+TEST(FiberBcsdf, PdfIntegratesToOne) {
+    for (const auto& preset : materialPresets()) {
+        const FiberBcsdf fiber(preset.fiber);
+        for (double thetaDeg : kIncidentThetaDeg) {
+            const Vec3 wi = fiberDirection(thetaDeg, -120.0);
+            const double integral =
+                integrateSphere([&](const Vec3& wo) { return fiber.pdf(wi, wo); });
+            EXPECT_NEAR(integral, 1.0, 1e-4) << preset.name << " theta_i = " << thetaDeg;
+        }
+    }
+}
+
+// Independent implementation of DESIGN.md 3 for a handful of directions: the
+// normaliser by brute-force Simpson integration, the von Mises lobe from
+// std::cyl_bessel_i.
+Rgb referenceEval(const FiberParams& p, const Vec3& wi, const Vec3& wo) {
+    const double thetaI = std::asin(wi.x), thetaO = std::asin(wo.x);
+    const double phiI = std::atan2(wi.z, wi.y), phiO = std::atan2(wo.z, wo.y);
+    auto g = [&](double beta) {
+        const int n = 100000;
+        const double h = kPi / n;
+        double z = 0;
+        for (int k = 0; k <= n; ++k) {
+            const double t = -kHalfPi + k * h;
+            const double w = (k == 0 || k == n) ? 1 : (k % 2 ? 4 : 2);
+            z += w * std::exp(-sqr(t + thetaI) / (2 * beta * beta)) * sqr(std::cos(t));
+        }
+        return std::exp(-sqr(thetaO + thetaI) / (2 * beta * beta)) / (z * h / 3);
+    };
+    const double kappa = 1 / sqr(radians(p.gammaTTDeg));
+    const double nTT = std::exp(kappa * std::cos(phiO - phiI - kPi)) /
+                       (kTwoPi * std::cyl_bessel_i(0.0, kappa));
+    const double gR = g(radians(p.betaRDeg)), gTT = g(radians(p.betaTTDeg));
+    Rgb out;
+    for (int c = 0; c < 3; ++c) {
+        const double f = p.cR[c] + (1 - p.cR[c]) * std::pow(1 - std::cos(thetaI), 5);
+        out[c] = (f * gR / kTwoPi + p.cTT[c] * (1 - f) * gTT * nTT) * std::cos(thetaO);
+    }
+    return out;
+}
+
+TEST(FiberBcsdf, EvalMatchesIndependentFormula) {
+    Rng rng(5, 5);
+    for (const auto& preset : materialPresets()) {
+        const FiberBcsdf fiber(preset.fiber);
+        for (int i = 0; i < 12; ++i) {
+            const Vec3 wi = fiberDirection(170 * rng.uniform() - 85, 360 * rng.uniform());
+            // Half the outgoing directions near the specular cone, half anywhere.
+            const Vec3 wo = i % 2 ? fiberDirection(-std::asin(wi.x) * 180 / kPi + 4 * rng.uniform(),
+                                                   360 * rng.uniform())
+                                  : fiberDirection(170 * rng.uniform() - 85, 360 * rng.uniform());
+            const Rgb got = fiber.eval(wi, wo), want = referenceEval(preset.fiber, wi, wo);
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(got[c], want[c], 1e-6 * std::max(1.0, want[c])) << preset.name;
+        }
+    }
+}
+
+TEST(FiberBcsdf, SampleWeightIsEvalOverPdf) {
+    Rng rng(1, 1);
+    for (const auto& preset : materialPresets()) {
+        const FiberBcsdf fiber(preset.fiber);
+        for (int i = 0; i < 2000; ++i) {
+            const Vec3 wi = fiberDirection(180 * rng.uniform() - 90, 360 * rng.uniform());
+            const BsdfSample s = fiber.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()});
+            ASSERT_TRUE(s.valid());
+            EXPECT_NEAR(length(s.wo), 1.0, 1e-12);
+            const double pdf = fiber.pdf(wi, s.wo);
+            const Rgb f = fiber.eval(wi, s.wo);
+            EXPECT_NEAR(s.pdf, pdf, 1e-12 * pdf);
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.weight[c], f[c] / pdf, 1e-9 * (1 + f[c] / pdf));
+        }
+    }
+}
+
+TEST(FiberBcsdf, SamplingIsChiSquareConsistentWithPdf) {
+    const std::vector<std::pair<double, double>> incident = {
+        {0, 0}, {30, 70}, {-60, -150}, {85, 10}, {-89.5, 200}, {90, 0}};
+    const int tests = static_cast<int>(materialPresets().size() * incident.size());
+    const double alpha = sidakCorrectedLevel(0.01, tests);
+    const SphereGrid grid{90, 90};
+    double minP = 1, maxP = 0;
+    for (const auto& preset : materialPresets()) {
+        const FiberBcsdf fiber(preset.fiber);
+        for (const auto& [thetaDeg, phiDeg] : incident) {
+            const Vec3 wi = fiberDirection(thetaDeg, phiDeg);
+            const int64_t n = testing::scaled(300000);
+            std::vector<double> observed(grid.cells(), 0);
+            Rng rng(42, static_cast<uint64_t>(thetaDeg * 1000 + phiDeg));
+            for (int64_t i = 0; i < n; ++i) {
+                const BsdfSample s =
+                    fiber.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()});
+                ASSERT_TRUE(s.valid());
+                observed[grid.cellOf(s.wo)] += 1;
+            }
+            const auto expected =
+                grid.expectedCounts([&](const Vec3& wo) { return fiber.pdf(wi, wo); }, n);
+            const Chi2Result r = chi2Test(observed, expected);
+            minP = std::min(minP, r.pValue);
+            maxP = std::max(maxP, r.pValue);
+            EXPECT_GT(r.pValue, alpha) << preset.name << " theta_i = " << thetaDeg
+                                       << " chi2 = " << r.statistic << " dof = " << r.dof;
+        }
+    }
+    std::printf("chi-square p-values over %d tests: min %.4g max %.4g (level %.3g)\n", tests, minP,
+                maxP, alpha);
+}
+
+TEST(FiberBcsdf, DirectionsAlongTheFiberAreFinite) {
+    const std::vector<Vec3> special = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, 0, -1},
+                                       fiberDirection(90 - 1e-10, 0), fiberDirection(-90 + 1e-12, 3)};
+    for (const auto& preset : materialPresets()) {
+        const FiberBcsdf fiber(preset.fiber);
+        for (const Vec3& wi : special) {
+            for (const Vec3& wo : special) {
+                EXPECT_TRUE(fiber.eval(wi, wo).isFinite());
+                EXPECT_TRUE(std::isfinite(fiber.pdf(wi, wo)));
+            }
+            Rng rng(3, 3);
+            for (int i = 0; i < 200; ++i) {
+                const BsdfSample s = fiber.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()});
+                if (!s.valid()) continue;
+                EXPECT_TRUE(s.weight.isFinite());
+                EXPECT_TRUE(isFinite(s.wo));
+                EXPECT_GT(s.pdf, 0);
+            }
+        }
+        // wo exactly along the fiber has zero projected area: eval and pdf vanish.
+        EXPECT_EQ(fiber.eval({0, 1, 0}, {1, 0, 0}), Rgb());
+        EXPECT_EQ(fiber.pdf({0, 1, 0}, {-1, 0, 0}), 0.0);
+    }
+}
+
+TEST(FiberBcsdf, SampleIsDeterministicInItsInput) {
+    const FiberBcsdf fiber(findMaterialPreset("fleece").fiber);
+    const Vec3 wi = fiberDirection(20, 30);
+    const BsdfSample a = fiber.sample(wi, {0.3, 0.6, 0.9}), b = fiber.sample(wi, {0.3, 0.6, 0.9});
+    EXPECT_EQ(a.wo, b.wo);
+    EXPECT_EQ(a.weight, b.weight);
+}
+
+TEST(FiberParams, ValidationNamesFieldAndRange) {
+    auto expectError = [](FiberParams p, const std::string& needle) {
+        try {
+            FiberBcsdf fiber(p);
+            ADD_FAILURE() << "no error for " << needle;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+        }
+    };
+    const FiberParams good = findMaterialPreset("silk").fiber;
+    FiberParams p = good;
+    p.cR.g = 1.5;
+    expectError(p, "c_r[1] = 1.5 is out of range: allowed [0, 1]");
+    p = good;
+    p.cTT.b = NAN;
+    expectError(p, "c_tt[2]");
+    p = good;
+    p.betaRDeg = 0;
+    expectError(p, "beta_r_deg = 0 is out of range: allowed (0, 90] degrees");
+    p = good;
+    p.betaTTDeg = 90.5;
+    expectError(p, "beta_tt_deg");
+    p = good;
+    p.gammaTTDeg = INFINITY;
+    expectError(p, "gamma_tt_deg");
+}
+
+TEST(FiberParams, JsonIsStrict) {
+    const nlohmann::json good = findMaterialPreset("cotton").fiber.toJson();
+    EXPECT_EQ(FiberParams::fromJson(good, "x.json").toJson(), good);
+    auto expectError = [](const nlohmann::json& j, const std::string& needle) {
+        try {
+            FiberParams::fromJson(j, "x.json");
+            ADD_FAILURE() << "no error for " << j.dump();
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+        }
+    };
+    nlohmann::json j = good;
+    j["colour"] = 1;
+    expectError(j, "x.json: unknown field \"colour\"");
+    j = good;
+    j.erase("beta_tt_deg");
+    expectError(j, "missing field \"beta_tt_deg\"");
+    j = good;
+    j["c_r"] = {0.1, 0.2};
+    expectError(j, "\"c_r\" must be an array of 3 numbers");
+    j = good;
+    j["gamma_tt_deg"] = "wide";
+    expectError(j, "\"gamma_tt_deg\" must be a number");
+    j = good;
+    j["c_tt"] = {0.1, -0.2, 0.3};
+    expectError(j, "c_tt[1] = -0.2");
+    EXPECT_THROW(findMaterialPreset("wool"), InputError);
+}
+
+}  // namespace
+}  // namespace weft

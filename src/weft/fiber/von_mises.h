@@ -1,0 +1,35 @@
+// weft/fiber/von_mises.h — the azimuthal von Mises lobe of the fiber model.
+//
+// N_TT(phi) = exp(kappa cos(phi - mean)) / (2 pi I0(kappa)), kappa = 1 / gamma^2
+// with gamma in radians (DESIGN.md 3, paper eq. 3). Evaluated with the scaled
+// Bessel function so that narrow lobes (large kappa) do not overflow. Sampling
+// is Best & Fisher's (1979) exact rejection algorithm, rewritten so that no
+// step cancels catastrophically when kappa is large.
+#pragma once
+
+#include "weft/core/rng.h"
+
+namespace weft {
+
+// Density of the von Mises distribution at angle x measured from its mean.
+double vonMisesPdf(double x, double kappa);
+
+// The same density with the normaliser precomputed, for hot loops.
+class VonMises {
+public:
+    explicit VonMises(double kappa);
+    double kappa() const { return kappa_; }
+    double pdf(double x) const;
+    // The density given cos(x), for callers that have the cosine already.
+    double pdfOfCos(double cosX) const;
+    double sample(double u, Rng& rng) const;
+
+private:
+    double kappa_, invNorm_;
+};
+
+// An angle in [-pi, pi] measured from the mean, exactly von Mises distributed.
+// u drives the first proposal; rng supplies the rest.
+double sampleVonMises(double kappa, double u, Rng& rng);
+
+}  // namespace weft

@@ -1,4 +1,5 @@
 // weft fiber eval | sample: probes of the fiber BCSDF on NumPy arrays.
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -6,6 +7,8 @@
 
 #include "commands.h"
 #include "weft/core/error.h"
+#include "weft/core/image.h"
+#include "weft/core/math.h"
 #include "weft/core/npy.h"
 #include "weft/fiber/fiber_bcsdf.h"
 
@@ -69,6 +72,40 @@ void runSample(const SampleOptions& o) {
     writeNpy(o.out, rows.data(), {static_cast<size_t>(o.count), 7});
 }
 
+struct MapOptions {
+    MaterialOptions material;
+    std::string wi, out;
+    int width = 720;
+};
+
+// A latitude-longitude picture of eval(wi, .) in the fiber frame: x is the
+// azimuth phi_o from -pi (left) to pi, y the longitudinal angle theta_o from
+// +pi/2 (top, along the tangent) to -pi/2. Auto-exposed so that the 99th
+// percentile of the values maps to white.
+void runMap(const MapOptions& o) {
+    const FiberBcsdf fiber(o.material.fiber());
+    const Vec3 wiRaw = parseVec3(o.wi, "--wi");
+    if (!(length(wiRaw) > 0)) throw InputError("--wi must be a non-zero vector");
+    const Vec3 wi = normalize(wiRaw);
+    Image image(o.width, o.width / 2);
+    std::vector<double> luminance;
+    for (int y = 0; y < image.height; ++y) {
+        const double theta = kHalfPi - kPi * (y + 0.5) / image.height;
+        for (int x = 0; x < image.width; ++x) {
+            const double phi = -kPi + kTwoPi * (x + 0.5) / image.width;
+            const Vec3 wo{std::sin(theta), std::cos(theta) * std::cos(phi),
+                          std::cos(theta) * std::sin(phi)};
+            const Rgb f = fiber.eval(wi, wo);
+            image.set(x, y, f);
+            luminance.push_back(f.average());
+        }
+    }
+    const size_t k = luminance.size() * 99 / 100;
+    std::nth_element(luminance.begin(), luminance.begin() + k, luminance.end());
+    const double white = luminance[k] > 0 ? luminance[k] : 1.0;
+    writePng(o.out, image, -std::log2(white));
+}
+
 }  // namespace
 
 void addFiberCommands(CLI::App& app) {
@@ -97,6 +134,18 @@ void addFiberCommands(CLI::App& app) {
     sample->add_option("--seed", sampleOpts->seed, "random seed")->default_val(0);
     sample->add_option("--out", sampleOpts->out, "(N,7) float64 .npy")->required();
     sample->callback([sampleOpts] { runSample(*sampleOpts); });
+
+    auto mapOpts = std::make_shared<MapOptions>();
+    CLI::App* map = fiber->add_subcommand(
+        "map", "PNG of eval(wi, wo) over all wo: x = azimuth phi_o in [-pi, pi), "
+               "y = theta_o from +90 (top) to -90 degrees");
+    mapOpts->material.add(*map, false);
+    map->add_option("--wi", mapOpts->wi, "incident direction X,Y,Z (normalised)")->required();
+    map->add_option("--width", mapOpts->width, "image width; the height is half of it")
+        ->default_val(720)
+        ->check(CLI::Range(16, 8192));
+    map->add_option("--out", mapOpts->out, "output PNG")->required();
+    map->callback([mapOpts] { runMap(*mapOpts); });
 }
 
 }  // namespace weft::cmd

@@ -1,0 +1,43 @@
+# Shared by scripts/test and scripts/demo: install what is missing, configure, build.
+# Sourced, not executed.
+
+WEFT_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+WEFT_JOBS="${WEFT_JOBS:-$(nproc)}"
+
+# Debian packages weft builds with (DEVELOPERS.md: dependencies only from apt).
+WEFT_PACKAGES=(
+    cmake g++ make pkg-config
+    libembree-dev libtbb-dev libopenexr-dev libstb-dev nlohmann-json3-dev libcli11-dev
+    libgtest-dev libgmock-dev libbenchmark-dev pybind11-dev libeigen3-dev
+    python3-dev python3-numpy python3-pytest
+)
+
+weft_install_deps() {
+    local missing=()
+    for pkg in "${WEFT_PACKAGES[@]}"; do
+        if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
+            missing+=("$pkg")
+        fi
+    done
+    if [ ${#missing[@]} -eq 0 ]; then
+        return 0
+    fi
+    echo "weft: installing missing packages: ${missing[*]}"
+    local sudo=""
+    if [ "$(id -u)" -ne 0 ]; then
+        if command -v sudo >/dev/null; then sudo="sudo"; else
+            echo "weft: need root (or sudo) to install: ${missing[*]}" >&2
+            return 1
+        fi
+    fi
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+# weft_build DIR [cmake args...]: configure and build one build tree.
+weft_build() {
+    local dir="$1"
+    shift
+    cmake -S "$WEFT_ROOT" -B "$dir" "$@" >/dev/null
+    cmake --build "$dir" -j"$WEFT_JOBS"
+}

@@ -1,0 +1,43 @@
+#include "weft/core/image.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "weft/core/error.h"
+#include "weft/core/file.h"
+
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#define STBI_WRITE_NO_STDIO
+#include <stb/stb_image_write.h>
+
+namespace weft {
+
+double linearToSrgb(double v) {
+    v = std::clamp(v, 0.0, 1.0);
+    return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+}
+
+std::string encodePng(const Image& image, double exposure) {
+    if (image.width <= 0 || image.height <= 0)
+        throw InputError("cannot encode an empty image as PNG");
+    const double scale = std::exp2(exposure);
+    std::vector<unsigned char> bytes(image.pixels.size());
+    for (size_t i = 0; i < bytes.size(); ++i) {
+        const double v = std::isfinite(image.pixels[i]) ? image.pixels[i] * scale : 0.0;
+        bytes[i] = static_cast<unsigned char>(std::lround(255.0 * linearToSrgb(v)));
+    }
+    std::string out;
+    auto append = [](void* context, void* data, int size) {
+        static_cast<std::string*>(context)->append(static_cast<const char*>(data), size);
+    };
+    if (!stbi_write_png_to_func(append, &out, image.width, image.height, 3, bytes.data(),
+                                image.width * 3))
+        throw std::runtime_error("PNG encoding failed");
+    return out;
+}
+
+void writePng(const std::string& path, const Image& image, double exposure) {
+    writeFileAtomic(path, encodePng(image, exposure));
+}
+
+}  // namespace weft

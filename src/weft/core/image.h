@@ -1,0 +1,39 @@
+// weft/core/image.h — linear RGB float images and their PNG encoding.
+//
+// Image holds linear RGB in row-major order (row 0 at the top). writePng
+// converts to 8-bit sRGB after multiplying by 2^exposure and clamping, and
+// writes atomically (temp file + rename).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "weft/core/rgb.h"
+
+namespace weft {
+
+struct Image {
+    int width = 0, height = 0;
+    std::vector<float> pixels;  // width * height * 3, linear RGB
+
+    Image() = default;
+    Image(int w, int h) : width(w), height(h), pixels(static_cast<size_t>(w) * h * 3, 0.0f) {}
+
+    void set(int x, int y, const Rgb& c) {
+        float* p = &pixels[3 * (static_cast<size_t>(y) * width + x)];
+        p[0] = static_cast<float>(c.r), p[1] = static_cast<float>(c.g), p[2] = static_cast<float>(c.b);
+    }
+    Rgb get(int x, int y) const {
+        const float* p = &pixels[3 * (static_cast<size_t>(y) * width + x)];
+        return {p[0], p[1], p[2]};
+    }
+};
+
+// The sRGB transfer function of a linear value in [0, 1].
+double linearToSrgb(double v);
+
+// PNG bytes of the image (8-bit sRGB, exposure in stops).
+std::string encodePng(const Image& image, double exposure = 0.0);
+void writePng(const std::string& path, const Image& image, double exposure = 0.0);
+
+}  // namespace weft

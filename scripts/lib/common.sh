@@ -3,6 +3,9 @@
 
 WEFT_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 WEFT_JOBS="${WEFT_JOBS:-$(nproc)}"
+# Debian's interpreter: the one python3-numpy and python3-pytest install into
+# (a python3 earlier on PATH, e.g. from pyenv, would not see them).
+WEFT_PYTHON="${WEFT_PYTHON:-/usr/bin/python3}"
 
 # Debian packages weft builds with (DEVELOPERS.md: dependencies only from apt).
 WEFT_PACKAGES=(

@@ -52,12 +52,12 @@ bool contains(const std::string& text, const std::string& part) {
 
 // A fresh working directory per test, removed afterwards.
 class CliTest : public ::testing::Test {
-protected:
+  protected:
     void SetUp() override {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::path(::testing::TempDir()) / ("weft_cli_test." + std::to_string(::getpid()) +
-                                                 "." + info->test_suite_name() + "." +
-                                                 info->name());
+        dir_ =
+            fs::path(::testing::TempDir()) / ("weft_cli_test." + std::to_string(::getpid()) + "." +
+                                              info->test_suite_name() + "." + info->name());
         fs::remove_all(dir_);
         fs::create_directories(dir_);
         errFile_ = dir_.string() + ".stderr";
@@ -71,9 +71,8 @@ protected:
 
     // Runs `weft ARGS` (ARGS is shell text) inside the test directory.
     RunResult run(const std::string& args) const {
-        const std::string cmd = "cd " + shellQuote(dir_.string()) + " && " +
-                                shellQuote(WEFT_BIN) + " " + args + " 2>" +
-                                shellQuote(errFile_);
+        const std::string cmd = "cd " + shellQuote(dir_.string()) + " && " + shellQuote(WEFT_BIN) +
+                                " " + args + " 2>" + shellQuote(errFile_);
         RunResult r;
         FILE* pipe = ::popen(cmd.c_str(), "r");
         if (!pipe) {
@@ -156,8 +155,8 @@ TEST_F(CliTest, FiberSampleHelp) {
 TEST_F(CliTest, PlyHelp) {
     const RunResult r = run("ply --help");
     EXPECT_EQ(r.status, 0) << r.err;
-    for (const char* flag : {"--preset", "--fibers", "--density", "--twist", "--radius",
-                             "--length", "--seed", "--points-per-twist", "--out"})
+    for (const char* flag : {"--preset", "--fibers", "--density", "--twist", "--radius", "--length",
+                             "--seed", "--points-per-twist", "--out"})
         EXPECT_TRUE(contains(r.out, flag)) << flag << " missing from\n" << r.out;
     // --params means nothing for geometry and is not offered.
     EXPECT_FALSE(contains(r.out, "--params")) << r.out;
@@ -295,7 +294,9 @@ TEST_F(CliTest, FiberEvalEmptyArray) {
 double simpsonNormaliser(double beta) {
     const int n = 20000;  // even
     const double a = -kPi / 2, h = kPi / n;
-    auto f = [&](double t) { return std::exp(-t * t / (2 * beta * beta)) * std::cos(t) * std::cos(t); };
+    auto f = [&](double t) {
+        return std::exp(-t * t / (2 * beta * beta)) * std::cos(t) * std::cos(t);
+    };
     double sum = f(a) + f(a + n * h);
     for (int i = 1; i < n; ++i) sum += (i % 2 ? 4.0 : 2.0) * f(a + i * h);
     return sum * h / 3;
@@ -321,7 +322,8 @@ TEST_F(CliTest, FiberEvalMatchesHandComputation) {
     const double pair[6] = {0, 1, 0, 0, -1, 0};
     writeNpy(file("PAIRS.npy"), pair, {1, 6});
     writeFileAtomic(file("silk.json"), findMaterialPreset("silk").fiber.toJson().dump());
-    for (const std::string name : {"fleece", "silk", "cotton"}) {
+    for (const auto& preset : materialPresets()) {
+        const std::string name(preset.name);
         SCOPED_TRACE(name);
         const std::string flags =
             name == "silk" ? std::string("--params silk.json") : "--preset " + name;
@@ -329,9 +331,11 @@ TEST_F(CliTest, FiberEvalMatchesHandComputation) {
         ASSERT_EQ(r.status, 0) << r.err;
         const std::vector<double> values = readValues(file("VALUES.npy"), 1);
         ASSERT_EQ(values.size(), 3u);
-        const Rgb expected = handEvalBackscatterFree(findMaterialPreset(name).fiber);
+        // The library's normaliser table is exact at mu = 0; the Simpson sum
+        // agrees with it to ~1e-14.
+        const Rgb expected = handEvalBackscatterFree(preset.fiber);
         for (int c = 0; c < 3; ++c)
-            expectRelNear(values[c], expected[c], 1e-9, "channel " + std::to_string(c));
+            expectRelNear(values[c], expected[c], 1e-10, "channel " + std::to_string(c));
     }
 }
 
@@ -339,7 +343,7 @@ TEST_F(CliTest, FiberEvalMatchesHandComputation) {
 // fiber eval: bad input
 
 class FiberEvalErrorTest : public CliTest {
-protected:
+  protected:
     void SetUp() override {
         CliTest::SetUp();
         pairs_ = randomPairs(10, 3);
@@ -390,6 +394,28 @@ TEST_F(FiberEvalErrorTest, TruncatedData) {
                     {"PAIRS.npy"});
 }
 
+// Layouts and dtypes the reader does not support, and bytes after the data.
+TEST_F(FiberEvalErrorTest, UnsupportedNpyLayouts) {
+    const std::string bytes = encodeNpy(pairs_.data(), {rows_, 6});
+    auto replaced = [&](const std::string& from, const std::string& to) {
+        std::string b = bytes;
+        const size_t at = b.find(from);
+        EXPECT_NE(at, std::string::npos) << from;
+        if (at != std::string::npos) b.replace(at, from.size(), to);
+        return b;
+    };
+    const std::string flags = "--preset fleece --in PAIRS.npy --out VALUES.npy";
+    writeFileAtomic(file("PAIRS.npy"),
+                    replaced("'fortran_order': False,", "'fortran_order': True, "));
+    expectEvalError(flags, {"PAIRS.npy"}, {"PAIRS.npy"});
+    writeFileAtomic(file("PAIRS.npy"), replaced("'<f8'", "'>f8'"));
+    expectEvalError(flags, {"PAIRS.npy"}, {"PAIRS.npy"});
+    writeFileAtomic(file("PAIRS.npy"), replaced("'<f8'", "'<c16'"));
+    expectEvalError(flags, {"PAIRS.npy"}, {"PAIRS.npy"});
+    writeFileAtomic(file("PAIRS.npy"), bytes + std::string(8, '\0'));
+    expectEvalError(flags, {"PAIRS.npy"}, {"PAIRS.npy"});
+}
+
 TEST_F(FiberEvalErrorTest, WrongShape) {
     writeNpy(file("PAIRS.npy"), pairs_.data(), {pairs_.size() / 5, 5});
     expectEvalError("--preset fleece --in PAIRS.npy --out VALUES.npy", {"PAIRS.npy", "(n, 6)"},
@@ -414,8 +440,8 @@ TEST_F(FiberEvalErrorTest, NonUnitVectorRow) {
     pairs_ = randomPairs(10, 3);
     pairs_[6 * 4 + 1] = std::nan("");  // a NaN in wi of row 4
     writeGoodPairs();
-    expectEvalError("--preset fleece --in PAIRS.npy --out VALUES.npy",
-                    {"PAIRS.npy", "row 4", "wi"}, {"PAIRS.npy"});
+    expectEvalError("--preset fleece --in PAIRS.npy --out VALUES.npy", {"PAIRS.npy", "row 4", "wi"},
+                    {"PAIRS.npy"});
     pairs_ = randomPairs(10, 3);
     for (int k = 0; k < 3; ++k) pairs_[6 * 2 + k] = 0;  // zero wi in row 2
     writeGoodPairs();
@@ -459,8 +485,8 @@ TEST_F(FiberEvalErrorTest, ParamsJsonOutOfRange) {
     j = findMaterialPreset("fleece").fiber.toJson();
     j.erase("gamma_tt_deg");
     writeFileAtomic(file("p.json"), j.dump());
-    expectEvalError("--params p.json --in PAIRS.npy --out VALUES.npy",
-                    {"p.json", "gamma_tt_deg"}, {"PAIRS.npy", "p.json"});
+    expectEvalError("--params p.json --in PAIRS.npy --out VALUES.npy", {"p.json", "gamma_tt_deg"},
+                    {"PAIRS.npy", "p.json"});
 }
 
 TEST_F(FiberEvalErrorTest, MissingParamsFile) {
@@ -472,8 +498,7 @@ TEST_F(FiberEvalErrorTest, MissingParamsFile) {
 TEST_F(FiberEvalErrorTest, UnknownPresetListsAllowedNames) {
     writeGoodPairs();
     expectEvalError("--preset wool --in PAIRS.npy --out VALUES.npy",
-                    {"wool", "fleece", "silk", "polyester", "cotton", "gabardine"},
-                    {"PAIRS.npy"});
+                    {"wool", "fleece", "silk", "polyester", "cotton", "gabardine"}, {"PAIRS.npy"});
 }
 
 TEST_F(FiberEvalErrorTest, PresetAndParamsTogetherOrNeither) {
@@ -487,8 +512,8 @@ TEST_F(FiberEvalErrorTest, PresetAndParamsTogetherOrNeither) {
 
 TEST_F(FiberEvalErrorTest, OutputInMissingDirectory) {
     writeGoodPairs();
-    expectEvalError("--preset fleece --in PAIRS.npy --out nodir/VALUES.npy",
-                    {"nodir/VALUES.npy"}, {"PAIRS.npy"});
+    expectEvalError("--preset fleece --in PAIRS.npy --out nodir/VALUES.npy", {"nodir/VALUES.npy"},
+                    {"PAIRS.npy"});
 }
 
 // ---------------------------------------------------------------------------
@@ -523,9 +548,9 @@ TEST_F(CliTest, FiberSample) {
         expectRelNear(pdf, fiber.pdf(wi, wo), 1e-12, "pdf of sample " + std::to_string(i));
         const Rgb expected = fiber.eval(wi, wo) / fiber.pdf(wi, wo);
         for (int c = 0; c < 3; ++c) {
-            expectRelNear(s[3 + c], expected[c], 1e-12,
-                          "weight of sample " + std::to_string(i) + " channel " +
-                              std::to_string(c));
+            expectRelNear(
+                s[3 + c], expected[c], 1e-12,
+                "weight of sample " + std::to_string(i) + " channel " + std::to_string(c));
             sum[c] += s[3 + c];
             sum2[c] += s[3 + c] * s[3 + c];
         }
@@ -554,6 +579,27 @@ TEST_F(CliTest, FiberSampleBadFlags) {
     expectUserError(run("fiber sample --preset fleece --wi 0,0,1 --count 10 --out no/s.npy"),
                     {"no/s.npy"});
     EXPECT_TRUE(listing().empty());
+}
+
+// Known bug, disabled until fixed: --wi is normalised as w / sqrt(x^2 + y^2 +
+// z^2) without scaling, so for components around 1e155 and above the squared
+// length overflows to inf and wi becomes (0, 0, 0) (silently sampled as if
+// along the fiber); for components around 1e-155 and below it underflows to
+// 0 and the non-zero vector is rejected with "must be a non-zero vector".
+// Expected: exit 2 for such input, or the samples of the normalised vector.
+TEST_F(CliTest, FiberSampleExtremeWiIsNormalisedOrRejected) {
+    const std::string common = "fiber sample --preset fleece --count 100 --seed 5 ";
+    ASSERT_EQ(run(common + "--wi 0,1,1 --out ref.npy").status, 0);
+    const std::vector<double> ref = npyToDoubles(readNpy(file("ref.npy")), "ref.npy");
+    for (const std::string wi : {"0,1e200,1e200", "0,1e-200,1e-200"}) {
+        SCOPED_TRACE(wi);
+        const RunResult r = run(common + "--wi " + wi + " --out s.npy");
+        if (r.status == 2) continue;
+        ASSERT_EQ(r.status, 0) << r.err;
+        const std::vector<double> s = npyToDoubles(readNpy(file("s.npy")), "s.npy");
+        ASSERT_EQ(s.size(), ref.size());
+        for (size_t i = 0; i < s.size(); ++i) EXPECT_NEAR(s[i], ref[i], 1e-9) << "entry " << i;
+    }
 }
 
 // ---------------------------------------------------------------------------
@@ -585,8 +631,8 @@ TEST_F(CliTest, PlyPresetText) {
         ASSERT_TRUE(set.hasRadii(i)) << "curve " << i;
         ASSERT_EQ(set.radii[i].size(), c.size());
         for (size_t k = 0; k < c.size(); ++k) {
-            expectRelNear(set.radii[i][k], fiberRadius, 1e-8, "radius of curve " +
-                                                                  std::to_string(i));
+            expectRelNear(set.radii[i][k], fiberRadius, 1e-8,
+                          "radius of curve " + std::to_string(i));
             // Centres stay within R - r of the axis.
             EXPECT_LE(std::hypot(c[k].x, c[k].y), 1 - fiberRadius + 1e-7);
         }

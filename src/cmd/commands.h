@@ -24,6 +24,11 @@ struct MaterialOptions {
 
 // Parses "X,Y,Z" into three finite numbers; InputError naming `flag` otherwise.
 Vec3 parseVec3(const std::string& text, const std::string& flag);
+// parseVec3, then normalised (any non-zero finite vector, however large or small).
+Vec3 parseDirection(const std::string& text, const std::string& flag);
+
+// Adds "--seed" (an unsigned 64-bit integer, default 0) to a command.
+CLI::Option* addSeedOption(CLI::App& app, uint64_t& seed, const std::string& description);
 
 void addFiberCommands(CLI::App& app);
 void addPlyCommand(CLI::App& app);

@@ -55,9 +55,7 @@ void runEval(const EvalOptions& o) {
 
 void runSample(const SampleOptions& o) {
     const FiberBcsdf fiber(o.material.fiber());
-    const Vec3 wiRaw = parseVec3(o.wi, "--wi");
-    if (!(length(wiRaw) > 0)) throw InputError("--wi must be a non-zero vector");
-    const Vec3 wi = normalize(wiRaw);
+    const Vec3 wi = parseDirection(o.wi, "--wi");
     std::vector<double> rows(static_cast<size_t>(o.count) * 7);
     for (int64_t i = 0; i < o.count; ++i) {
         // One stream per sample index: the output does not depend on chunking.
@@ -84,9 +82,7 @@ struct MapOptions {
 // percentile of the values maps to white.
 void runMap(const MapOptions& o) {
     const FiberBcsdf fiber(o.material.fiber());
-    const Vec3 wiRaw = parseVec3(o.wi, "--wi");
-    if (!(length(wiRaw) > 0)) throw InputError("--wi must be a non-zero vector");
-    const Vec3 wi = normalize(wiRaw);
+    const Vec3 wi = parseDirection(o.wi, "--wi");
     Image image(o.width, o.width / 2);
     std::vector<double> luminance;
     for (int y = 0; y < image.height; ++y) {
@@ -131,7 +127,7 @@ void addFiberCommands(CLI::App& app) {
     sample->add_option("--count", sampleOpts->count, "number of samples")
         ->required()
         ->check(CLI::Range(int64_t{1}, int64_t{100000000}));
-    sample->add_option("--seed", sampleOpts->seed, "random seed")->default_val(0);
+    addSeedOption(*sample, sampleOpts->seed, "random seed");
     sample->add_option("--out", sampleOpts->out, "(N,7) float64 .npy")->required();
     sample->callback([sampleOpts] { runSample(*sampleOpts); });
 

@@ -76,7 +76,7 @@ void addPlyCommand(CLI::App& app) {
     o->twistOpt = ply->add_option("--twist", o->twist, "twist factor alpha >= 0");
     ply->add_option("--radius", o->radius, "ply radius R > 0")->default_val(1.0);
     ply->add_option("--length", o->length, "ply length L > 0 (axis from z=0 to z=L)")->required();
-    ply->add_option("--seed", o->seed, "random seed of the fiber placement")->default_val(0);
+    addSeedOption(*ply, o->seed, "random seed of the fiber placement");
     ply->add_option("--points-per-twist", o->pointsPerTwist,
                     "polyline points per twist period (>= 16)")
         ->default_val(32)

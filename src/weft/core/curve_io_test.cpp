@@ -1,6 +1,8 @@
 #include "weft/core/curve_io.h"
 
 #include <gtest/gtest.h>
+
+#include "weft/core/test_util.h"
 #include <unistd.h>
 
 #include <cmath>
@@ -21,32 +23,9 @@ namespace fs = std::filesystem;
 
 const std::string kDataDir = WEFT_SHARED_DATA_DIR;
 
-class CurveIoTest : public ::testing::Test {
-protected:
-    void SetUp() override {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::path(::testing::TempDir()) /
-               ("weft_curve_io_test." + std::to_string(::getpid()) + "." + info->name());
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
+using CurveIoTest = testing::TempDirTest;
 
-    fs::path dir_;
-};
-
-void expectInputError(const std::function<void()>& f, std::initializer_list<std::string> parts) {
-    try {
-        f();
-        ADD_FAILURE() << "expected an InputError";
-    } catch (const InputError& e) {
-        const std::string msg = e.what();
-        for (const std::string& p : parts)
-            EXPECT_NE(msg.find(p), std::string::npos)
-                << "message '" << msg << "' lacks '" << p << "'";
-    }
-}
+using testing::expectInputError;
 
 // Text holds 9 significant digits: exact for float32 values, so compare as floats.
 void expectSameCurvesAsFloat(const CurveSet& a, const CurveSet& b) {

@@ -1,6 +1,8 @@
 #include "weft/core/file.h"
 
 #include <gtest/gtest.h>
+
+#include "weft/core/test_util.h"
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -20,20 +22,8 @@ namespace {
 using namespace std::string_view_literals;
 namespace fs = std::filesystem;
 
-class FileTest : public ::testing::Test {
+class FileTest : public testing::TempDirTest {
 protected:
-    void SetUp() override {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::path(::testing::TempDir()) /
-               ("weft_file_test." + std::to_string(::getpid()) + "." + info->name());
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override {
-        fs::permissions(dir_, fs::perms::owner_all, fs::perm_options::add);
-        fs::remove_all(dir_);
-    }
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
     // Names of the entries of dir (not recursive), sorted.
     static std::vector<std::string> entries(const fs::path& dir) {
         std::vector<std::string> names;
@@ -42,20 +32,9 @@ protected:
         return names;
     }
 
-    fs::path dir_;
 };
 
-void expectInputError(const std::function<void()>& f, std::initializer_list<std::string> parts) {
-    try {
-        f();
-        ADD_FAILURE() << "expected an InputError";
-    } catch (const InputError& e) {
-        const std::string msg = e.what();
-        for (const std::string& p : parts)
-            EXPECT_NE(msg.find(p), std::string::npos)
-                << "message '" << msg << "' lacks '" << p << "'";
-    }
-}
+using testing::expectInputError;
 
 TEST_F(FileTest, WriteThenReadBinaryBytes) {
     const std::string p = path("a.bin");

@@ -1,6 +1,8 @@
 #include "weft/core/npy.h"
 
 #include <gtest/gtest.h>
+
+#include "weft/core/test_util.h"
 #include <unistd.h>
 
 #include <cstring>
@@ -21,33 +23,13 @@ using namespace std::string_view_literals;
 namespace fs = std::filesystem;
 
 // A fresh directory per test, removed afterwards.
-class NpyTest : public ::testing::Test {
+class NpyTest : public testing::TempDirTest {
 protected:
-    void SetUp() override {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::path(::testing::TempDir()) /
-               ("weft_npy_test." + std::to_string(::getpid()) + "." + info->name());
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    std::string file(const std::string& name) const { return (dir_ / name).string(); }
+    std::string file(const std::string& name) const { return path(name); }
 
-    fs::path dir_;
 };
 
-// Runs f, expects an InputError whose message contains every string in parts.
-void expectInputError(const std::function<void()>& f, std::initializer_list<std::string> parts) {
-    try {
-        f();
-        ADD_FAILURE() << "expected an InputError";
-    } catch (const InputError& e) {
-        const std::string msg = e.what();
-        for (const std::string& p : parts)
-            EXPECT_NE(msg.find(p), std::string::npos)
-                << "message '" << msg << "' lacks '" << p << "'";
-    }
-}
+using testing::expectInputError;
 
 // A .npy file assembled by hand: magic, version, header length of the
 // version's width, the header text as given, then the data.
@@ -218,7 +200,7 @@ TEST_F(NpyTest, RejectsMalformedFilesNamingThem) {
     // Writes bytes to bad.npy and expects readNpy to fail naming it.
     const auto check = [&](std::string_view bytes, std::initializer_list<std::string> parts) {
         writeFileAtomic(path, bytes);
-        SCOPED_TRACE(testing::Message() << "case expecting '" << *parts.begin() << "'");
+        SCOPED_TRACE(::testing::Message() << "case expecting '" << *parts.begin() << "'");
         expectInputError([&] { readNpy(path); }, {path});
         expectInputError([&] { readNpy(path); }, parts);
     };

@@ -1,7 +1,16 @@
-// weft/core/test_util.h — helpers shared by the *_test.cpp files.
+// weft/core/test_util.h — helpers shared by the *_test.cpp files (GoogleTest).
 #pragma once
 
+#include <gtest/gtest.h>
+#include <unistd.h>
+
 #include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <initializer_list>
+#include <string>
+
+#include "weft/core/error.h"
 
 namespace weft::testing {
 
@@ -19,5 +28,51 @@ constexpr int64_t scaled(int64_t n) {
     const auto s = static_cast<int64_t>(n * sampleScale());
     return s < 1000 ? 1000 : s;
 }
+
+// Composite Simpson rule with n (even) intervals: the independent reference
+// quadrature of the tests (no tables, no Gauss-Legendre).
+template <typename F>
+double simpson(const F& f, double a, double b, int n) {
+    const double h = (b - a) / n;
+    double sum = f(a) + f(b);
+    for (int k = 1; k < n; ++k) sum += (k % 2 ? 4.0 : 2.0) * f(a + k * h);
+    return sum * h / 3.0;
+}
+
+// Runs f and expects an InputError whose message contains every string in parts.
+inline void expectInputError(const std::function<void()>& f,
+                             std::initializer_list<std::string> parts) {
+    try {
+        f();
+        ADD_FAILURE() << "expected an InputError";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        for (const std::string& p : parts)
+            EXPECT_NE(msg.find(p), std::string::npos)
+                << "message '" << msg << "' lacks '" << p << "'";
+    }
+}
+
+// A fixture with a fresh directory per test, removed afterwards.
+class TempDirTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        dir_ = std::filesystem::path(::testing::TempDir()) /
+               (std::string("weft_") + info->test_suite_name() + "." +
+                std::to_string(::getpid()) + "." + info->name());
+        std::filesystem::remove_all(dir_);
+        std::filesystem::create_directories(dir_);
+    }
+    void TearDown() override {
+        std::error_code ignored;
+        std::filesystem::permissions(dir_, std::filesystem::perms::owner_all,
+                                     std::filesystem::perm_options::add, ignored);
+        std::filesystem::remove_all(dir_);
+    }
+    std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+    std::filesystem::path dir_;
+};
 
 }  // namespace weft::testing

@@ -15,15 +15,8 @@ namespace {
 // Independent reference: composite Simpson over [-pi/2, pi/2] with a step far
 // below the narrowest width (1 degree), no tables, no Gauss-Legendre.
 double simpsonCos2Integral(const LongitudinalGaussian& g, double mu) {
-    const int n = 200000;
-    const double h = kPi / n;
-    double sum = 0;
-    for (int k = 0; k <= n; ++k) {
-        const double t = -kHalfPi + k * h;
-        const double w = (k == 0 || k == n) ? 1 : (k % 2 ? 4 : 2);
-        sum += w * g.eval(t, mu) * sqr(std::cos(t));
-    }
-    return sum * h / 3.0;
+    return testing::simpson([&](double t) { return g.eval(t, mu) * sqr(std::cos(t)); }, -kHalfPi,
+                            kHalfPi, 200000);
 }
 
 const std::vector<double> kWidthsDeg = {1.0, 2.141, 5.238, 7.238, 10.0, 20.0, 27.197, 45.0, 90.0};
@@ -68,15 +61,10 @@ TEST(LongitudinalGaussian, SamplesFollowGCos2) {
             }
             // Expected counts by Simpson integration of g cos^2 over each bin.
             for (int b = 0; b < bins; ++b) {
-                const int m = 400;
-                const double a = -kHalfPi + kPi * b / bins, h = kPi / bins / m;
-                double sum = 0;
-                for (int k = 0; k <= m; ++k) {
-                    const double t = a + k * h;
-                    const double w = (k == 0 || k == m) ? 1 : (k % 2 ? 4 : 2);
-                    sum += w * g.eval(t, mu) * sqr(std::cos(t));
-                }
-                expected[b] = sum * h / 3.0 * n;
+                const double a = -kHalfPi + kPi * b / bins;
+                expected[b] = n * testing::simpson(
+                                      [&](double t) { return g.eval(t, mu) * sqr(std::cos(t)); }, a,
+                                      a + kPi / bins, 400);
             }
             const Chi2Result r = chi2Test(observed, expected);
             EXPECT_GT(r.pValue, alpha) << "beta = " << deg << " deg, mu = " << mu

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     weft::cmd::addFiberCommands(app);
     weft::cmd::addPlyCommand(app);
+    weft::cmd::addGatherCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

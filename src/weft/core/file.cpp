@@ -124,6 +124,14 @@ TempDirCommit::TempDirCommit(std::string finalPath)
     if (finalPath_.empty() || finalPath_ == "/" || finalPath_ == "." || finalPath_ == "..")
         throw InputError("invalid output directory '" + finalPath_ +
                          "': expected a path naming a new or replaceable directory");
+    {
+        // Refuse at once what commit() would refuse after the work is done.
+        std::error_code ec;
+        const auto st = std::filesystem::symlink_status(finalPath_, ec);
+        if (std::filesystem::exists(st) && !std::filesystem::is_directory(st))
+            throw InputError("cannot write output directory '" + finalPath_ +
+                             "': it exists and is not a directory");
+    }
     tempPath_ = finalPath_ + ".tmp." + std::to_string(::getpid());
     // A leftover from an earlier process with the same pid is stale: remove it.
     std::error_code ec;

@@ -1,0 +1,93 @@
+// weft gather: the RDM of a ply by random walks through its explicit fibers.
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "commands.h"
+#include "weft/core/error.h"
+#include "weft/core/file.h"
+#include "weft/gather/gather.h"
+
+namespace weft::cmd {
+
+namespace {
+
+struct GatherCliOptions {
+    MaterialOptions material;
+    int fibers = 0;
+    double density = 0, twist = 0;
+    CLI::Option *fibersOpt = nullptr, *densityOpt = nullptr, *twistOpt = nullptr;
+    int64_t paths = 0;
+    uint64_t seed = 0;
+    std::string bins = "22,90,45,90", out;
+    int maxDepth = 1000, threads = 0, segmentsPerTwist = 128;
+    bool quiet = false;
+};
+
+void runGather(const GatherCliOptions& c) {
+    GatherOptions o;
+    const bool explicitPly = c.fibersOpt->count() || c.densityOpt->count() || c.twistOpt->count();
+    if (!c.material.preset.empty()) {
+        if (!c.material.paramsFile.empty() || explicitPly)
+            throw InputError("--preset gives fiber and ply parameters: do not combine it with "
+                             "--params, --fibers, --density or --twist");
+        const MaterialPreset& preset = findMaterialPreset(c.material.preset);
+        o.fiber = preset.fiber;
+        o.ply = preset.ply;
+        o.material = c.material.preset;
+    } else {
+        if (c.material.paramsFile.empty() ||
+            !(c.fibersOpt->count() && c.densityOpt->count() && c.twistOpt->count()))
+            throw InputError("give --preset NAME, or --params FILE.json with --fibers N "
+                             "--density RHO --twist ALPHA");
+        o.fiber = FiberParams::fromJsonFile(c.material.paramsFile);
+        o.ply = {c.fibers, c.density, c.twist};
+        o.material = c.material.paramsFile;
+    }
+    o.paths = c.paths;
+    o.seed = c.seed;
+    o.bins = RdmBins::parse(c.bins);
+    o.maxDepth = c.maxDepth;
+    o.threads = c.threads;
+    o.segmentsPerTwist = c.segmentsPerTwist;
+    o.quiet = c.quiet;
+    o.validate();
+    // Before the (long) gather: a bad destination fails now, not after it.
+    TempDirCommit out(c.out);
+    const GatherResult result = gatherRdm(o);
+    writeGather(result, o, out);
+    const GatherStats& s = result.stats;
+    std::printf(
+        "{\"out\": \"%s\", \"paths\": %lld, \"seconds\": %.3f, \"paths_per_second\": %.0f, "
+        "\"rays_per_second\": %.0f, \"mean_depth\": %.3f, \"truncated_fraction\": %.3g}\n",
+        c.out.c_str(), static_cast<long long>(s.paths), s.seconds, s.paths / s.seconds,
+        s.rays / s.seconds, s.meanDepth, static_cast<double>(s.truncatedPaths) / s.paths);
+}
+
+}  // namespace
+
+void addGatherCommand(CLI::App& app) {
+    auto o = std::make_shared<GatherCliOptions>();
+    CLI::App* gather = app.add_subcommand(
+        "gather", "Trace random walks through an explicit ply and write its reflectance "
+                  "distribution (RDM: P(T | wi), R and M maps) as NumPy arrays");
+    o->material.add(*gather, true);
+    o->fibersOpt = gather->add_option("--fibers", o->fibers, "fiber count N >= 1 (with --params)");
+    o->densityOpt = gather->add_option("--density", o->density, "fiber density rho in (0, 1)");
+    o->twistOpt = gather->add_option("--twist", o->twist, "twist factor alpha >= 0");
+    gather->add_option("--paths", o->paths, "number of random walks (>= 1)")->required();
+    addSeedOption(*gather, o->seed, "random seed of the fiber placement and the walks");
+    gather->add_option("--bins", o->bins, "RDM resolution TI,PI,TO,PO (theta_i, phi_i, theta_o, phi_o)")
+        ->default_val("22,90,45,90");
+    gather->add_option("--max-depth", o->maxDepth, "fiber interactions per path before truncation")
+        ->default_val(1000);
+    gather->add_option("--threads", o->threads, "worker threads (0: all cores)")->default_val(0);
+    gather->add_option("--segments-per-twist", o->segmentsPerTwist,
+                       "polyline segments per twist period of the traced fibers (>= 16)")
+        ->default_val(128);
+    gather->add_flag("--quiet", o->quiet, "no progress output");
+    gather->add_option("--out", o->out, "output directory (written atomically)")->required();
+    gather->callback([o] { runGather(*o); });
+}
+
+}  // namespace weft::cmd

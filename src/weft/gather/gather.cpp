@@ -1,0 +1,261 @@
+#include "weft/gather/gather.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "weft/core/curve_io.h"
+#include "weft/core/error.h"
+#include "weft/core/file.h"
+#include "weft/core/math.h"
+#include "weft/core/npy.h"
+#include "weft/core/progress.h"
+#include "weft/core/rng.h"
+#include "weft/fiber/fiber_bcsdf.h"
+#include "weft/gather/ply_tracer.h"
+
+namespace weft {
+
+namespace {
+
+// Fixed-point unit of the accumulators: associative sums, thread-count
+// independent results. 2^-32 resolves weights to 2.3e-10 and leaves room for
+// 2^31 unit-weight paths in one cell.
+constexpr double kFixedScale = 4294967296.0;
+
+int64_t toFixed(double w) { return std::llround(w * kFixedScale); }
+
+void atomicAdd(int64_t& cell, int64_t v) {
+    if (v != 0) std::atomic_ref<int64_t>(cell).fetch_add(v, std::memory_order_relaxed);
+}
+
+constexpr int64_t kChunk = 1024;  // paths per task
+
+}  // namespace
+
+void GatherOptions::validate() const {
+    if (paths < 1)
+        throw InputError("paths = " + std::to_string(paths) + " is out of range: allowed >= 1");
+    if (maxDepth < 1 || maxDepth > 1000000)
+        throw InputError("max depth = " + std::to_string(maxDepth) +
+                         " is out of range: allowed [1, 1000000]");
+    if (threads < 0 || threads > 1024)
+        throw InputError("threads = " + std::to_string(threads) +
+                         " is out of range: allowed [0, 1024] (0: all cores)");
+    fiber.validate();
+    ply.validate();
+    bins.validate();
+}
+
+GatherResult gatherRdm(const GatherOptions& o) {
+    o.validate();
+    const auto start = std::chrono::steady_clock::now();
+    const FiberBcsdf fiber(o.fiber);
+    // Fibers are placed with the gather's seed; R = 1 (everything is scale-invariant).
+    const PlyGeometry ply = generatePly(o.ply, 1.0, 1.0, o.seed);
+    const PeriodicPlyTracer tracer(ply, o.segmentsPerTwist);
+    const RdmBins& bins = o.bins;
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+
+    std::vector<int64_t> count(nIn, 0), countT(nIn, 0), truncated(nIn * 3, 0);
+    std::vector<int64_t> depthHistogram(o.maxDepth + 2, 0);
+    std::vector<int64_t> mapR(nIn * nOut * 3, 0), mapM(nIn * nOut * 3, 0);
+    std::atomic<int64_t> rays{0}, axial{0}, depthSum{0};
+
+    const double period = tracer.period();
+    const int64_t chunks = (o.paths + kChunk - 1) / kChunk;
+    Progress progress("gather", static_cast<uint64_t>(o.paths), o.quiet);
+    const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<int64_t>(0, chunks), [&](const auto& range) {
+            for (int64_t chunk = range.begin(); chunk != range.end(); ++chunk) {
+                const int64_t first = chunk * kChunk, last = std::min(o.paths, first + kChunk);
+                int64_t chunkRays = 0, chunkAxial = 0, chunkDepth = 0;
+                for (int64_t k = first; k < last; ++k) {
+                    Rng rng(static_cast<uint64_t>(k), o.seed);
+                    // Entry point and frame (DESIGN.md 5).
+                    const double psi = kTwoPi * rng.uniform();
+                    const Vec3 n{std::cos(psi), std::sin(psi), 0.0};
+                    const Vec3 t{0.0, 0.0, 1.0};
+                    const Vec3 b = cross(t, n);
+                    const Frame entry(t, b, n);
+                    Vec3 org = n * ply.radius;
+                    org.z = period * rng.uniform();
+                    // wi uniform over the upper hemisphere: cos(theta) uniform.
+                    const double cosTheta = rng.uniform();
+                    const double sinTheta = safeSqrt(1.0 - cosTheta * cosTheta);
+                    const double phi = kTwoPi * rng.uniform() - kPi;
+                    const Vec3 wiLocal{sinTheta * std::cos(phi), sinTheta * std::sin(phi),
+                                       cosTheta};
+                    const size_t binIn = bins.incidentBin(wiLocal);
+                    Vec3 dir = -entry.fromLocal(wiLocal);
+                    Rgb weight(1.0);
+                    int depth = 0, excluded = -1;
+                    bool truncatedPath = false;
+                    for (;;) {
+                        const PlyTraceHit hit = tracer.trace(org, dir, excluded);
+                        chunkRays += hit.raysTraced;
+                        if (hit.kind != PlyTraceHit::Kind::Fiber) {
+                            chunkAxial += hit.kind == PlyTraceHit::Kind::ExitAxial;
+                            break;
+                        }
+                        if (depth == o.maxDepth) {
+                            truncatedPath = true;
+                            break;
+                        }
+                        ++depth;
+                        const Frame fiberFrame =
+                            Frame::fromX(ply.fiberTangent(hit.fiber, hit.point.z));
+                        const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
+                        const BsdfSample s = fiber.sample(fiberFrame.toLocal(-dir), u, rng);
+                        if (!s.valid()) {
+                            weight = Rgb();
+                            break;
+                        }
+                        weight *= s.weight;
+                        dir = normalize(fiberFrame.fromLocal(s.wo));
+                        org = hit.point;
+                        excluded = hit.fiber;
+                    }
+                    atomicAdd(count[binIn], 1);
+                    chunkDepth += depth;
+                    if (truncatedPath) {
+                        atomicAdd(depthHistogram[o.maxDepth + 1], 1);
+                        for (int c = 0; c < 3; ++c)
+                            atomicAdd(truncated[binIn * 3 + c], toFixed(weight[c]));
+                        continue;
+                    }
+                    atomicAdd(depthHistogram[depth], 1);
+                    if (depth == 0) {
+                        atomicAdd(countT[binIn], 1);
+                        continue;
+                    }
+                    const Vec3 woLocal = entry.toLocal(dir);
+                    auto& map = (depth == 1 && woLocal.z > 0) ? mapR : mapM;
+                    const size_t cell = (binIn * nOut + bins.outgoingBin(woLocal)) * 3;
+                    for (int c = 0; c < 3; ++c) atomicAdd(map[cell + c], toFixed(weight[c]));
+                }
+                rays += chunkRays;
+                axial += chunkAxial;
+                depthSum += chunkDepth;
+                progress.add(static_cast<uint64_t>(last - first));
+            }
+        });
+    });
+    progress.finish();
+
+    GatherResult r;
+    r.bins = bins;
+    r.fiberRadius = ply.fiberRadius;
+    r.plyLines = tracer.centreLines();
+    r.pT.assign(nIn, 0.0);
+    r.truncated.assign(nIn * 3, 0.0);
+    r.rdmR.assign(mapR.size(), 0.0f);
+    r.rdmM.assign(mapM.size(), 0.0f);
+    double truncatedTotal[3] = {0, 0, 0};
+    for (size_t i = 0; i < nIn; ++i) {
+        if (count[i] == 0) continue;
+        r.pT[i] = static_cast<double>(countT[i]) / count[i];
+        for (int c = 0; c < 3; ++c) {
+            truncatedTotal[c] += truncated[i * 3 + c] / kFixedScale;
+            r.truncated[i * 3 + c] = truncated[i * 3 + c] / kFixedScale / count[i];
+        }
+        for (size_t j = 0; j < nOut; ++j) {
+            const double norm = 1.0 / (kFixedScale * count[i] * bins.outgoingSolidAngle(j));
+            for (int c = 0; c < 3; ++c) {
+                const size_t cell = (i * nOut + j) * 3 + c;
+                r.rdmR[cell] = static_cast<float>(mapR[cell] * norm);
+                r.rdmM[cell] = static_cast<float>(mapM[cell] * norm);
+            }
+        }
+    }
+    r.count = std::move(count);
+    r.countT = std::move(countT);
+    r.depth = std::move(depthHistogram);
+
+    GatherStats& st = r.stats;
+    st.paths = o.paths;
+    st.rays = rays.load();
+    st.truncatedPaths = r.depth[o.maxDepth + 1];
+    st.axialPaths = axial.load();
+    st.meanDepth = static_cast<double>(depthSum.load()) / o.paths;
+    for (int c = 0; c < 3; ++c) st.truncatedEnergy[c] = truncatedTotal[c] / o.paths;
+    st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    st.threads = threads;
+    st.period = period;
+    st.fiberRadius = ply.fiberRadius;
+    st.segments = tracer.segmentCount();
+    st.embreeBytes = tracer.embreeBytes();
+    return r;
+}
+
+void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& out) {
+    const auto file = [&](const char* name) { return (std::filesystem::path(out.path()) / name).string(); };
+    const RdmBins& b = r.bins;
+    const size_t ti = b.thetaI, pi = b.phiI, to = b.thetaO, po = b.phiO;
+    writeNpy(file("count.npy"), r.count.data(), {ti, pi});
+    writeNpy(file("count_t.npy"), r.countT.data(), {ti, pi});
+    writeNpy(file("p_t.npy"), r.pT.data(), {ti, pi});
+    writeNpy(file("rdm_r.npy"), r.rdmR.data(), {ti, pi, to, po, 3});
+    writeNpy(file("rdm_m.npy"), r.rdmM.data(), {ti, pi, to, po, 3});
+    writeNpy(file("truncated.npy"), r.truncated.data(), {ti, pi, 3});
+    writeNpy(file("depth.npy"), r.depth.data(), {r.depth.size()});
+    CurveSet lines;
+    lines.curves = r.plyLines;
+    for (const auto& c : lines.curves) lines.radii.emplace_back(c.size(), r.fiberRadius);
+    lines.closed.assign(lines.curves.size(), false);
+    writeCurveText(file("ply.txt"), lines);
+
+    const GatherStats& s = r.stats;
+    const nlohmann::json meta = {
+        {"format", "weft-gather"},
+        {"version", 1},
+        {"material", o.material},
+        {"fiber", o.fiber.toJson()},
+        {"ply",
+         {{"fibers", o.ply.fibers},
+          {"density", o.ply.density},
+          {"twist", o.ply.twist},
+          {"radius", 1.0},
+          {"fiber_radius", s.fiberRadius},
+          {"period", s.period},
+          {"segments_per_twist", o.ply.twist > 0 ? o.segmentsPerTwist : 1},
+          {"segments", s.segments},
+          {"primitive", "embree round linear curves, periodic in z"}}},
+        {"bins", {b.thetaI, b.phiI, b.thetaO, b.phiO}},
+        {"paths", s.paths},
+        {"seed", o.seed},
+        {"max_depth", o.maxDepth},
+        {"threads", s.threads},
+        {"elapsed_seconds", s.seconds},
+        {"paths_per_second", s.paths / s.seconds},
+        {"rays", s.rays},
+        {"rays_per_second", s.rays / s.seconds},
+        {"mean_depth", s.meanDepth},
+        {"truncated_fraction", static_cast<double>(s.truncatedPaths) / s.paths},
+        {"truncated_energy", {s.truncatedEnergy[0], s.truncatedEnergy[1], s.truncatedEnergy[2]}},
+        {"end_exit_fraction", 0.0},
+        {"axial_fraction", static_cast<double>(s.axialPaths) / s.paths},
+        {"embree_bytes", s.embreeBytes},
+        {"versions", {{"weft", WEFT_VERSION}, {"embree", EmbreeDevice::version()}}},
+        {"arrays",
+         {{"count", "int64 (TI,PI): paths per incident bin"},
+          {"count_t", "int64 (TI,PI): T paths (no fiber interaction) per incident bin"},
+          {"p_t", "float64 (TI,PI): count_t / count (0 where count is 0)"},
+          {"rdm_r", "float32 (TI,PI,TO,PO,3): R weight / count / outgoing solid angle"},
+          {"rdm_m", "float32 (TI,PI,TO,PO,3): M weight / count / outgoing solid angle"},
+          {"truncated", "float64 (TI,PI,3): weight of paths cut at max_depth / count"},
+          {"depth", "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}}};
+    writeFileAtomic(file("meta.json"), meta.dump(2) + "\n");
+    out.commit();
+}
+
+}  // namespace weft

@@ -1,0 +1,279 @@
+#include "weft/gather/gather.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "weft/core/math.h"
+#include "weft/core/rng.h"
+#include "weft/core/test_util.h"
+#include "weft/fiber/fiber_bcsdf.h"
+#include "weft/gather/ply_tracer.h"
+
+namespace weft {
+namespace {
+
+FiberParams losslessFiber() {
+    // C_TT = 1: the albedo F + (1 - F) C_TT is exactly 1 in every channel.
+    return {Rgb(0.04), Rgb(1.0), 7.0, 12.0, 25.0};
+}
+
+GatherOptions smallGather(const FiberParams& fiber, PlyParams ply, int64_t paths) {
+    GatherOptions o;
+    o.fiber = fiber;
+    o.ply = ply;
+    o.paths = paths;
+    o.seed = 11;
+    o.bins = {3, 8, 6, 12};
+    o.quiet = true;
+    return o;
+}
+
+// Energy leaving the ply for incident bin i (T + R + M integrated over the
+// outgoing bins) plus the truncated energy, channel c.
+double energyBalance(const GatherResult& r, size_t i, int c) {
+    const size_t nOut = r.bins.outgoingCount();
+    double e = r.pT[i] + r.truncated[i * 3 + c];
+    for (size_t j = 0; j < nOut; ++j) {
+        const size_t cell = (i * nOut + j) * 3 + c;
+        e += (static_cast<double>(r.rdmR[cell]) + r.rdmM[cell]) * r.bins.outgoingSolidAngle(j);
+    }
+    return e;
+}
+
+TEST(RdmBins, SolidAnglesAndBinsAreConsistent) {
+    const RdmBins bins;  // the paper's 22 x 90 x 45 x 90
+    double sphere = 0, hemisphere = 0;
+    for (size_t j = 0; j < bins.outgoingCount(); ++j) {
+        sphere += bins.outgoingSolidAngle(j);
+        EXPECT_EQ(bins.outgoingBin(bins.outgoingCentre(j)), j);
+    }
+    for (size_t i = 0; i < bins.incidentCount(); ++i) {
+        hemisphere += bins.incidentSolidAngle(i);
+        EXPECT_EQ(bins.incidentBin(bins.incidentCentre(i)), i);
+    }
+    EXPECT_NEAR(sphere, 4 * kPi, 1e-12);
+    EXPECT_NEAR(hemisphere, 2 * kPi, 1e-12);
+    // Conventions of DESIGN.md 2: theta from n, phi from t towards b.
+    EXPECT_EQ(bins.outgoingBin({0, 0, 1}) / bins.phiO, 0u);
+    EXPECT_EQ(bins.outgoingBin({0, 0, -1}) / bins.phiO, 44u);
+    EXPECT_EQ(bins.outgoingBin({1, 1e-9, 0}) % bins.phiO, 45u);  // phi = 0+ is the middle bin
+    EXPECT_EQ(bins.outgoingBin({0, 1, 0}) % bins.phiO, 67u);     // phi = pi/2
+    testing::expectInputError([] { RdmBins::parse("22,90,45"); }, {"TI,PI,TO,PO"});
+    testing::expectInputError([] { RdmBins::parse("22,0,45,90"); }, {"phi_i = 0", "[1, 4096]"});
+}
+
+TEST(PlyTracer, FindsFibersSkipsTheExcludedOneAndWrapsPeriodically) {
+    const PlyGeometry ply = generatePly({40, 0.3, 0.25}, 1.0, 1.0, 5);
+    const PeriodicPlyTracer tracer(ply);
+    EXPECT_NEAR(tracer.period(), 2.0 / 0.25, 1e-12);
+    // A ray aimed at the centre line of the outermost fiber from just outside
+    // its tube, in the plane z = z0, hits that fiber first unless it is excluded.
+    int outer = 0;
+    for (int i = 1; i < 40; ++i) {
+        if (std::hypot(ply.centres[i][0], ply.centres[i][1]) >
+            std::hypot(ply.centres[outer][0], ply.centres[outer][1]))
+            outer = i;
+    }
+    const double z0 = 0.3 * tracer.period();
+    const Vec3 c = ply.fiberCentre(outer, z0);
+    const Vec3 radial = normalize(Vec3(c.x, c.y, 0));
+    // Start halfway between the tube and the bounding cylinder (fixed seed: a gap exists).
+    const double gap = 1.0 - std::hypot(c.x, c.y) - ply.fiberRadius;
+    ASSERT_GT(gap, 0.1 * ply.fiberRadius);
+    const Vec3 from = c + radial * (ply.fiberRadius + 0.5 * gap);
+    const PlyTraceHit hit = tracer.trace(from, -radial, -1);
+    ASSERT_EQ(hit.kind, PlyTraceHit::Kind::Fiber);
+    EXPECT_EQ(hit.fiber, outer);
+    // The tube surface (to the chord accuracy of 128 segments per twist).
+    EXPECT_NEAR(length(hit.point - c), ply.fiberRadius, 0.02 * ply.fiberRadius);
+    const PlyTraceHit skipped = tracer.trace(from, -radial, outer);
+    EXPECT_NE(skipped.fiber, outer);
+    // A ray along +z exactly on the axis of the empty ply (no fibers hit) wraps
+    // until it gives up; one along z at the surface leaves at once.
+    const PlyGeometry sparse = generatePly({1, 0.01, 0.0}, 1.0, 1.0, 1);
+    const PeriodicPlyTracer empty(sparse);
+    const Vec3 q = sparse.fiberCentre(0, 0);
+    const Vec3 awayFromFiber =
+        std::hypot(q.x, q.y) > 0.5 ? Vec3(0, 0, 0) : normalize(Vec3(q.x, q.y, 0)) * -0.8;
+    const PlyTraceHit axial = empty.trace(awayFromFiber + Vec3(0, 0, 1.0), {0, 0, 1}, -1, 50);
+    EXPECT_EQ(axial.kind, PlyTraceHit::Kind::ExitAxial);
+    EXPECT_EQ(axial.raysTraced, 51);
+    // A steep ray crossing several periods keeps the same xy path: it exits
+    // the side after travelling the 2D chord.
+    const Vec3 steep = normalize(Vec3(0.01, 0.0, 1.0));
+    const PlyTraceHit out = empty.trace(awayFromFiber + Vec3(0, 0, 0.5), steep, 0, 10000);
+    EXPECT_EQ(out.kind, PlyTraceHit::Kind::ExitSide);
+    EXPECT_GT(out.raysTraced, 10);
+}
+
+TEST(Gather, LosslessFiberConservesEnergyInEveryIncidentBin) {
+    GatherOptions o = smallGather(losslessFiber(), {80, 0.3, 0.2}, testing::scaled(40000));
+    o.maxDepth = 8;  // some truncation, to check its bookkeeping too
+    const GatherResult r = gatherRdm(o);
+    EXPECT_GT(r.stats.truncatedPaths, 0);
+    double worst = 0;
+    for (size_t i = 0; i < r.bins.incidentCount(); ++i) {
+        ASSERT_GT(r.count[i], 0);
+        for (int c = 0; c < 3; ++c) {
+            const double e = energyBalance(r, i, c);
+            EXPECT_NEAR(e, 1.0, 1e-5) << "incident bin " << i << " channel " << c;
+            worst = std::max(worst, std::fabs(e - 1.0));
+        }
+    }
+    std::printf("lossless energy balance: largest |T + R + M + truncated - 1| = %.3g\n", worst);
+}
+
+// Independent transmission probability for straight fibers: a ray misses
+// every (infinite, straight) fiber exactly when its projection on the cross
+// section misses every disc of radius r.
+TEST(Gather, StraightPlyTransmissionMatchesTwoDimensionalGeometry) {
+    const PlyParams plyParams{120, 0.3, 0.0};
+    const GatherOptions o =
+        smallGather(findMaterialPreset("fleece").fiber, plyParams, testing::scaled(200000));
+    const GatherResult r = gatherRdm(o);
+    const PlyGeometry ply = generatePly(plyParams, 1.0, 1.0, o.seed);
+    const double rf = ply.fiberRadius;
+    const RdmBins& bins = o.bins;
+    const int64_t perBin = testing::scaled(20000);
+    double worstZ = 0;
+    Rng rng(99, 1);
+    for (size_t i = 0; i < bins.incidentCount(); ++i) {
+        const int ti = static_cast<int>(i / bins.phiI), pi = static_cast<int>(i % bins.phiI);
+        const double c0 = std::cos(ti * kHalfPi / bins.thetaI);
+        const double c1 = std::cos((ti + 1) * kHalfPi / bins.thetaI);
+        int64_t missed = 0;
+        for (int64_t k = 0; k < perBin; ++k) {
+            const double psi = kTwoPi * rng.uniform();
+            const double cosTheta = c1 + (c0 - c1) * rng.uniform();
+            const double sinTheta = std::sqrt(1 - cosTheta * cosTheta);
+            const double phi = -kPi + (pi + rng.uniform()) * kTwoPi / bins.phiI;
+            // Direction of travel -wi in 2D: n = (cos psi, sin psi), b = (-sin psi, cos psi).
+            const double wb = sinTheta * std::sin(phi), wn = cosTheta;
+            const double dx = -(wn * std::cos(psi) - wb * std::sin(psi));
+            const double dy = -(wn * std::sin(psi) + wb * std::cos(psi));
+            const double ex = std::cos(psi), ey = std::sin(psi);
+            const double len2 = dx * dx + dy * dy;
+            // Chord to the far side of the unit circle.
+            const double tExit = -2 * (ex * dx + ey * dy) / len2;
+            bool hit = false;
+            for (const auto& c : ply.centres) {
+                const double s = std::clamp(((c[0] - ex) * dx + (c[1] - ey) * dy) / len2, 0.0, tExit);
+                if (std::hypot(ex + s * dx - c[0], ey + s * dy - c[1]) < rf) {
+                    hit = true;
+                    break;
+                }
+            }
+            missed += !hit;
+        }
+        const double pTest = static_cast<double>(missed) / perBin;
+        const double p = 0.5 * (pTest + r.pT[i]);
+        const double se = std::sqrt(std::max(p * (1 - p), 1e-4) * (1.0 / perBin + 1.0 / r.count[i]));
+        const double z = std::fabs(r.pT[i] - pTest) / se;
+        worstZ = std::max(worstZ, z);
+        EXPECT_LT(z, 4.5) << "incident bin " << i << ": gather " << r.pT[i] << " vs 2D " << pTest;
+    }
+    std::printf("alpha = 0 P(T): largest |gather - 2D| / standard error = %.2f over %zu bins\n",
+                worstZ, bins.incidentCount());
+}
+
+TEST(Gather, SingleFiberFirstBounceEnergyIsTheFiberAlbedo) {
+    // One straight fiber: a path interacts at most once, and the expected
+    // weight of an interacting path is the fiber's albedo at that angle.
+    const FiberParams fleece = findMaterialPreset("fleece").fiber;
+    const PlyParams plyParams{1, 0.2, 0.0};
+    const GatherOptions o = smallGather(fleece, plyParams, testing::scaled(400000));
+    const GatherResult r = gatherRdm(o);
+    for (size_t d = 2; d < r.depth.size(); ++d) EXPECT_EQ(r.depth[d], 0) << "depth " << d;
+    const PlyGeometry ply = generatePly(plyParams, 1.0, 1.0, o.seed);
+    const double cx = ply.centres[0][0], cy = ply.centres[0][1], rf = ply.fiberRadius;
+    const RdmBins& bins = o.bins;
+    const size_t nOut = bins.outgoingCount();
+    const int64_t perBin = testing::scaled(100000);
+    Rng rng(7, 7);
+    for (size_t i = 0; i < bins.incidentCount(); ++i) {
+        const int ti = static_cast<int>(i / bins.phiI), pi = static_cast<int>(i % bins.phiI);
+        const double c0 = std::cos(ti * kHalfPi / bins.thetaI);
+        const double c1 = std::cos((ti + 1) * kHalfPi / bins.thetaI);
+        double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
+        for (int64_t k = 0; k < perBin; ++k) {
+            const double psi = kTwoPi * rng.uniform();
+            const double cosTheta = c1 + (c0 - c1) * rng.uniform();
+            const double sinTheta = std::sqrt(1 - cosTheta * cosTheta);
+            const double phi = -kPi + (pi + rng.uniform()) * kTwoPi / bins.phiI;
+            const double wt = sinTheta * std::cos(phi), wb = sinTheta * std::sin(phi), wn = cosTheta;
+            const double dx = -(wn * std::cos(psi) - wb * std::sin(psi));
+            const double dy = -(wn * std::sin(psi) + wb * std::cos(psi));
+            const double ex = std::cos(psi), ey = std::sin(psi), len2 = dx * dx + dy * dy;
+            const double tExit = -2 * (ex * dx + ey * dy) / len2;
+            const double s = std::clamp(((cx - ex) * dx + (cy - ey) * dy) / len2, 0.0, tExit);
+            if (std::hypot(ex + s * dx - cx, ey + s * dy - cy) >= rf) continue;
+            // Fiber along +z: cos(theta_f) = |d_xy| (the ray travels along -wi).
+            const double cosFiber = std::sqrt(1 - wt * wt);
+            const double m = 1 - cosFiber, schlick = m * m * m * m * m;
+            for (int c = 0; c < 3; ++c) {
+                const double f = fleece.cR[c] + (1 - fleece.cR[c]) * schlick;
+                const double albedo = f + (1 - f) * fleece.cTT[c];
+                sum[c] += albedo;
+                sum2[c] += albedo * albedo;
+            }
+        }
+        for (int c = 0; c < 3; ++c) {
+            double gathered = 0;
+            for (size_t j = 0; j < nOut; ++j) {
+                const size_t cell = (i * nOut + j) * 3 + c;
+                gathered += (static_cast<double>(r.rdmR[cell]) + r.rdmM[cell]) *
+                            bins.outgoingSolidAngle(j);
+                // R is the upper hemisphere only (DESIGN.md 5).
+                if (static_cast<int>(j) / bins.phiO >= bins.thetaO / 2) {
+                    EXPECT_EQ(r.rdmR[cell], 0.f);
+                }
+            }
+            const double mean = sum[c] / perBin;
+            const double var = sum2[c] / perBin - mean * mean;
+            // The gather's per-path weight varies more than the albedo (lobe
+            // choice); bound its variance by that of a 0/1 variable times 4.
+            const double seGather = std::sqrt(std::max(4.0 * gathered, 1e-6) / r.count[i]);
+            const double se = std::sqrt(var / perBin + seGather * seGather);
+            EXPECT_NEAR(gathered, mean, 4.5 * se) << "incident bin " << i << " channel " << c;
+        }
+    }
+}
+
+TEST(Gather, ResultDoesNotDependOnThreadCountButOnSeed) {
+    GatherOptions o = smallGather(findMaterialPreset("polyester").fiber, {60, 0.4, 0.2},
+                                  testing::scaled(20000));
+    o.threads = 1;
+    const GatherResult one = gatherRdm(o);
+    o.threads = 2;
+    const GatherResult two = gatherRdm(o);
+    EXPECT_EQ(one.count, two.count);
+    EXPECT_EQ(one.countT, two.countT);
+    EXPECT_EQ(one.depth, two.depth);
+    ASSERT_EQ(one.rdmM.size(), two.rdmM.size());
+    EXPECT_EQ(0, std::memcmp(one.rdmM.data(), two.rdmM.data(), one.rdmM.size() * sizeof(float)));
+    EXPECT_EQ(0, std::memcmp(one.rdmR.data(), two.rdmR.data(), one.rdmR.size() * sizeof(float)));
+    EXPECT_EQ(one.truncated, two.truncated);
+    o.seed = 12;
+    const GatherResult other = gatherRdm(o);
+    EXPECT_NE(0, std::memcmp(one.rdmM.data(), other.rdmM.data(), one.rdmM.size() * sizeof(float)));
+}
+
+TEST(Gather, InvalidOptionsAreRejected) {
+    GatherOptions o = smallGather(losslessFiber(), {80, 0.3, 0.2}, 0);
+    testing::expectInputError([&] { gatherRdm(o); }, {"paths = 0"});
+    o.paths = 10;
+    o.maxDepth = 0;
+    testing::expectInputError([&] { gatherRdm(o); }, {"max depth = 0"});
+    o.maxDepth = 10;
+    o.ply = {300, 0.95, 0.1};
+    testing::expectInputError([&] { gatherRdm(o); }, {"N=300", "rho=0.95"});
+    o.ply = {80, 0.3, 0.2};
+    o.segmentsPerTwist = 4;
+    testing::expectInputError([&] { gatherRdm(o); }, {"segments per twist = 4"});
+}
+
+}  // namespace
+}  // namespace weft

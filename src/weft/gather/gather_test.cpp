@@ -66,31 +66,32 @@ TEST(RdmBins, SolidAnglesAndBinsAreConsistent) {
 }
 
 TEST(PlyTracer, FindsFibersSkipsTheExcludedOneAndWrapsPeriodically) {
-    const PlyGeometry ply = generatePly({40, 0.3, 0.25}, 1.0, 1.0, 5);
+    const PlyGeometry ply = generatePly({40, 0.1, 0.25}, 1.0, 1.0, 5);
     const PeriodicPlyTracer tracer(ply);
     EXPECT_NEAR(tracer.period(), 2.0 / 0.25, 1e-12);
-    // A ray aimed at the centre line of the outermost fiber from just outside
-    // its tube, in the plane z = z0, hits that fiber first unless it is excluded.
-    int outer = 0;
-    for (int i = 1; i < 40; ++i) {
-        if (std::hypot(ply.centres[i][0], ply.centres[i][1]) >
-            std::hypot(ply.centres[outer][0], ply.centres[outer][1]))
-            outer = i;
+    // Pick a fiber whose neighbours are all more than 3r away and which has
+    // room to the bounding cylinder; a ray aimed at its centre line from 1.2r
+    // away (in the plane z = z0) hits it first, unless it is excluded.
+    const double r = ply.fiberRadius, z0 = 0.3 * tracer.period();
+    int target = -1;
+    for (int i = 0; i < 40 && target < 0; ++i) {
+        const Vec3 ci = ply.fiberCentre(i, z0);
+        bool isolated = std::hypot(ci.x, ci.y) + 1.3 * r < 1.0;
+        for (int j = 0; j < 40; ++j)
+            if (j != i && length(ply.fiberCentre(j, z0) - ci) < 3 * r) isolated = false;
+        if (isolated) target = i;
     }
-    const double z0 = 0.3 * tracer.period();
-    const Vec3 c = ply.fiberCentre(outer, z0);
+    ASSERT_GE(target, 0);
+    const Vec3 c = ply.fiberCentre(target, z0);
     const Vec3 radial = normalize(Vec3(c.x, c.y, 0));
-    // Start halfway between the tube and the bounding cylinder (fixed seed: a gap exists).
-    const double gap = 1.0 - std::hypot(c.x, c.y) - ply.fiberRadius;
-    ASSERT_GT(gap, 0.1 * ply.fiberRadius);
-    const Vec3 from = c + radial * (ply.fiberRadius + 0.5 * gap);
+    const Vec3 from = c + radial * (1.2 * r);
     const PlyTraceHit hit = tracer.trace(from, -radial, -1);
     ASSERT_EQ(hit.kind, PlyTraceHit::Kind::Fiber);
-    EXPECT_EQ(hit.fiber, outer);
+    EXPECT_EQ(hit.fiber, target);
     // The tube surface (to the chord accuracy of 128 segments per twist).
-    EXPECT_NEAR(length(hit.point - c), ply.fiberRadius, 0.02 * ply.fiberRadius);
-    const PlyTraceHit skipped = tracer.trace(from, -radial, outer);
-    EXPECT_NE(skipped.fiber, outer);
+    EXPECT_NEAR(length(hit.point - c), r, 0.02 * r);
+    const PlyTraceHit skipped = tracer.trace(from, -radial, target);
+    EXPECT_NE(skipped.fiber, target);
     // A ray along +z exactly on the axis of the empty ply (no fibers hit) wraps
     // until it gives up; one along z at the surface leaves at once.
     const PlyGeometry sparse = generatePly({1, 0.01, 0.0}, 1.0, 1.0, 1);

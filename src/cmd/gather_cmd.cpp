@@ -61,7 +61,7 @@ void runGather(const GatherCliOptions& c) {
         "{\"out\": \"%s\", \"paths\": %lld, \"seconds\": %.3f, \"paths_per_second\": %.0f, "
         "\"rays_per_second\": %.0f, \"mean_depth\": %.3f, \"truncated_fraction\": %.3g}\n",
         c.out.c_str(), static_cast<long long>(s.paths), s.seconds, s.paths / s.seconds,
-        s.rays / s.seconds, s.meanDepth, static_cast<double>(s.truncatedPaths) / s.paths);
+        s.rays / s.walkSeconds, s.meanDepth, static_cast<double>(s.truncatedPaths) / s.paths);
 }
 
 }  // namespace

@@ -120,10 +120,12 @@ BsdfSample FiberBcsdf::sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng
         cosPhiO = -(cosPhiI * cd - sinPhiI * sd);
         sinPhiO = -(sinPhiI * cd + cosPhiI * sd);
     }
-    const double cosThetaO = std::cos(thetaO);
-    s.wo = {std::sin(thetaO), cosThetaO * cosPhiO, cosThetaO * sinPhiO};
+    const double cosThetaO = std::cos(thetaO), sinThetaO = std::sin(thetaO);
+    s.wo = {sinThetaO, cosThetaO * cosPhiO, cosThetaO * sinPhiO};
+    // The angles of wo are known: no need for anglesOf(s.wo).
+    const Angles out{sinThetaO, cosThetaO, thetaO, s.wo.y, s.wo.z};
     Rgb value;
-    evalAndPdf(in, anglesOf(s.wo), &value, &s.pdf);
+    evalAndPdf(in, out, &value, &s.pdf);
     if (!(s.pdf > 0)) return BsdfSample{};
     s.weight = value / s.pdf;
     return s;

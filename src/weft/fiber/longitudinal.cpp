@@ -49,7 +49,9 @@ LongitudinalGaussian::LongitudinalGaussian(double beta)
     : beta_(beta), inv2Beta2_(0.5 / (beta * beta)), nodeSpacing_(kHalfPi / kTableIntervals) {
     logZ_.resize(kTableIntervals + 1);
     dLogZ_.resize(kTableIntervals + 1);
+    mode_.resize(kTableIntervals + 1);
     for (int j = 0; j <= kTableIntervals; ++j) {
+        mode_[j] = targetMode(j * nodeSpacing_, beta_);
         double dz = 0;
         const double z = normalizationByQuadrature(j * nodeSpacing_, &dz);
         logZ_[j] = std::log(z);
@@ -92,6 +94,13 @@ double LongitudinalGaussian::logNormalization(double mu) const {
            h11 * nodeSpacing_ * dLogZ_[j + 1];
 }
 
+double LongitudinalGaussian::proposalCentre(double mu) const {
+    const double x = std::min(std::fabs(mu), kHalfPi) / nodeSpacing_;
+    const int j = std::min(static_cast<int>(x), kTableIntervals - 1);
+    const double s = x - j;
+    return std::copysign((1.0 - s) * mode_[j] + s * mode_[j + 1], mu);
+}
+
 double LongitudinalGaussian::normalization(double mu) const {
     return std::exp(logNormalization(mu));
 }
@@ -107,10 +116,11 @@ double LongitudinalGaussian::sample(double mu, double u, Rng& rng) const {
     // with slope -2 tan t, so its tangent at t* = atan(s / 2) bounds it:
     // cos^2(t) exp(s t) <= cos^2(t*) exp(s t*). Accepting with the ratio of the
     // two sides gives exactly g cos^2 for any c.
-    const double centre = targetMode(mu, beta_);
+    const double centre = proposalCentre(mu);
     const double slope = (mu - centre) / (beta_ * beta_);
     const double tangentPoint = std::atan(0.5 * slope);
-    const double logCos2Tangent = -std::log1p(0.25 * slope * slope);
+    // 1 / cos^2(t*) = 1 + tan^2(t*) = 1 + s^2 / 4.
+    const double invCos2Tangent = 1.0 + 0.25 * slope * slope;
     const double scale = std::sqrt(2.0) * beta_;
     // erf is exactly +-1 in double beyond 6, so skip it there.
     const double lo = (-kHalfPi - centre) / scale, hi = (kHalfPi - centre) / scale;
@@ -124,9 +134,8 @@ double LongitudinalGaussian::sample(double mu, double u, Rng& rng) const {
         const double theta = std::clamp(centre + scale * erfInv(y), -kHalfPi, kHalfPi);
         const double c = std::cos(theta);
         if (c <= 0) continue;
-        const double logAccept =
-            2.0 * std::log(c) - logCos2Tangent + slope * (theta - tangentPoint);
-        if (rng.uniform() < std::exp(logAccept)) return theta;
+        const double accept = c * c * invCos2Tangent * std::exp(slope * (theta - tangentPoint));
+        if (rng.uniform() < accept) return theta;
     }
     return centre;
 }

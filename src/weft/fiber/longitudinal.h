@@ -37,6 +37,9 @@ public:
     // Z(mu), the normaliser; symmetric in mu.
     double normalization(double mu) const;
     double logNormalization(double mu) const;
+    // The proposal centre of sample(): the mode of g cos^2, interpolated from a
+    // table (sample() is exact for any centre; the mode keeps it efficient).
+    double proposalCentre(double mu) const;
 
     // g(theta; mu, beta) = exp(-(theta - mu)^2 / (2 beta^2)) / Z(mu).
     double eval(double theta, double mu) const;
@@ -52,6 +55,7 @@ private:
     double beta_, inv2Beta2_;
     double nodeSpacing_;
     std::vector<double> logZ_, dLogZ_;  // at mu = j * nodeSpacing_, j = 0..n
+    std::vector<double> mode_;          // mode of g cos^2 at the same nodes
 };
 
 }  // namespace weft

@@ -6,31 +6,22 @@
 
 namespace weft {
 
-double vonMisesPdf(double x, double kappa) {
-    return std::exp(kappa * (std::cos(x) - 1.0)) / (kTwoPi * besselI0Scaled(kappa));
-}
+namespace {
 
-VonMises::VonMises(double kappa)
-    : kappa_(kappa), invNorm_(1.0 / (kTwoPi * besselI0Scaled(kappa))) {}
-
-double VonMises::pdf(double x) const { return std::exp(kappa_ * (std::cos(x) - 1.0)) * invNorm_; }
-
-double VonMises::pdfOfCos(double cosX) const {
-    return std::exp(kappa_ * (cosX - 1.0)) * invNorm_;
-}
-
-double VonMises::sample(double u, Rng& rng) const { return sampleVonMises(kappa_, u, rng); }
-
-double sampleVonMises(double kappa, double u, Rng& rng) {
-    // Best & Fisher: tau = 1 + sqrt(1 + 4 k^2), rho = (tau - sqrt(2 tau)) / (2k),
-    // r = (1 + rho^2) / (2 rho). We carry r - 1 = (1 - rho)^2 / (2 rho) and
-    // 1 - rho (from 2k - tau = -1 - 1 / (sqrt(1 + 4k^2) + 2k)) instead.
+// Best & Fisher: tau = 1 + sqrt(1 + 4 k^2), rho = (tau - sqrt(2 tau)) / (2k),
+// r = (1 + rho^2) / (2 rho). We carry r - 1 = (1 - rho)^2 / (2 rho) and
+// 1 - rho (from 2k - tau = -1 - 1 / (sqrt(1 + 4k^2) + 2k)) instead, so that
+// nothing cancels when kappa is large.
+double bestFisherRMinus1(double kappa) {
     const double root = std::sqrt(1.0 + 4.0 * kappa * kappa);
     const double tau = 1.0 + root;
-    const double oneMinusRho = (std::sqrt(2.0 * tau) - 1.0 - 1.0 / (root + 2.0 * kappa)) /
-                               (2.0 * kappa);
+    const double oneMinusRho =
+        (std::sqrt(2.0 * tau) - 1.0 - 1.0 / (root + 2.0 * kappa)) / (2.0 * kappa);
     const double rho = 1.0 - oneMinusRho;
-    const double rMinus1 = oneMinusRho * oneMinusRho / (2.0 * rho);
+    return oneMinusRho * oneMinusRho / (2.0 * rho);
+}
+
+double sampleBestFisher(double kappa, double rMinus1, double u, Rng& rng) {
     for (int round = 0; round < 200; ++round) {
         const double u1 = round == 0 ? u : rng.uniform();
         // z = cos(pi u1); 1 + z and 1 - z without cancellation.
@@ -49,5 +40,31 @@ double sampleVonMises(double kappa, double u, Rng& rng) {
     }
     return 0.0;
 }
+
+}  // namespace
+
+double vonMisesPdf(double x, double kappa) {
+    return std::exp(kappa * (std::cos(x) - 1.0)) / (kTwoPi * besselI0Scaled(kappa));
+}
+
+VonMises::VonMises(double kappa)
+    : kappa_(kappa),
+      invNorm_(1.0 / (kTwoPi * besselI0Scaled(kappa))),
+      rMinus1_(bestFisherRMinus1(kappa)) {}
+
+double VonMises::pdf(double x) const { return std::exp(kappa_ * (std::cos(x) - 1.0)) * invNorm_; }
+
+double VonMises::pdfOfCos(double cosX) const {
+    return std::exp(kappa_ * (cosX - 1.0)) * invNorm_;
+}
+
+double VonMises::sample(double u, Rng& rng) const {
+    return sampleBestFisher(kappa_, rMinus1_, u, rng);
+}
+
+double sampleVonMises(double kappa, double u, Rng& rng) {
+    return sampleBestFisher(kappa, bestFisherRMinus1(kappa), u, rng);
+}
+
 
 }  // namespace weft

@@ -26,6 +26,7 @@ public:
 
 private:
     double kappa_, invNorm_;
+    double rMinus1_;  // Best & Fisher's r - 1, computed once per kappa
 };
 
 // An angle in [-pi, pi] measured from the mean, exactly von Mises distributed.

@@ -74,6 +74,7 @@ GatherResult gatherRdm(const GatherOptions& o) {
     Progress progress("gather", static_cast<uint64_t>(o.paths), o.quiet);
     const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
+    const auto walkStart = std::chrono::steady_clock::now();
     arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<int64_t>(0, chunks), [&](const auto& range) {
             for (int64_t chunk = range.begin(); chunk != range.end(); ++chunk) {
@@ -150,6 +151,8 @@ GatherResult gatherRdm(const GatherOptions& o) {
             }
         });
     });
+    const double walkSeconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - walkStart).count();
     progress.finish();
 
     GatherResult r;
@@ -189,6 +192,7 @@ GatherResult gatherRdm(const GatherOptions& o) {
     st.meanDepth = static_cast<double>(depthSum.load()) / o.paths;
     for (int c = 0; c < 3; ++c) st.truncatedEnergy[c] = truncatedTotal[c] / o.paths;
     st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    st.walkSeconds = walkSeconds;
     st.threads = threads;
     st.period = period;
     st.fiberRadius = ply.fiberRadius;
@@ -238,7 +242,8 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
         {"elapsed_seconds", s.seconds},
         {"paths_per_second", s.paths / s.seconds},
         {"rays", s.rays},
-        {"rays_per_second", s.rays / s.seconds},
+        {"walk_seconds", s.walkSeconds},
+        {"rays_per_second", s.rays / s.walkSeconds},
         {"mean_depth", s.meanDepth},
         {"truncated_fraction", static_cast<double>(s.truncatedPaths) / s.paths},
         {"truncated_energy", {s.truncatedEnergy[0], s.truncatedEnergy[1], s.truncatedEnergy[2]}},

@@ -52,7 +52,8 @@ struct GatherStats {
     int64_t axialPaths = 0;      // ran along the axis without hit or exit (recorded as exits)
     double meanDepth = 0;        // mean number of fiber interactions
     double truncatedEnergy[3] = {0, 0, 0};  // mean remaining weight per path
-    double seconds = 0;
+    double seconds = 0;      // whole gather: placement, BVH, walks, normalisation
+    double walkSeconds = 0;  // the random walks alone
     int threads = 0;
     double period = 0, fiberRadius = 0;
     int64_t segments = 0, embreeBytes = 0;

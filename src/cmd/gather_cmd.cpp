@@ -7,6 +7,7 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/gather/gather.h"
+#include "weft/gather/rdm_image.h"
 
 namespace weft::cmd {
 
@@ -88,6 +89,26 @@ void addGatherCommand(CLI::App& app) {
     gather->add_flag("--quiet", o->quiet, "no progress output");
     gather->add_option("--out", o->out, "output directory (written atomically)")->required();
     gather->callback([o] { runGather(*o); });
+
+    struct SliceOptions {
+        std::string rdm, component = "m", out;
+        double thetaI = 45, phiI = 0;
+    };
+    auto so = std::make_shared<SliceOptions>();
+    CLI::App* rdm = app.add_subcommand("rdm", "Inspect a gathered RDM directory");
+    rdm->require_subcommand(1);
+    CLI::App* slice = rdm->add_subcommand(
+        "slice", "PNG of the R or M map of one incident bin over all outgoing directions "
+                 "(x: phi_o -180..180, y: theta_o 0 (top) .. 180 degrees)");
+    slice->add_option("--rdm", so->rdm, "directory written by weft gather")->required();
+    slice->add_option("--component", so->component, "r or m")->default_val("m");
+    slice->add_option("--theta-i", so->thetaI, "incident theta in degrees [0, 90]")->default_val(45);
+    slice->add_option("--phi-i", so->phiI, "incident phi in degrees [-180, 180]")->default_val(0);
+    slice->add_option("--out", so->out, "output PNG")->required();
+    slice->callback([so] {
+        const size_t bin = writeRdmSlicePng(so->rdm, so->component, so->thetaI, so->phiI, so->out);
+        std::printf("{\"incident_bin\": %zu, \"out\": \"%s\"}\n", bin, so->out.c_str());
+    });
 }
 
 }  // namespace weft::cmd

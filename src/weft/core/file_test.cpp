@@ -182,10 +182,10 @@ TEST_F(FileTest, TempDirCommitErrorsNamePath) {
 
     const std::string notDir = path("file.txt");
     writeFileAtomic(notDir, "x");
-    TempDirCommit out(notDir);
-    expectInputError([&] { out.commit(); }, {notDir, "not a directory"});
-    EXPECT_FALSE(out.committed());
+    // Refused at construction, before any work is done, and nothing is created.
+    expectInputError([&] { TempDirCommit out(notDir); }, {notDir, "not a directory"});
     EXPECT_EQ(readFile(notDir), "x");
+    EXPECT_FALSE(std::filesystem::exists(notDir + ".tmp." + std::to_string(::getpid())));
 }
 
 }  // namespace

@@ -49,6 +49,7 @@ void GatherOptions::validate() const {
     if (threads < 0 || threads > 1024)
         throw InputError("threads = " + std::to_string(threads) +
                          " is out of range: allowed [0, 1024] (0: all cores)");
+    PeriodicPlyTracer::validateSegmentsPerTwist(segmentsPerTwist);
     fiber.validate();
     ply.validate();
     bins.validate();

@@ -61,10 +61,14 @@ double intersect(RTCScene scene, ExcludeContext& ctx, const Vec3& org, const Vec
 
 }  // namespace
 
-PeriodicPlyTracer::PeriodicPlyTracer(const PlyGeometry& ply, int segmentsPerTwist) : ply_(ply) {
+void PeriodicPlyTracer::validateSegmentsPerTwist(int segmentsPerTwist) {
     if (segmentsPerTwist < 16 || segmentsPerTwist > 65536)
         throw InputError("segments per twist = " + std::to_string(segmentsPerTwist) +
                          " is out of range: allowed [16, 65536]");
+}
+
+PeriodicPlyTracer::PeriodicPlyTracer(const PlyGeometry& ply, int segmentsPerTwist) : ply_(ply) {
+    validateSegmentsPerTwist(segmentsPerTwist);
     const double radius = ply_.radius, r = ply_.fiberRadius;
     const bool straight = ply_.params.twist == 0;
     period_ = straight ? 4.0 * radius : ply_.twistPeriod();

@@ -62,6 +62,9 @@ public:
     // `excludedFiber` (-1: none) or leaves the cylinder's side. A ray that
     // wraps more than `maxWraps` times without either (almost parallel to the
     // axis) is reported as ExitAxial.
+    // InputError unless segmentsPerTwist is in [16, 65536].
+    static void validateSegmentsPerTwist(int segmentsPerTwist);
+
     PlyTraceHit trace(const Vec3& org, const Vec3& dir, int excludedFiber,
                       int maxWraps = 4096) const;
 

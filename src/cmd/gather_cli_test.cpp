@@ -1,0 +1,448 @@
+// End-to-end tests of `weft gather`: each test runs the built binary (WEFT_BIN)
+// in a fresh temporary directory and checks its exit status, its messages and
+// the arrays, ply and metadata it writes.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <initializer_list>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "weft/core/curve_io.h"
+#include "weft/core/file.h"
+#include "weft/core/npy.h"
+#include "weft/core/test_util.h"
+
+namespace weft {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kPi = std::numbers::pi;
+
+// Small runs: 3,8,6,12 bins keep every array tiny and every run well under a second.
+const std::string kSmall = "--paths 3000 --bins 3,8,6,12 --quiet";
+const char* const kNpyFiles[] = {"count.npy", "count_t.npy",   "p_t.npy",  "rdm_r.npy",
+                                 "rdm_m.npy", "truncated.npy", "depth.npy"};
+// N = 300 fibers cannot be packed at density 0.95 (fiber.json: kLosslessFiber).
+const std::string kImpossiblePly =
+    "--params fiber.json --fibers 300 --density 0.95 --twist 0 " + kSmall;
+// A lossless fiber: c_tt = 1, the Fresnel term splits energy between R and TT.
+const std::string kLosslessFiber =
+    R"({"c_r":0.04,"c_tt":1,"beta_r_deg":7,"beta_tt_deg":12,"gamma_tt_deg":25})";
+
+struct RunResult {
+    int status = -1;  // exit status; -signal if the process was killed by a signal
+    std::string out;  // stdout
+    std::string err;  // stderr
+};
+
+// Single-quotes `s` for /bin/sh.
+std::string shellQuote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+bool contains(const std::string& text, const std::string& part) {
+    return text.find(part) != std::string::npos;
+}
+
+// The elements of an array whose descr matches T (checked by the caller).
+template <typename T>
+std::vector<T> values(const NpyArray& a) {
+    std::vector<T> v(a.size());
+    EXPECT_EQ(a.bytes.size(), v.size() * sizeof(T));
+    if (a.bytes.size() == v.size() * sizeof(T) && !v.empty())
+        std::memcpy(v.data(), a.bytes.data(), a.bytes.size());
+    return v;
+}
+
+// Reads DIR/NAME and checks its dtype and shape.
+NpyArray readChecked(const std::string& dir, const std::string& name, const std::string& descr,
+                     const std::vector<size_t>& shape) {
+    const NpyArray a = readNpy(dir + "/" + name);
+    EXPECT_EQ(a.descr, descr) << name;
+    EXPECT_EQ(a.shape, shape) << name << ": " << npyShapeString(a.shape);
+    return a;
+}
+
+class GatherCliTest : public testing::TempDirTest {
+  protected:
+    void SetUp() override {
+        TempDirTest::SetUp();
+        errFile_ = dir_.string() + ".stderr";
+    }
+    void TearDown() override {
+        std::error_code ignored;
+        fs::remove(errFile_, ignored);
+        TempDirTest::TearDown();
+    }
+
+    // Runs `weft gather ARGS` (ARGS is shell text) inside the test directory.
+    RunResult gather(const std::string& args) const {
+        const std::string cmd = "cd " + shellQuote(dir_.string()) + " && " + shellQuote(WEFT_BIN) +
+                                " gather " + args + " 2>" + shellQuote(errFile_);
+        RunResult r;
+        FILE* pipe = ::popen(cmd.c_str(), "r");
+        if (!pipe) {
+            ADD_FAILURE() << "popen failed for: " << cmd;
+            return r;
+        }
+        char buf[4096];
+        size_t n;
+        while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) r.out.append(buf, n);
+        const int st = ::pclose(pipe);
+        if (WIFEXITED(st)) {
+            r.status = WEXITSTATUS(st);
+        } else if (WIFSIGNALED(st)) {
+            r.status = -WTERMSIG(st);
+        }
+        r.err = fs::exists(errFile_) ? readFile(errFile_) : std::string();
+        return r;
+    }
+
+    // Runs a gather that must succeed and returns its stdout.
+    std::string gatherOk(const std::string& args) const {
+        const RunResult r = gather(args);
+        EXPECT_EQ(r.status, 0) << "weft gather " << args << "\nstderr: " << r.err;
+        return r.out;
+    }
+
+    void writeText(const std::string& name, const std::string& text) const {
+        writeFileAtomic(path(name), text);
+    }
+
+    // Names of the entries in the test directory, sorted.
+    std::vector<std::string> listing() const {
+        std::vector<std::string> names;
+        for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename());
+        std::sort(names.begin(), names.end());
+        return names;
+    }
+
+    nlohmann::json meta(const std::string& out) const {
+        return nlohmann::json::parse(readFile(path(out) + "/meta.json"));
+    }
+
+    std::string errFile_;
+};
+
+// Exit status 2 and a "weft: error: " message on stderr containing every part.
+void expectUserError(const RunResult& r, std::initializer_list<std::string> parts) {
+    EXPECT_EQ(r.status, 2) << "stdout: " << r.out << "\nstderr: " << r.err;
+    EXPECT_TRUE(contains(r.err, "weft: error: ")) << "stderr: " << r.err;
+    for (const std::string& p : parts)
+        EXPECT_TRUE(contains(r.err, p)) << "stderr '" << r.err << "' lacks '" << p << "'";
+    EXPECT_TRUE(r.out.empty()) << "stdout: " << r.out;
+}
+
+// ---------------------------------------------------------------------------
+// Successful runs
+
+TEST_F(GatherCliTest, WritesArraysOfTheDocumentedTypesAndShapes) {
+    const std::string out = gatherOk("--preset fleece " + kSmall + " --out out");
+    const std::string dir = path("out");
+    const size_t ti = 3, pi = 8, to = 6, po = 12;
+
+    const auto count = values<int64_t>(readChecked(dir, "count.npy", "<i8", {ti, pi}));
+    const auto countT = values<int64_t>(readChecked(dir, "count_t.npy", "<i8", {ti, pi}));
+    const auto pT = values<double>(readChecked(dir, "p_t.npy", "<f8", {ti, pi}));
+    const auto rdmR = values<float>(readChecked(dir, "rdm_r.npy", "<f4", {ti, pi, to, po, 3}));
+    const auto rdmM = values<float>(readChecked(dir, "rdm_m.npy", "<f4", {ti, pi, to, po, 3}));
+    const auto trunc = values<double>(readChecked(dir, "truncated.npy", "<f8", {ti, pi, 3}));
+    const auto depth = values<int64_t>(readChecked(dir, "depth.npy", "<i8", {1002}));
+
+    int64_t paths = 0, depthPaths = 0;
+    for (int64_t c : count) paths += c;
+    for (int64_t d : depth) {
+        EXPECT_GE(d, 0);
+        depthPaths += d;
+    }
+    EXPECT_EQ(paths, 3000);
+    EXPECT_EQ(depthPaths, 3000);
+    // Paths with no interaction (depth 0) are exactly the T paths.
+    int64_t tPaths = 0;
+    for (int64_t c : countT) tPaths += c;
+    EXPECT_EQ(depth[0], tPaths);
+    ASSERT_EQ(pT.size(), count.size());
+    for (size_t i = 0; i < count.size(); ++i) {
+        EXPECT_GE(countT[i], 0);
+        EXPECT_LE(countT[i], count[i]) << i;
+        const double expected =
+            count[i] > 0 ? static_cast<double>(countT[i]) / static_cast<double>(count[i]) : 0.0;
+        EXPECT_EQ(pT[i], expected) << "incident bin " << i;
+    }
+    for (float v : rdmR) EXPECT_TRUE(std::isfinite(v) && v >= 0) << v;
+    for (float v : rdmM) EXPECT_TRUE(std::isfinite(v) && v >= 0) << v;
+    for (double v : trunc) EXPECT_TRUE(std::isfinite(v) && v >= 0) << v;
+    // Fleece scatters: some R and some M energy is recorded.
+    EXPECT_GT(*std::max_element(rdmR.begin(), rdmR.end()), 0.0f);
+    EXPECT_GT(*std::max_element(rdmM.begin(), rdmM.end()), 0.0f);
+
+    // The one-line JSON summary on stdout.
+    ASSERT_FALSE(out.empty());
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+    const nlohmann::json summary = nlohmann::json::parse(out);
+    EXPECT_EQ(summary.at("out"), "out");
+    EXPECT_EQ(summary.at("paths"), 3000);
+    for (const char* key :
+         {"seconds", "paths_per_second", "rays_per_second", "mean_depth", "truncated_fraction"})
+        EXPECT_TRUE(summary.contains(key)) << key << " missing from " << out;
+
+    // Nothing else was left in the test directory (no DIR.tmp.<pid>).
+    EXPECT_EQ(listing(), std::vector<std::string>{"out"});
+    std::vector<std::string> files;
+    for (const auto& e : fs::directory_iterator(dir)) files.push_back(e.path().filename());
+    std::sort(files.begin(), files.end());
+    EXPECT_EQ(files, (std::vector<std::string>{"count.npy", "count_t.npy", "depth.npy", "meta.json",
+                                               "p_t.npy", "ply.txt", "rdm_m.npy", "rdm_r.npy",
+                                               "truncated.npy"}));
+}
+
+TEST_F(GatherCliTest, MetaJsonAndPly) {
+    gatherOk("--preset fleece " + kSmall + " --seed 7 --threads 2 --out out");
+    const nlohmann::json m = meta("out");
+    for (const char* key :
+         {"paths", "seed", "bins", "threads", "elapsed_seconds", "paths_per_second",
+          "rays_per_second", "truncated_fraction", "truncated_energy", "end_exit_fraction",
+          "mean_depth", "versions", "fiber", "ply"})
+        EXPECT_TRUE(m.contains(key)) << key << " missing from meta.json";
+    EXPECT_EQ(m.at("paths"), 3000);
+    EXPECT_EQ(m.at("seed"), 7);
+    EXPECT_EQ(m.at("bins"), nlohmann::json({3, 8, 6, 12}));
+    EXPECT_EQ(m.at("threads"), 2);
+    EXPECT_EQ(m.at("material"), "fleece");
+    EXPECT_GT(m.at("elapsed_seconds").get<double>(), 0.0);
+    EXPECT_GT(m.at("paths_per_second").get<double>(), 0.0);
+    EXPECT_GT(m.at("rays_per_second").get<double>(), 0.0);
+    EXPECT_GT(m.at("mean_depth").get<double>(), 0.0);
+    const double truncatedFraction = m.at("truncated_fraction").get<double>();
+    EXPECT_GE(truncatedFraction, 0.0);
+    EXPECT_LE(truncatedFraction, 1.0);
+    ASSERT_TRUE(m.at("truncated_energy").is_array());
+    EXPECT_EQ(m.at("truncated_energy").size(), 3u);
+    EXPECT_TRUE(m.at("end_exit_fraction").is_number());
+    EXPECT_TRUE(m.at("versions").at("weft").is_string());
+    EXPECT_EQ(m.at("versions").at("weft"), WEFT_VERSION);
+    EXPECT_TRUE(m.at("versions").at("embree").is_string());
+    EXPECT_FALSE(m.at("versions").at("embree").get<std::string>().empty());
+    // The fleece preset (paper Table 3).
+    EXPECT_EQ(m.at("ply").at("fibers"), 300);
+    EXPECT_DOUBLE_EQ(m.at("ply").at("density").get<double>(), 0.30);
+    EXPECT_DOUBLE_EQ(m.at("ply").at("twist").get<double>(), 0.24);
+    EXPECT_DOUBLE_EQ(m.at("fiber").at("beta_r_deg").get<double>(), 7.238);
+    EXPECT_DOUBLE_EQ(m.at("fiber").at("gamma_tt_deg").get<double>(), 25.989);
+
+    // The mean depth agrees with the depth histogram (no truncation at depth 1000 here).
+    const auto depth = values<int64_t>(readNpy(path("out/depth.npy")));
+    double depthSum = 0;
+    for (size_t d = 0; d + 1 < depth.size(); ++d) depthSum += static_cast<double>(d) * depth[d];
+    if (depth.back() == 0) {
+        EXPECT_NEAR(m.at("mean_depth").get<double>(), depthSum / 3000, 1e-12);
+    }
+
+    // ply.txt: the 300 traced fiber centre lines, radius r = R sqrt(rho / N).
+    const CurveSet ply = readCurveText(path("out/ply.txt"));
+    ASSERT_EQ(ply.curves.size(), 300u);
+    const double r = std::sqrt(0.30 / 300);
+    for (size_t i = 0; i < ply.curves.size(); ++i) {
+        ASSERT_GE(ply.curves[i].size(), 2u) << i;
+        ASSERT_TRUE(ply.hasRadii(i)) << i;
+        EXPECT_NEAR(ply.radii[i][0], r, 1e-6) << i;
+        for (const Vec3& p : ply.curves[i]) {
+            EXPECT_LE(std::hypot(p.x, p.y), 1.0 - r + 1e-6) << "curve " << i;
+        }
+    }
+}
+
+TEST_F(GatherCliTest, BitIdenticalForAnyThreadCount) {
+    gatherOk("--preset fleece " + kSmall + " --seed 3 --threads 1 --out one");
+    gatherOk("--preset fleece " + kSmall + " --seed 3 --threads 2 --out two");
+    for (const char* name : kNpyFiles)
+        EXPECT_TRUE(readFile(path("one") + "/" + name) == readFile(path("two") + "/" + name))
+            << name << " differs between --threads 1 and --threads 2";
+    EXPECT_TRUE(readFile(path("one/ply.txt")) == readFile(path("two/ply.txt")));
+    EXPECT_EQ(meta("one").at("threads"), 1);
+    EXPECT_EQ(meta("two").at("threads"), 2);
+}
+
+TEST_F(GatherCliTest, SeedDeterminesTheResult) {
+    gatherOk("--preset fleece " + kSmall + " --seed 11 --out a");
+    gatherOk("--preset fleece " + kSmall + " --seed 11 --out b");
+    gatherOk("--preset fleece " + kSmall + " --seed 12 --out c");
+    for (const char* name : kNpyFiles)
+        EXPECT_TRUE(readFile(path("a") + "/" + name) == readFile(path("b") + "/" + name))
+            << name << " differs between two runs with the same seed";
+    EXPECT_TRUE(readFile(path("a/rdm_m.npy")) != readFile(path("c/rdm_m.npy")))
+        << "--seed 11 and --seed 12 gave the same rdm_m.npy";
+    // The seed also places the fibers.
+    EXPECT_TRUE(readFile(path("a/ply.txt")) != readFile(path("c/ply.txt")));
+    EXPECT_EQ(meta("c").at("seed"), 12);
+}
+
+TEST_F(GatherCliTest, ParamsWithExplicitPly) {
+    writeText("fiber.json", kLosslessFiber);
+    gatherOk("--params fiber.json --fibers 40 --density 0.2 --twist 0.1 " + kSmall + " --out out");
+    const nlohmann::json m = meta("out");
+    EXPECT_EQ(m.at("ply").at("fibers"), 40);
+    EXPECT_DOUBLE_EQ(m.at("ply").at("density").get<double>(), 0.2);
+    EXPECT_DOUBLE_EQ(m.at("ply").at("twist").get<double>(), 0.1);
+    EXPECT_EQ(m.at("material"), "fiber.json");
+    EXPECT_DOUBLE_EQ(m.at("fiber").at("beta_tt_deg").get<double>(), 12.0);
+    EXPECT_DOUBLE_EQ(m.at("fiber").at("gamma_tt_deg").get<double>(), 25.0);
+    EXPECT_EQ(m.at("fiber").at("c_tt"), nlohmann::json({1.0, 1.0, 1.0}));
+    EXPECT_EQ(readCurveText(path("out/ply.txt")).curves.size(), 40u);
+    int64_t paths = 0;
+    for (int64_t c : values<int64_t>(readNpy(path("out/count.npy")))) paths += c;
+    EXPECT_EQ(paths, 3000);
+}
+
+// Lossless fibers: every path's energy ends in T, R, M or the truncated
+// remainder, so per incident bin p_t + sum_o (R + M) solidAngle(o) + truncated = 1.
+void expectEnergyConserved(const std::string& dir) {
+    const size_t ti = 3, pi = 8, to = 6, po = 12;
+    const auto count = values<int64_t>(readChecked(dir, "count.npy", "<i8", {ti, pi}));
+    const auto pT = values<double>(readChecked(dir, "p_t.npy", "<f8", {ti, pi}));
+    const auto rdmR = values<float>(readChecked(dir, "rdm_r.npy", "<f4", {ti, pi, to, po, 3}));
+    const auto rdmM = values<float>(readChecked(dir, "rdm_m.npy", "<f4", {ti, pi, to, po, 3}));
+    const auto trunc = values<double>(readChecked(dir, "truncated.npy", "<f8", {ti, pi, 3}));
+    const size_t nOut = to * po;
+    for (size_t i = 0; i < ti * pi; ++i) {
+        ASSERT_GT(count[i], 0) << "incident bin " << i << " received no paths";
+        for (int c = 0; c < 3; ++c) {
+            double total = pT[i] + trunc[i * 3 + c];
+            for (size_t o = 0; o < nOut; ++o) {
+                const double a = static_cast<double>(o / po) * kPi / to;
+                const double b = static_cast<double>(o / po + 1) * kPi / to;
+                const double solidAngle = (std::cos(a) - std::cos(b)) * 2 * kPi / po;
+                const size_t cell = (i * nOut + o) * 3 + c;
+                total += (static_cast<double>(rdmR[cell]) + rdmM[cell]) * solidAngle;
+            }
+            EXPECT_NEAR(total, 1.0, 1e-5) << "incident bin " << i << ", channel " << c;
+        }
+    }
+}
+
+TEST_F(GatherCliTest, LosslessFiberConservesEnergy) {
+    writeText("fiber.json", kLosslessFiber);
+    gatherOk("--params fiber.json --fibers 60 --density 0.3 --twist 0.2 " + kSmall + " --out out");
+    expectEnergyConserved(path("out"));
+}
+
+TEST_F(GatherCliTest, LosslessFiberConservesEnergyWithTruncation) {
+    writeText("fiber.json", kLosslessFiber);
+    gatherOk("--params fiber.json --fibers 60 --density 0.3 --twist 0.2 " + kSmall +
+             " --max-depth 2 --out out");
+    expectEnergyConserved(path("out"));
+    // Depth histogram 0, 1, 2, truncated; some paths are cut at depth 2.
+    const auto depth = values<int64_t>(readChecked(path("out"), "depth.npy", "<i8", {4}));
+    EXPECT_GT(depth[3], 0);
+    const nlohmann::json m = meta("out");
+    EXPECT_EQ(m.at("max_depth"), 2);
+    EXPECT_NEAR(m.at("truncated_fraction").get<double>(), depth[3] / 3000.0, 1e-12);
+    // Lossless: each truncated path carries its full unit weight.
+    for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(m.at("truncated_energy")[c].get<double>(), depth[3] / 3000.0, 1e-6);
+}
+
+TEST_F(GatherCliTest, ReplacesAnExistingDirectory) {
+    fs::create_directories(path("out"));
+    writeText("out/old.txt", "old");
+    gatherOk("--preset fleece " + kSmall + " --out out");
+    EXPECT_FALSE(fs::exists(path("out/old.txt")));
+    for (const char* name : kNpyFiles) EXPECT_TRUE(fs::is_regular_file(path("out") + "/" + name));
+    EXPECT_TRUE(fs::is_regular_file(path("out/ply.txt")));
+    EXPECT_TRUE(fs::is_regular_file(path("out/meta.json")));
+    // Neither the temporary nor the moved-aside old directory is left behind.
+    EXPECT_EQ(listing(), std::vector<std::string>{"out"});
+}
+
+// ---------------------------------------------------------------------------
+// User errors: exit 2, a message naming the problem, no output left behind
+
+TEST_F(GatherCliTest, ImpossiblePly) {
+    writeText("fiber.json", kLosslessFiber);
+    const RunResult r = gather(kImpossiblePly + " --out out");
+    expectUserError(r, {"N=300", "rho=0.95"});
+    EXPECT_EQ(listing(), std::vector<std::string>{"fiber.json"});
+}
+
+TEST_F(GatherCliTest, BadOptions) {
+    struct Case {
+        std::string args;
+        std::vector<std::string> parts;
+    };
+    const std::string preset = "--preset fleece --quiet --out out ";
+    const std::vector<Case> cases = {
+        {preset + "--paths 0 --bins 3,8,6,12", {"paths", "0"}},
+        {preset + "--paths -5 --bins 3,8,6,12", {"paths", "-5"}},
+        {"--preset flece --paths 10 --out out", {"flece", "fleece", "silk", "gabardine"}},
+        {preset + "--paths 10 --bins 22,90,45", {"--bins", "22,90,45"}},
+        {preset + "--paths 10 --bins 0,90,45,90", {"bins", "theta_i", "0"}},
+        {preset + "--paths 10 --bins 3,8,6,x", {"--bins", "3,8,6,x"}},
+        {preset + "--paths 10 --bins 3,8,6,12 --max-depth 0", {"depth", "0"}},
+        {preset + "--paths 10 --bins 3,8,6,12 --threads -1", {"threads", "-1"}},
+        {preset + "--paths 10 --bins 3,8,6,12 --segments-per-twist 8", {"segments", "8"}},
+        {"--preset fleece --fibers 40 --paths 10 --out out", {"--preset", "--fibers"}},
+        {"--preset fleece --params fiber.json --paths 10 --out out", {"--preset", "--params"}},
+        {"--params fiber.json --paths 10 --out out", {"--fibers"}},
+        {"--params fiber.json --fibers 40 --density 0.2 --paths 10 --out out", {"--twist"}},
+        {"--fibers 40 --density 0.2 --twist 0.1 --paths 10 --out out", {"--preset", "--params"}},
+        {"--params bad.json --fibers 40 --density 0.2 --twist 0.1 --paths 10 --out out",
+         {"bad.json", "malformed JSON"}},
+        {"--params missing.json --fibers 40 --density 0.2 --twist 0.1 --paths 10 --out out",
+         {"missing.json"}},
+        {"--params fiber.json --fibers 40 --density 1.5 --twist 0.1 --paths 10 --out out",
+         {"density", "1.5"}},
+    };
+    writeText("fiber.json", kLosslessFiber);
+    writeText("bad.json", R"({"c_r":0.04, "c_tt":)");
+    const std::vector<std::string> inputs = {"bad.json", "fiber.json"};
+    for (const Case& c : cases) {
+        SCOPED_TRACE("weft gather " + c.args);
+        const RunResult r = gather(c.args);
+        EXPECT_EQ(r.status, 2) << r.err;
+        EXPECT_TRUE(contains(r.err, "weft: error: ")) << r.err;
+        for (const std::string& p : c.parts)
+            EXPECT_TRUE(contains(r.err, p)) << "stderr '" << r.err << "' lacks '" << p << "'";
+        // No output directory and no out.tmp.<pid> left behind.
+        EXPECT_EQ(listing(), inputs);
+    }
+}
+
+TEST_F(GatherCliTest, OutputInsideAMissingDirectory) {
+    const RunResult r = gather("--preset fleece " + kSmall + " --out nonexistent/sub/out");
+    expectUserError(r, {"nonexistent/sub/out"});
+    EXPECT_TRUE(listing().empty());
+}
+
+TEST_F(GatherCliTest, OutputIsARegularFile) {
+    writeText("out", "not a directory");
+    const RunResult r = gather("--preset fleece " + kSmall + " --out out");
+    expectUserError(r, {"out", "not a directory"});
+    EXPECT_EQ(readFile(path("out")), "not a directory");
+    EXPECT_EQ(listing(), std::vector<std::string>{"out"});
+}
+
+TEST_F(GatherCliTest, FailedRunKeepsAnExistingDirectory) {
+    fs::create_directories(path("out"));
+    writeText("out/old.txt", "old");
+    writeText("fiber.json", kLosslessFiber);
+    const RunResult r = gather(kImpossiblePly + " --out out");
+    expectUserError(r, {"N=300", "rho=0.95"});
+    EXPECT_EQ(readFile(path("out/old.txt")), "old");
+    EXPECT_EQ(listing(), (std::vector<std::string>{"fiber.json", "out"}));
+}
+
+}  // namespace
+}  // namespace weft

@@ -2,6 +2,8 @@
 // (WEFT_BIN) in a fresh temporary directory and checks its exit status, its
 // messages and the files it writes against the library.
 #include <gtest/gtest.h>
+
+#include "cli_test_util.h"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -33,84 +35,15 @@ namespace fs = std::filesystem;
 
 constexpr double kPi = std::numbers::pi;
 
-struct RunResult {
-    int status = -1;  // exit status; -signal if the process was killed by a signal
-    std::string out;  // stdout
-    std::string err;  // stderr
+using testing::contains;
+using testing::RunResult;
+
+class CliTest : public testing::CliTestBase {
+protected:
+    std::string file(const std::string& name) const { return path(name); }
 };
 
-// Single-quotes `s` for /bin/sh.
-std::string shellQuote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-}
-
-bool contains(const std::string& text, const std::string& part) {
-    return text.find(part) != std::string::npos;
-}
-
-// A fresh working directory per test, removed afterwards.
-class CliTest : public ::testing::Test {
-  protected:
-    void SetUp() override {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ =
-            fs::path(::testing::TempDir()) / ("weft_cli_test." + std::to_string(::getpid()) + "." +
-                                              info->test_suite_name() + "." + info->name());
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-        errFile_ = dir_.string() + ".stderr";
-    }
-    void TearDown() override {
-        fs::remove_all(dir_);
-        fs::remove(errFile_);
-    }
-
-    std::string file(const std::string& name) const { return (dir_ / name).string(); }
-
-    // Runs `weft ARGS` (ARGS is shell text) inside the test directory.
-    RunResult run(const std::string& args) const {
-        const std::string cmd = "cd " + shellQuote(dir_.string()) + " && " + shellQuote(WEFT_BIN) +
-                                " " + args + " 2>" + shellQuote(errFile_);
-        RunResult r;
-        FILE* pipe = ::popen(cmd.c_str(), "r");
-        if (!pipe) {
-            ADD_FAILURE() << "popen failed for: " << cmd;
-            return r;
-        }
-        char buf[4096];
-        size_t n;
-        while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) r.out.append(buf, n);
-        const int st = ::pclose(pipe);
-        if (WIFEXITED(st)) {
-            r.status = WEXITSTATUS(st);
-        } else if (WIFSIGNALED(st)) {
-            r.status = -WTERMSIG(st);
-        }
-        r.err = fs::exists(errFile_) ? readFile(errFile_) : std::string();
-        return r;
-    }
-
-    // Names of the entries in the test directory, sorted.
-    std::vector<std::string> listing() const {
-        std::vector<std::string> names;
-        for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename());
-        std::sort(names.begin(), names.end());
-        return names;
-    }
-
-    fs::path dir_;
-    std::string errFile_;
-};
-
-// Exit status 2, a "weft: error: " message on stderr containing every part.
-void expectUserError(const RunResult& r, std::initializer_list<std::string> parts) {
-    EXPECT_EQ(r.status, 2) << "stdout: " << r.out << "\nstderr: " << r.err;
-    EXPECT_TRUE(contains(r.err, "weft: error: ")) << "stderr: " << r.err;
-    for (const std::string& p : parts)
-        EXPECT_TRUE(contains(r.err, p)) << "stderr '" << r.err << "' lacks '" << p << "'";
-}
+using testing::expectUserError;
 
 void expectRelNear(double actual, double expected, double rel, const std::string& what) {
     EXPECT_LE(std::fabs(actual - expected), rel * std::max(std::fabs(actual), std::fabs(expected)))

@@ -22,6 +22,18 @@ struct MaterialOptions {
     FiberParams fiber() const;
 };
 
+// --fibers N --density RHO --twist ALPHA: explicit ply geometry (paper eq. 1).
+struct PlyGeometryOptions {
+    int fibers = 0;
+    double density = 0, twist = 0;
+    CLI::Option *fibersOpt = nullptr, *densityOpt = nullptr, *twistOpt = nullptr;
+
+    void add(CLI::App& app);
+    bool anyGiven() const { return fibersOpt->count() || densityOpt->count() || twistOpt->count(); }
+    bool allGiven() const { return fibersOpt->count() && densityOpt->count() && twistOpt->count(); }
+    PlyParams params() const { return {fibers, density, twist}; }
+};
+
 // Parses "X,Y,Z" into three finite numbers; InputError naming `flag` otherwise.
 Vec3 parseVec3(const std::string& text, const std::string& flag);
 // parseVec3, then normalised (any non-zero finite vector, however large or small).

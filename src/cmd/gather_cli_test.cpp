@@ -21,6 +21,7 @@
 #include "weft/core/file.h"
 #include "weft/core/npy.h"
 #include "weft/core/test_util.h"
+#include "cli_test_util.h"
 
 namespace weft {
 namespace {
@@ -40,22 +41,8 @@ const std::string kImpossiblePly =
 const std::string kLosslessFiber =
     R"({"c_r":0.04,"c_tt":1,"beta_r_deg":7,"beta_tt_deg":12,"gamma_tt_deg":25})";
 
-struct RunResult {
-    int status = -1;  // exit status; -signal if the process was killed by a signal
-    std::string out;  // stdout
-    std::string err;  // stderr
-};
-
-// Single-quotes `s` for /bin/sh.
-std::string shellQuote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-}
-
-bool contains(const std::string& text, const std::string& part) {
-    return text.find(part) != std::string::npos;
-}
+using testing::contains;
+using testing::RunResult;
 
 // The elements of an array whose descr matches T (checked by the caller).
 template <typename T>
@@ -76,40 +63,9 @@ NpyArray readChecked(const std::string& dir, const std::string& name, const std:
     return a;
 }
 
-class GatherCliTest : public testing::TempDirTest {
-  protected:
-    void SetUp() override {
-        TempDirTest::SetUp();
-        errFile_ = dir_.string() + ".stderr";
-    }
-    void TearDown() override {
-        std::error_code ignored;
-        fs::remove(errFile_, ignored);
-        TempDirTest::TearDown();
-    }
-
-    // Runs `weft gather ARGS` (ARGS is shell text) inside the test directory.
-    RunResult gather(const std::string& args) const {
-        const std::string cmd = "cd " + shellQuote(dir_.string()) + " && " + shellQuote(WEFT_BIN) +
-                                " gather " + args + " 2>" + shellQuote(errFile_);
-        RunResult r;
-        FILE* pipe = ::popen(cmd.c_str(), "r");
-        if (!pipe) {
-            ADD_FAILURE() << "popen failed for: " << cmd;
-            return r;
-        }
-        char buf[4096];
-        size_t n;
-        while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) r.out.append(buf, n);
-        const int st = ::pclose(pipe);
-        if (WIFEXITED(st)) {
-            r.status = WEXITSTATUS(st);
-        } else if (WIFSIGNALED(st)) {
-            r.status = -WTERMSIG(st);
-        }
-        r.err = fs::exists(errFile_) ? readFile(errFile_) : std::string();
-        return r;
-    }
+class GatherCliTest : public testing::CliTestBase {
+protected:
+    RunResult gather(const std::string& args) const { return run("gather " + args); }
 
     // Runs a gather that must succeed and returns its stdout.
     std::string gatherOk(const std::string& args) const {
@@ -122,29 +78,13 @@ class GatherCliTest : public testing::TempDirTest {
         writeFileAtomic(path(name), text);
     }
 
-    // Names of the entries in the test directory, sorted.
-    std::vector<std::string> listing() const {
-        std::vector<std::string> names;
-        for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename());
-        std::sort(names.begin(), names.end());
-        return names;
-    }
-
     nlohmann::json meta(const std::string& out) const {
         return nlohmann::json::parse(readFile(path(out) + "/meta.json"));
     }
 
-    std::string errFile_;
 };
 
-// Exit status 2 and a "weft: error: " message on stderr containing every part.
-void expectUserError(const RunResult& r, std::initializer_list<std::string> parts) {
-    EXPECT_EQ(r.status, 2) << "stdout: " << r.out << "\nstderr: " << r.err;
-    EXPECT_TRUE(contains(r.err, "weft: error: ")) << "stderr: " << r.err;
-    for (const std::string& p : parts)
-        EXPECT_TRUE(contains(r.err, p)) << "stderr '" << r.err << "' lacks '" << p << "'";
-    EXPECT_TRUE(r.out.empty()) << "stdout: " << r.out;
-}
+using testing::expectUserError;
 
 // ---------------------------------------------------------------------------
 // Successful runs

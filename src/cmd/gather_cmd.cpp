@@ -15,9 +15,7 @@ namespace {
 
 struct GatherCliOptions {
     MaterialOptions material;
-    int fibers = 0;
-    double density = 0, twist = 0;
-    CLI::Option *fibersOpt = nullptr, *densityOpt = nullptr, *twistOpt = nullptr;
+    PlyGeometryOptions geometry;
     int64_t paths = 0;
     uint64_t seed = 0;
     std::string bins = "22,90,45,90", out;
@@ -27,9 +25,8 @@ struct GatherCliOptions {
 
 void runGather(const GatherCliOptions& c) {
     GatherOptions o;
-    const bool explicitPly = c.fibersOpt->count() || c.densityOpt->count() || c.twistOpt->count();
     if (!c.material.preset.empty()) {
-        if (!c.material.paramsFile.empty() || explicitPly)
+        if (!c.material.paramsFile.empty() || c.geometry.anyGiven())
             throw InputError("--preset gives fiber and ply parameters: do not combine it with "
                              "--params, --fibers, --density or --twist");
         const MaterialPreset& preset = findMaterialPreset(c.material.preset);
@@ -37,12 +34,11 @@ void runGather(const GatherCliOptions& c) {
         o.ply = preset.ply;
         o.material = c.material.preset;
     } else {
-        if (c.material.paramsFile.empty() ||
-            !(c.fibersOpt->count() && c.densityOpt->count() && c.twistOpt->count()))
+        if (c.material.paramsFile.empty() || !c.geometry.allGiven())
             throw InputError("give --preset NAME, or --params FILE.json with --fibers N "
                              "--density RHO --twist ALPHA");
         o.fiber = FiberParams::fromJsonFile(c.material.paramsFile);
-        o.ply = {c.fibers, c.density, c.twist};
+        o.ply = c.geometry.params();
         o.material = c.material.paramsFile;
     }
     o.paths = c.paths;
@@ -73,9 +69,7 @@ void addGatherCommand(CLI::App& app) {
         "gather", "Trace random walks through an explicit ply and write its reflectance "
                   "distribution (RDM: P(T | wi), R and M maps) as NumPy arrays");
     o->material.add(*gather, true);
-    o->fibersOpt = gather->add_option("--fibers", o->fibers, "fiber count N >= 1 (with --params)");
-    o->densityOpt = gather->add_option("--density", o->density, "fiber density rho in (0, 1)");
-    o->twistOpt = gather->add_option("--twist", o->twist, "twist factor alpha >= 0");
+    o->geometry.add(*gather);
     gather->add_option("--paths", o->paths, "number of random walks (>= 1)")->required();
     addSeedOption(*gather, o->seed, "random seed of the fiber placement and the walks");
     gather->add_option("--bins", o->bins, "RDM resolution TI,PI,TO,PO (theta_i, phi_i, theta_o, phi_o)")

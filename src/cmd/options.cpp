@@ -25,6 +25,12 @@ FiberParams MaterialOptions::fiber() const {
     return FiberParams::fromJsonFile(paramsFile);
 }
 
+void PlyGeometryOptions::add(CLI::App& app) {
+    fibersOpt = app.add_option("--fibers", fibers, "fiber count N >= 1");
+    densityOpt = app.add_option("--density", density, "fiber density rho in (0, 1)");
+    twistOpt = app.add_option("--twist", twist, "twist factor alpha >= 0");
+}
+
 Vec3 parseVec3(const std::string& text, const std::string& flag) {
     std::istringstream in(text);
     double v[3];

@@ -16,12 +16,11 @@ namespace {
 
 struct PlyOptions {
     MaterialOptions material;
-    int fibers = 0;
-    double density = 0, twist = 0, radius = 1, length = 0;
+    PlyGeometryOptions geometry;
+    double radius = 1, length = 0;
     uint64_t seed = 0;
     int pointsPerTwist = 32;
     std::string out;
-    CLI::Option *fibersOpt = nullptr, *densityOpt = nullptr, *twistOpt = nullptr;
 };
 
 bool endsWith(const std::string& s, const std::string& suffix) {
@@ -30,15 +29,14 @@ bool endsWith(const std::string& s, const std::string& suffix) {
 
 void runPly(const PlyOptions& o) {
     PlyParams params;
-    const bool explicitGeometry = o.fibersOpt->count() || o.densityOpt->count() || o.twistOpt->count();
     if (!o.material.preset.empty()) {
-        if (explicitGeometry)
+        if (o.geometry.anyGiven())
             throw InputError("give either --preset NAME or --fibers/--density/--twist, not both");
         params = findMaterialPreset(o.material.preset).ply;
     } else {
-        if (!(o.fibersOpt->count() && o.densityOpt->count() && o.twistOpt->count()))
+        if (!o.geometry.allGiven())
             throw InputError("give --preset NAME, or all of --fibers N --density RHO --twist ALPHA");
-        params = {o.fibers, o.density, o.twist};
+        params = o.geometry.params();
     }
     const PlyGeometry ply = generatePly(params, o.radius, o.length, o.seed);
     CurveSet set;
@@ -71,9 +69,7 @@ void addPlyCommand(CLI::App& app) {
     o->material.add(*ply, true);
     // --params has no meaning for geometry; keep the flag set to --preset only.
     ply->remove_option(ply->get_option("--params"));
-    o->fibersOpt = ply->add_option("--fibers", o->fibers, "fiber count N >= 1");
-    o->densityOpt = ply->add_option("--density", o->density, "fiber density rho in (0, 1)");
-    o->twistOpt = ply->add_option("--twist", o->twist, "twist factor alpha >= 0");
+    o->geometry.add(*ply);
     ply->add_option("--radius", o->radius, "ply radius R > 0")->default_val(1.0);
     ply->add_option("--length", o->length, "ply length L > 0 (axis from z=0 to z=L)")->required();
     addSeedOption(*ply, o->seed, "random seed of the fiber placement");

@@ -92,6 +92,12 @@ TEST(PlyTracer, FindsFibersSkipsTheExcludedOneAndWrapsPeriodically) {
     EXPECT_NEAR(length(hit.point - c), r, 0.02 * r);
     const PlyTraceHit skipped = tracer.trace(from, -radial, target);
     EXPECT_NE(skipped.fiber, target);
+    // The cubic primitive (bench comparison) describes the same tube.
+    const PeriodicPlyTracer cubic(ply, 32, FiberPrimitive::RoundCatmullRom);
+    const PlyTraceHit cubicHit = cubic.trace(from, -radial, -1);
+    ASSERT_EQ(cubicHit.kind, PlyTraceHit::Kind::Fiber);
+    EXPECT_EQ(cubicHit.fiber, target);
+    EXPECT_NEAR(length(cubicHit.point - c), r, 0.02 * r);
     // A ray along +z exactly on the axis of the empty ply (no fibers hit) wraps
     // until it gives up; one along z at the surface leaves at once.
     const PlyGeometry sparse = generatePly({1, 0.01, 0.0}, 1.0, 1.0, 1);

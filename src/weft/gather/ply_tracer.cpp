@@ -67,7 +67,9 @@ void PeriodicPlyTracer::validateSegmentsPerTwist(int segmentsPerTwist) {
                          " is out of range: allowed [16, 65536]");
 }
 
-PeriodicPlyTracer::PeriodicPlyTracer(const PlyGeometry& ply, int segmentsPerTwist) : ply_(ply) {
+PeriodicPlyTracer::PeriodicPlyTracer(const PlyGeometry& ply, int segmentsPerTwist,
+                                     FiberPrimitive primitive)
+    : ply_(ply) {
     validateSegmentsPerTwist(segmentsPerTwist);
     const double radius = ply_.radius, r = ply_.fiberRadius;
     const bool straight = ply_.params.twist == 0;
@@ -77,45 +79,53 @@ PeriodicPlyTracer::PeriodicPlyTracer(const PlyGeometry& ply, int segmentsPerTwis
     const int perPeriod = straight ? 1 : segmentsPerTwist;
     const double step = period_ / perPeriod;
     margin_ = r * (1.0 + kPi * ply_.params.twist) + (straight ? 0.0 : step) + 1e-3 * radius;
-    const int extra = straight ? 0 : static_cast<int>(std::ceil(margin_ / step));
+    const bool cubic = primitive == FiberPrimitive::RoundCatmullRom;
+    // A Catmull-Rom segment needs one more control point on each side.
+    const int extra = straight ? 0 : static_cast<int>(std::ceil(margin_ / step)) + (cubic ? 1 : 0);
     const double z0 = straight ? -margin_ : -extra * step;
-    const int points = straight ? 2 : perPeriod + 2 * extra + 1;
-    const double dz = straight ? period_ + 2.0 * margin_ : step;
+    const int points = straight ? (cubic ? 4 : 2) : perPeriod + 2 * extra + 1;
+    const int segments = cubic ? points - 3 : points - 1;
+    const double dz = straight ? (period_ + 2.0 * margin_) / (points - 1 - (cubic ? 2 : 0)) : step;
+    const double zStart = straight && cubic ? z0 - dz : z0;
 
     scene_ = rtcNewScene(device_.get());
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
     lines_.resize(ply_.centres.size());
     for (int i = 0; i < static_cast<int>(ply_.centres.size()); ++i) {
-        RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE);
+        RTCGeometry geom = rtcNewGeometry(device_.get(), cubic ? RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE
+                                                               : RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE);
         auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
             geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), points));
         auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-            geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, sizeof(unsigned), points - 1));
-        auto* flags = static_cast<unsigned char*>(rtcSetNewGeometryBuffer(
-            geom, RTC_BUFFER_TYPE_FLAGS, 0, RTC_FORMAT_UCHAR, 1, points - 1));
+            geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, sizeof(unsigned), segments));
+        auto* flags = cubic ? nullptr
+                            : static_cast<unsigned char*>(rtcSetNewGeometryBuffer(
+                                  geom, RTC_BUFFER_TYPE_FLAGS, 0, RTC_FORMAT_UCHAR, 1, segments));
         device_.check("allocating fiber geometry");
         lines_[i].resize(points);
         for (int k = 0; k < points; ++k) {
-            const Vec3 p = ply_.fiberCentre(i, z0 + k * dz);
+            const Vec3 p = ply_.fiberCentre(i, zStart + k * dz);
             lines_[i][k] = p;
             vertices[4 * k + 0] = static_cast<float>(p.x);
             vertices[4 * k + 1] = static_cast<float>(p.y);
             vertices[4 * k + 2] = static_cast<float>(p.z);
             vertices[4 * k + 3] = static_cast<float>(r);
         }
-        for (int k = 0; k + 1 < points; ++k) {
+        for (int k = 0; k < segments; ++k) {
             indices[k] = static_cast<unsigned>(k);
-            // Joined segments: no double hits inside the sphere joints.
-            flags[k] = static_cast<unsigned char>((k > 0 ? RTC_CURVE_FLAG_NEIGHBOR_LEFT : 0) |
-                                                  (k + 2 < points ? RTC_CURVE_FLAG_NEIGHBOR_RIGHT : 0));
+            // Joined linear segments: no double hits inside the sphere joints.
+            if (flags)
+                flags[k] = static_cast<unsigned char>(
+                    (k > 0 ? RTC_CURVE_FLAG_NEIGHBOR_LEFT : 0) |
+                    (k + 1 < segments ? RTC_CURVE_FLAG_NEIGHBOR_RIGHT : 0));
         }
         rtcSetGeometryUserData(geom, reinterpret_cast<void*>(static_cast<intptr_t>(i)));
         rtcCommitGeometry(geom);
         const unsigned id = rtcAttachGeometry(scene_, geom);
         rtcReleaseGeometry(geom);
         if (id != static_cast<unsigned>(i)) throw std::runtime_error("unexpected Embree geometry id");
-        segments_ += points - 1;
+        segments_ += segments;
     }
     rtcCommitScene(scene_);
     device_.check("building the ply BVH");

@@ -32,6 +32,11 @@
 
 namespace weft {
 
+// How fiber centre lines are handed to Embree. Round linear curves are the
+// default (measured fastest, bench/gather); round Catmull-Rom curves
+// interpolate the same helix points with cubic segments.
+enum class FiberPrimitive { RoundLinear, RoundCatmullRom };
+
 struct PlyTraceHit {
     enum class Kind { Fiber, ExitSide, ExitAxial };
     Kind kind = Kind::ExitSide;
@@ -43,7 +48,8 @@ struct PlyTraceHit {
 class PeriodicPlyTracer {
 public:
     // ply.length is ignored; the slab is one twist period long.
-    PeriodicPlyTracer(const PlyGeometry& ply, int segmentsPerTwist = 128);
+    PeriodicPlyTracer(const PlyGeometry& ply, int segmentsPerTwist = 128,
+                      FiberPrimitive primitive = FiberPrimitive::RoundLinear);
     ~PeriodicPlyTracer();
     PeriodicPlyTracer(const PeriodicPlyTracer&) = delete;
     PeriodicPlyTracer& operator=(const PeriodicPlyTracer&) = delete;

@@ -1,0 +1,108 @@
+// weft/fit/mlp.h — the tiny multilayer perceptrons of the neural yarn model.
+//
+// Paper 5.2-5.3, DESIGN.md 6: fully connected layers y = W x + b, a
+// channel-wise PReLU after every hidden layer (one learnable slope per
+// channel, He et al. 2015), and an output function on the last layer:
+// sigmoid (T network, P(T | wi)) or exp (M network, RGB radiance).
+// Batches are column-major: one column per sample. Forward and backward
+// passes work on whole mini-batches with Eigen; all parameters live in one
+// flat vector (per layer: W row-major, then b, then the PReLU slopes) so that
+// the optimiser and the model file see one array. Deterministic for a seed.
+// Instantiated for float (training, inference) and double (gradient checks).
+#pragma once
+
+#include <Eigen/Dense>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace weft {
+
+enum class OutputFunction { Identity, Sigmoid, Exp };
+enum class Loss {
+    Mse,     // mean over the batch of sum_k w_k (y_k - t_k)^2
+    LogMse,  // the same on log(1 + y) and log(1 + t): tames the range of RDM values
+};
+
+std::string toString(OutputFunction f);
+OutputFunction outputFunctionFromString(const std::string& name);  // InputError if unknown
+
+template <typename Real>
+class Mlp {
+public:
+    using Matrix = Eigen::Matrix<Real, Eigen::Dynamic, Eigen::Dynamic>;
+    using Vector = Eigen::Matrix<Real, Eigen::Dynamic, 1>;
+    using RowMatrix = Eigen::Matrix<Real, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+    struct Layer {
+        int in = 0, out = 0;
+        bool prelu = false;
+        size_t weightOffset = 0, biasOffset = 0, preluOffset = 0;
+    };
+
+    Mlp() = default;
+    // widths = {inputs, hidden..., outputs}; PReLU after every hidden layer.
+    // Weights and biases U(-1/sqrt(in), 1/sqrt(in)) (PyTorch's Linear
+    // default), PReLU slopes 0.25, from the given seed.
+    Mlp(const std::vector<int>& widths, OutputFunction output, uint64_t seed);
+
+    const std::vector<Layer>& layers() const { return layers_; }
+    OutputFunction output() const { return output_; }
+    int inputs() const { return layers_.front().in; }
+    int outputs() const { return layers_.back().out; }
+    std::vector<int> widths() const;
+
+    std::vector<Real>& parameters() { return params_; }
+    const std::vector<Real>& parameters() const { return params_; }
+
+    // Views of one layer's parameters (W is out x in).
+    Eigen::Map<const RowMatrix> weight(int layer) const;
+    Eigen::Map<const Vector> bias(int layer) const;
+    Eigen::Map<const Vector> preluSlopes(int layer) const;  // size 0 without PReLU
+    Eigen::Map<RowMatrix> weight(int layer);
+    Eigen::Map<Vector> bias(int layer);
+    Eigen::Map<Vector> preluSlopes(int layer);
+
+    // y (outputs x batch) for x (inputs x batch).
+    Matrix forward(const Matrix& x) const;
+
+    // Loss over the batch (mean over samples) and its gradient with respect
+    // to parameters() (resized and overwritten). `sampleWeights` (size batch)
+    // may be empty for uniform weights.
+    Real lossAndGradient(const Matrix& x, const Matrix& target, Loss loss,
+                         const Vector& sampleWeights, std::vector<Real>& gradient) const;
+
+private:
+    // W x + b of layer l, and the layer's PReLU (in place; nothing for the last layer).
+    Matrix preActivation(int l, const Matrix& a) const;
+    void applyPrelu(int l, Matrix& z) const;
+
+    std::vector<Layer> layers_;
+    OutputFunction output_ = OutputFunction::Identity;
+    std::vector<Real> params_;
+};
+
+// Adam (Kingma & Ba 2015) with bias correction, over a flat parameter vector.
+template <typename Real>
+class Adam {
+public:
+    explicit Adam(size_t size, double learningRate = 1e-3, double beta1 = 0.9,
+                  double beta2 = 0.999, double epsilon = 1e-8);
+
+    void setLearningRate(double lr) { learningRate_ = lr; }
+    double learningRate() const { return learningRate_; }
+    int64_t steps() const { return step_; }
+    void step(std::vector<Real>& params, const std::vector<Real>& gradient);
+
+private:
+    double learningRate_, beta1_, beta2_, epsilon_;
+    int64_t step_ = 0;
+    std::vector<double> m_, v_;
+};
+
+extern template class Mlp<float>;
+extern template class Mlp<double>;
+extern template class Adam<float>;
+extern template class Adam<double>;
+
+}  // namespace weft

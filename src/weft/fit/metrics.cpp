@@ -1,0 +1,72 @@
+#include "weft/fit/metrics.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace weft {
+
+namespace {
+
+// Fine -> coarse bin of the same kind, through the fine bin's centre direction.
+std::vector<size_t> incidentMap(const RdmBins& fine, const RdmBins& coarse) {
+    std::vector<size_t> m(fine.incidentCount());
+    for (size_t i = 0; i < m.size(); ++i) m[i] = coarse.incidentBin(fine.incidentCentre(i));
+    return m;
+}
+
+std::vector<size_t> outgoingMap(const RdmBins& fine, const RdmBins& coarse) {
+    std::vector<size_t> m(fine.outgoingCount());
+    for (size_t o = 0; o < m.size(); ++o) m[o] = coarse.outgoingBin(fine.outgoingCentre(o));
+    return m;
+}
+
+}  // namespace
+
+std::vector<double> poolRdm(const std::vector<float>& map, const RdmBins& fine,
+                            const RdmBins& coarse) {
+    const size_t nIn = fine.incidentCount(), nOut = fine.outgoingCount();
+    if (map.size() != nIn * nOut * 3) throw std::invalid_argument("poolRdm: map size does not match bins");
+    const std::vector<size_t> inMap = incidentMap(fine, coarse), outMap = outgoingMap(fine, coarse);
+    const size_t cIn = coarse.incidentCount(), cOut = coarse.outgoingCount();
+    std::vector<double> pooled(cIn * cOut * 3, 0.0), coarseSolidAngle(cOut, 0.0);
+    std::vector<int> incidentCount(cIn, 0);
+    std::vector<double> fineSolidAngle(nOut);
+    for (size_t o = 0; o < nOut; ++o) {
+        fineSolidAngle[o] = fine.outgoingSolidAngle(o);
+        coarseSolidAngle[outMap[o]] += fineSolidAngle[o];
+    }
+    for (size_t i = 0; i < nIn; ++i) ++incidentCount[inMap[i]];
+    for (size_t i = 0; i < nIn; ++i) {
+        for (size_t o = 0; o < nOut; ++o) {
+            const double w = fineSolidAngle[o];
+            const size_t cell = (inMap[i] * cOut + outMap[o]) * 3, src = (i * nOut + o) * 3;
+            for (int c = 0; c < 3; ++c) pooled[cell + c] += map[src + c] * w;
+        }
+    }
+    for (size_t I = 0; I < cIn; ++I)
+        for (size_t O = 0; O < cOut; ++O)
+            for (int c = 0; c < 3; ++c) {
+                double& v = pooled[(I * cOut + O) * 3 + c];
+                v = (incidentCount[I] > 0 && coarseSolidAngle[O] > 0)
+                        ? v / (incidentCount[I] * coarseSolidAngle[O])
+                        : 0.0;
+            }
+    return pooled;
+}
+
+double coarseRelativeL2(const std::vector<float>& fit, const std::vector<float>& reference,
+                        const RdmBins& fine, const RdmBins& coarse) {
+    const std::vector<double> a = poolRdm(fit, fine, coarse), b = poolRdm(reference, fine, coarse);
+    const size_t cOut = coarse.outgoingCount();
+    std::vector<double> solidAngle(cOut);
+    for (size_t O = 0; O < cOut; ++O) solidAngle[O] = coarse.outgoingSolidAngle(O);
+    double num = 0, den = 0;
+    for (size_t k = 0; k < a.size(); ++k) {
+        const double w = solidAngle[(k / 3) % cOut];
+        num += w * (a[k] - b[k]) * (a[k] - b[k]);
+        den += w * b[k] * b[k];
+    }
+    return den > 0 ? std::sqrt(num / den) : (num > 0 ? INFINITY : 0.0);
+}
+
+}  // namespace weft

@@ -39,8 +39,10 @@ Vec3 parseVec3(const std::string& text, const std::string& flag);
 // parseVec3, then normalised (any non-zero finite vector, however large or small).
 Vec3 parseDirection(const std::string& text, const std::string& flag);
 
-// Adds "--seed" (an unsigned 64-bit integer, default 0) to a command.
-CLI::Option* addSeedOption(CLI::App& app, uint64_t& seed, const std::string& description);
+// Adds a seed flag (an unsigned 64-bit integer, default 0; negative values are
+// refused instead of wrapping around) to a command.
+CLI::Option* addSeedOption(CLI::App& app, uint64_t& seed, const std::string& description,
+                           const std::string& flag = "--seed");
 
 void addFiberCommands(CLI::App& app);
 void addPlyCommand(CLI::App& app);

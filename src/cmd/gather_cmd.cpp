@@ -17,7 +17,8 @@ struct GatherCliOptions {
     MaterialOptions material;
     PlyGeometryOptions geometry;
     int64_t paths = 0;
-    uint64_t seed = 0;
+    uint64_t seed = 0, plySeed = 0;
+    CLI::Option* plySeedOpt = nullptr;
     std::string bins = "22,90,45,90", out;
     int maxDepth = 1000, threads = 0, segmentsPerTwist = 128;
     bool quiet = false;
@@ -43,6 +44,7 @@ void runGather(const GatherCliOptions& c) {
     }
     o.paths = c.paths;
     o.seed = c.seed;
+    if (c.plySeedOpt->count()) o.plySeed = c.plySeed;
     o.bins = RdmBins::parse(c.bins);
     o.maxDepth = c.maxDepth;
     o.threads = c.threads;
@@ -71,7 +73,11 @@ void addGatherCommand(CLI::App& app) {
     o->material.add(*gather, true);
     o->geometry.add(*gather);
     gather->add_option("--paths", o->paths, "number of random walks (>= 1)")->required();
-    addSeedOption(*gather, o->seed, "random seed of the fiber placement and the walks");
+    addSeedOption(*gather, o->seed, "random seed of the walks (and of the fiber placement)");
+    o->plySeedOpt = addSeedOption(*gather, o->plySeed,
+                                  "random seed of the fiber placement only (default: --seed); "
+                                  "fix it to compare walks on one ply",
+                                  "--ply-seed");
     gather->add_option("--bins", o->bins, "RDM resolution TI,PI,TO,PO (theta_i, phi_i, theta_o, phi_o)")
         ->default_val("22,90,45,90");
     gather->add_option("--max-depth", o->maxDepth, "fiber interactions per path before truncation")

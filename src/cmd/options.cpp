@@ -44,7 +44,8 @@ Vec3 parseVec3(const std::string& text, const std::string& flag) {
     return {v[0], v[1], v[2]};
 }
 
-CLI::Option* addSeedOption(CLI::App& app, uint64_t& seed, const std::string& description) {
+CLI::Option* addSeedOption(CLI::App& app, uint64_t& seed, const std::string& description,
+                           const std::string& flag) {
     // CLI11 would wrap "-1" around to 2^64 - 1 for an unsigned option.
     const CLI::Validator nonNegative(
         [](std::string& text) {
@@ -53,7 +54,7 @@ CLI::Option* addSeedOption(CLI::App& app, uint64_t& seed, const std::string& des
                        : "a seed is an integer in [0, 2^64 - 1], got " + text;
         },
         "SEED");
-    return app.add_option("--seed", seed, description + " (integer >= 0)")
+    return app.add_option(flag, seed, description + " (integer >= 0)")
         ->default_val(0)
         ->check(nonNegative);
 }

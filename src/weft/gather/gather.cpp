@@ -59,8 +59,8 @@ GatherResult gatherRdm(const GatherOptions& o) {
     o.validate();
     const auto start = std::chrono::steady_clock::now();
     const FiberBcsdf fiber(o.fiber);
-    // Fibers are placed with the gather's seed; R = 1 (everything is scale-invariant).
-    const PlyGeometry ply = generatePly(o.ply, 1.0, 1.0, o.seed);
+    // R = 1: everything is scale-invariant.
+    const PlyGeometry ply = generatePly(o.ply, 1.0, 1.0, o.placementSeed());
     const PeriodicPlyTracer tracer(ply, o.segmentsPerTwist);
     const RdmBins& bins = o.bins;
     const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
@@ -238,6 +238,7 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
         {"bins", {b.thetaI, b.phiI, b.thetaO, b.phiO}},
         {"paths", s.paths},
         {"seed", o.seed},
+        {"ply_seed", o.placementSeed()},
         {"max_depth", o.maxDepth},
         {"threads", s.threads},
         {"elapsed_seconds", s.seconds},

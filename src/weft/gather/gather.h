@@ -22,6 +22,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,7 +37,8 @@ struct GatherOptions {
     PlyParams ply;
     std::string material;  // preset name, or the params file, for the record
     int64_t paths = 0;     // >= 1
-    uint64_t seed = 0;
+    uint64_t seed = 0;                  // random walks (and fiber placement unless plySeed is set)
+    std::optional<uint64_t> plySeed;    // fiber placement; default: seed
     RdmBins bins;
     int maxDepth = 1000;         // fiber interactions allowed per path, >= 1
     int threads = 0;             // 0: all cores
@@ -44,6 +46,7 @@ struct GatherOptions {
     bool quiet = false;          // no progress output
 
     void validate() const;  // InputError naming the option
+    uint64_t placementSeed() const { return plySeed.value_or(seed); }
 };
 
 struct GatherStats {

@@ -266,6 +266,12 @@ TEST(Gather, ResultDoesNotDependOnThreadCountButOnSeed) {
     o.seed = 12;
     const GatherResult other = gatherRdm(o);
     EXPECT_NE(0, std::memcmp(one.rdmM.data(), other.rdmM.data(), one.rdmM.size() * sizeof(float)));
+    EXPECT_NE(one.plyLines, other.plyLines);
+    // --ply-seed fixes the placement while the walks change.
+    o.plySeed = 11;
+    const GatherResult samePly = gatherRdm(o);
+    EXPECT_EQ(one.plyLines, samePly.plyLines);
+    EXPECT_NE(0, std::memcmp(one.rdmM.data(), samePly.rdmM.data(), one.rdmM.size() * sizeof(float)));
 }
 
 TEST(Gather, InvalidOptionsAreRejected) {

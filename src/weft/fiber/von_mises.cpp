@@ -43,16 +43,12 @@ double sampleBestFisher(double kappa, double rMinus1, double u, Rng& rng) {
 
 }  // namespace
 
-double vonMisesPdf(double x, double kappa) {
-    return std::exp(kappa * (std::cos(x) - 1.0)) / (kTwoPi * besselI0Scaled(kappa));
-}
-
 VonMises::VonMises(double kappa)
     : kappa_(kappa),
       invNorm_(1.0 / (kTwoPi * besselI0Scaled(kappa))),
       rMinus1_(bestFisherRMinus1(kappa)) {}
 
-double VonMises::pdf(double x) const { return std::exp(kappa_ * (std::cos(x) - 1.0)) * invNorm_; }
+double VonMises::pdf(double x) const { return pdfOfCos(std::cos(x)); }
 
 double VonMises::pdfOfCos(double cosX) const {
     return std::exp(kappa_ * (cosX - 1.0)) * invNorm_;
@@ -60,10 +56,6 @@ double VonMises::pdfOfCos(double cosX) const {
 
 double VonMises::sample(double u, Rng& rng) const {
     return sampleBestFisher(kappa_, rMinus1_, u, rng);
-}
-
-double sampleVonMises(double kappa, double u, Rng& rng) {
-    return sampleBestFisher(kappa, bestFisherRMinus1(kappa), u, rng);
 }
 
 

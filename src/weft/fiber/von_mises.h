@@ -11,26 +11,23 @@
 
 namespace weft {
 
-// Density of the von Mises distribution at angle x measured from its mean.
-double vonMisesPdf(double x, double kappa);
-
-// The same density with the normaliser precomputed, for hot loops.
+// The von Mises distribution of concentration kappa about mean 0, with its
+// normaliser and sampling constants computed once.
 class VonMises {
 public:
     explicit VonMises(double kappa);
     double kappa() const { return kappa_; }
+    // Density at angle x measured from the mean.
     double pdf(double x) const;
     // The density given cos(x), for callers that have the cosine already.
     double pdfOfCos(double cosX) const;
+    // An angle in [-pi, pi] measured from the mean, exactly von Mises
+    // distributed. u drives the first proposal; rng supplies the rest.
     double sample(double u, Rng& rng) const;
 
 private:
     double kappa_, invNorm_;
     double rMinus1_;  // Best & Fisher's r - 1, computed once per kappa
 };
-
-// An angle in [-pi, pi] measured from the mean, exactly von Mises distributed.
-// u drives the first proposal; rng supplies the rest.
-double sampleVonMises(double kappa, double u, Rng& rng);
 
 }  // namespace weft

@@ -2,13 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <nlohmann/json.hpp>
 
 #include "weft/core/error.h"
-#include "weft/core/file.h"
 #include "weft/core/math.h"
-#include "weft/core/npy.h"
+#include "weft/gather/rdm_io.h"
 
 namespace weft {
 
@@ -31,26 +28,11 @@ size_t writeRdmSlicePng(const std::string& rdmDir, const std::string& component,
     if (!(thetaIDeg >= 0 && thetaIDeg <= 90) || !(phiIDeg >= -180 && phiIDeg <= 180))
         throw InputError("incident direction out of range: theta_i in [0, 90], phi_i in "
                          "[-180, 180] degrees");
-    const std::string metaPath = (std::filesystem::path(rdmDir) / "meta.json").string();
-    nlohmann::json meta;
-    try {
-        meta = nlohmann::json::parse(readFile(metaPath));
-    } catch (const nlohmann::json::exception& e) {
-        throw InputError(metaPath + ": malformed JSON: " + e.what());
-    }
-    const auto& b = meta.at("bins");
-    if (!b.is_array() || b.size() != 4) throw InputError(metaPath + ": \"bins\" must hold 4 integers");
-    RdmBins bins{b[0].get<int>(), b[1].get<int>(), b[2].get<int>(), b[3].get<int>()};
-    bins.validate();
-    const std::string mapPath = (std::filesystem::path(rdmDir) / ("rdm_" + component + ".npy")).string();
-    const NpyArray array = readNpy(mapPath);
-    const std::vector<size_t> shape = {size_t(bins.thetaI), size_t(bins.phiI), size_t(bins.thetaO),
-                                       size_t(bins.phiO), 3};
-    if (array.descr != "<f4" || array.shape != shape)
-        throw InputError(mapPath + ": expected float32 of shape " + npyShapeString(shape) +
-                         ", got " + array.descr + " " + npyShapeString(array.shape));
+    const RdmData rdm = loadRdm(rdmDir);
+    const RdmBins& bins = rdm.bins;
+    const std::vector<float>& map = component == "r" ? rdm.rdmR : rdm.rdmM;
     const size_t bin = bins.incidentBin(sphericalDirection(radians(thetaIDeg), radians(phiIDeg)));
-    Image image = rdmSliceImage(reinterpret_cast<const float*>(array.bytes.data()), bins, bin);
+    Image image = rdmSliceImage(map.data(), bins, bin);
     std::vector<float> values(image.pixels);
     const size_t k = values.size() * 99 / 100;
     std::nth_element(values.begin(), values.begin() + k, values.end());

@@ -16,8 +16,8 @@ namespace weft {
 // map: (TI, PI, TO, PO, 3) float32 as in rdm_r.npy / rdm_m.npy.
 Image rdmSliceImage(const float* map, const RdmBins& bins, size_t incidentBin, int scale = 4);
 
-// Reads DIR/meta.json and DIR/rdm_<component>.npy (component "r" or "m") and
-// writes the slice of the incident bin containing (thetaIDeg, phiIDeg) as a
+// Loads DIR (loadRdm: validated) and, for component "r" or "m",
+// writes the slice of that map for the incident bin containing (thetaIDeg, phiIDeg) as a
 // PNG, auto-exposed to the 99th percentile. Returns that bin's index.
 size_t writeRdmSlicePng(const std::string& rdmDir, const std::string& component,
                         double thetaIDeg, double phiIDeg, const std::string& pngPath);

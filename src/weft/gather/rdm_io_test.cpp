@@ -8,6 +8,7 @@
 #include "weft/core/npy.h"
 #include "weft/core/test_util.h"
 #include "weft/gather/gather.h"
+#include "weft/gather/rdm_image.h"
 
 namespace weft {
 namespace {
@@ -78,6 +79,30 @@ TEST_F(RdmIoTest, MalformedDirectoriesNameTheFile) {
     testing::expectInputError([&] { loadRdm(dir); }, {"rdm_m.npy", "element 10"});
     std::filesystem::remove(dir + "/rdm_m.npy");
     testing::expectInputError([&] { loadRdm(dir); }, {"rdm_m.npy"});
+}
+
+}  // namespace
+}  // namespace weft
+
+namespace weft {
+namespace {
+
+TEST(RdmSliceImage, OneCellLightsItsPixelBlock) {
+    // Incident bin 5, outgoing bin (theta_o row 2, phi_o column 7) of a
+    // 2,4,4,8 grid: pixels x in [28, 32), y in [8, 12) at scale 4; rows are
+    // theta_o from the top, columns phi_o from -180 degrees.
+    const RdmBins bins{2, 4, 4, 8};
+    std::vector<float> map(bins.incidentCount() * bins.outgoingCount() * 3, 0.0f);
+    const size_t cell = (5 * bins.outgoingCount() + 2 * 8 + 7) * 3;
+    map[cell] = 1.0f, map[cell + 1] = 2.0f, map[cell + 2] = 3.0f;
+    const Image image = rdmSliceImage(map.data(), bins, 5, 4);
+    ASSERT_EQ(image.width, 32);
+    ASSERT_EQ(image.height, 16);
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 32; ++x) {
+            const bool inside = x >= 28 && y >= 8 && y < 12;
+            EXPECT_EQ(image.get(x, y), inside ? Rgb(1, 2, 3) : Rgb()) << x << " " << y;
+        }
 }
 
 }  // namespace

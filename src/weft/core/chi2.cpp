@@ -87,6 +87,41 @@ Chi2Result chi2Test(const std::vector<double>& observed, const std::vector<doubl
     return r;
 }
 
+namespace {
+
+// Legendre polynomial P_n(x) and its derivative, by the three-term recurrence.
+void legendre(int n, double x, double* p, double* dp) {
+    double p0 = 1, p1 = x;
+    for (int k = 2; k <= n; ++k) {
+        const double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+    }
+    *p = p1;
+    *dp = n * (x * p1 - p0) / (x * x - 1);
+}
+
+// Gauss-Legendre nodes and weights on [-1, 1]: Newton iteration on P_n from
+// the Chebyshev-like initial guesses, w = 2 / ((1 - x^2) P_n'(x)^2).
+void gaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weights) {
+    nodes->resize(n);
+    weights->resize(n);
+    for (int k = 0; k < n; ++k) {
+        double x = std::cos(kPi * (k + 0.75) / (n + 0.5)), p, dp;
+        for (int it = 0; it < 100; ++it) {
+            legendre(n, x, &p, &dp);
+            const double dx = p / dp;
+            x -= dx;
+            if (std::fabs(dx) < 1e-15) break;
+        }
+        legendre(n, x, &p, &dp);
+        (*nodes)[k] = x;
+        (*weights)[k] = 2.0 / ((1 - x * x) * dp * dp);
+    }
+}
+
+}  // namespace
+
 int SphereGrid::cellOf(const Vec3& w) const {
     const double theta = std::atan2(w.x, std::sqrt(w.y * w.y + w.z * w.z));
     const double phi = std::atan2(w.z, w.y);
@@ -98,36 +133,8 @@ int SphereGrid::cellOf(const Vec3& w) const {
 
 std::vector<double> SphereGrid::expectedCounts(const std::function<double(const Vec3&)>& pdf,
                                                double sampleCount, int order) const {
-    // Gauss-Legendre nodes on [-1, 1] by Newton iteration on P_order.
-    std::vector<double> nodes(order), weights(order);
-    for (int k = 0; k < order; ++k) {
-        double x = std::cos(kPi * (k + 0.75) / (order + 0.5));
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1, p1 = x;
-            for (int n = 2; n <= order; ++n) {
-                const double p2 = ((2 * n - 1) * x * p1 - (n - 1) * p0) / n;
-                p0 = p1;
-                p1 = p2;
-            }
-            const double dp = order * (x * p1 - p0) / (x * x - 1);
-            const double dx = p1 / dp;
-            x -= dx;
-            if (std::fabs(dx) < 1e-15) {
-                // Recompute the derivative at the converged node for the weight.
-                p0 = 1;
-                p1 = x;
-                for (int n = 2; n <= order; ++n) {
-                    const double p2 = ((2 * n - 1) * x * p1 - (n - 1) * p0) / n;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                const double dpx = order * (x * p1 - p0) / (x * x - 1);
-                weights[k] = 2.0 / ((1 - x * x) * dpx * dpx);
-                break;
-            }
-        }
-        nodes[k] = x;
-    }
+    std::vector<double> nodes, weights;
+    gaussLegendre(order, &nodes, &weights);
     const double dTheta = kPi / thetaBins, dPhi = kTwoPi / phiBins;
     std::vector<double> expected(cells(), 0.0);
     for (int i = 0; i < thetaBins; ++i) {

@@ -47,5 +47,6 @@ CLI::Option* addSeedOption(CLI::App& app, uint64_t& seed, const std::string& des
 void addFiberCommands(CLI::App& app);
 void addPlyCommand(CLI::App& app);
 void addGatherCommand(CLI::App& app);
+void addFitCommand(CLI::App& app);
 
 }  // namespace weft::cmd

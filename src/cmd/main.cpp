@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
     weft::cmd::addFiberCommands(app);
     weft::cmd::addPlyCommand(app);
     weft::cmd::addGatherCommand(app);
+    weft::cmd::addFitCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace weft {
 
@@ -81,6 +82,11 @@ void Progress::finish() {
     print(nowNs(), true);
 }
 
+void Progress::setStatus(std::string status) {
+    std::lock_guard<std::mutex> lock(printMutex_);
+    status_ = std::move(status);
+}
+
 void Progress::print(int64_t now, bool final) {
     std::lock_guard<std::mutex> lock(printMutex_);
     if (finished_) return;
@@ -100,6 +106,7 @@ void Progress::print(int64_t now, bool final) {
         const double remaining = static_cast<double>(total_ - std::min(done, total_));
         tail += " ETA " + (rate > 0 ? formatDuration(remaining / rate) : std::string("?"));
     }
+    if (!status_.empty()) tail += " " + status_;
 
     char buf[96];
     std::string line;

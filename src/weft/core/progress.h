@@ -1,7 +1,7 @@
 // weft/core/progress.h — a progress report on stderr for long loops.
 //
 // On a terminal: one line redrawn in place ('\r') at most 10 times a second,
-//     render [##########..........]  42.0% 420000/1000000 12.3k/s ETA 47s
+//     render [##########..........]  42.0% 420000/1000000 12.3k/s ETA 47s [status]
 // Otherwise (a log file, CI): a plain line about every 5 seconds,
 //     render: 42% (420000/1000000) 12.3k/s ETA 47s
 // and in both cases a final line from finish(). total == 0 means unknown:
@@ -34,6 +34,9 @@ public:
     void add(uint64_t n = 1);
     // Prints the final line (count, rate, elapsed time); later calls do nothing.
     void finish();
+    // A short status shown after the ETA from the next print on (e.g. the
+    // current training loss); thread-safe.
+    void setStatus(std::string status);
 
     uint64_t done() const { return done_.load(std::memory_order_relaxed); }
     uint64_t total() const { return total_; }
@@ -53,6 +56,7 @@ private:
     std::mutex printMutex_;             // serialises the rare prints
     bool finished_ = false;             // guarded by printMutex_
     size_t lastLineLength_ = 0;         // guarded by printMutex_ (tty redraw)
+    std::string status_;                // guarded by printMutex_
     std::FILE* out_ = stderr;
 };
 

@@ -24,10 +24,27 @@ OutputFunction outputFunctionFromString(const std::string& name) {
     throw InputError("unknown output function \"" + name + "\" (allowed: identity, sigmoid, exp)");
 }
 
+namespace {
+
+std::vector<bool> preluAfterHiddenLayers(size_t widthCount) {
+    std::vector<bool> prelu(widthCount < 2 ? 0 : widthCount - 1, true);
+    if (!prelu.empty()) prelu.back() = false;
+    return prelu;
+}
+
+}  // namespace
+
 template <typename Real>
 Mlp<Real>::Mlp(const std::vector<int>& widths, OutputFunction output, uint64_t seed)
+    : Mlp(widths, preluAfterHiddenLayers(widths.size()), output, seed) {}
+
+template <typename Real>
+Mlp<Real>::Mlp(const std::vector<int>& widths, const std::vector<bool>& prelu,
+               OutputFunction output, uint64_t seed)
     : output_(output) {
     if (widths.size() < 2) throw InputError("a network needs at least an input and an output width");
+    if (prelu.size() + 1 != widths.size())
+        throw std::invalid_argument("Mlp: one PReLU flag per layer expected");
     for (int w : widths)
         if (w < 1 || w > 4096)
             throw InputError("layer width " + std::to_string(w) + " is out of range: allowed [1, 4096]");
@@ -36,7 +53,7 @@ Mlp<Real>::Mlp(const std::vector<int>& widths, OutputFunction output, uint64_t s
         Layer layer;
         layer.in = widths[l];
         layer.out = widths[l + 1];
-        layer.prelu = l + 2 < widths.size();
+        layer.prelu = prelu[l];
         layer.weightOffset = offset;
         offset += static_cast<size_t>(layer.in) * layer.out;
         layer.biasOffset = offset;

@@ -45,6 +45,10 @@ public:
     // Weights and biases U(-1/sqrt(in), 1/sqrt(in)) (PyTorch's Linear
     // default), PReLU slopes 0.25, from the given seed.
     Mlp(const std::vector<int>& widths, OutputFunction output, uint64_t seed);
+    // The same with an explicit PReLU flag per layer (size widths.size() - 1),
+    // e.g. for networks read from a model file.
+    Mlp(const std::vector<int>& widths, const std::vector<bool>& prelu, OutputFunction output,
+        uint64_t seed);
 
     const std::vector<Layer>& layers() const { return layers_; }
     OutputFunction output() const { return output_; }

@@ -38,6 +38,9 @@ struct RdmBins {
     double outgoingSolidAngle(size_t bin) const;
     // Solid angle of an incident bin (theta_i in [0, pi/2]).
     double incidentSolidAngle(size_t bin) const;
+    // A direction inside a bin, uniform in solid angle for uniform (u1, u2) in [0, 1)^2.
+    Vec3 incidentDirectionIn(size_t bin, double u1, double u2) const;
+    Vec3 outgoingDirectionIn(size_t bin, double u1, double u2) const;
 };
 
 // Local (t, b, n) direction from polar angle theta (from n) and azimuth phi (from t towards b).

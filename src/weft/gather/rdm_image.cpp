@@ -21,6 +21,28 @@ Image rdmSliceImage(const float* map, const RdmBins& bins, size_t incidentBin, i
     return image;
 }
 
+double quantileExposure(const Image& image, double q) {
+    std::vector<float> values(image.pixels);
+    if (values.empty()) return 0.0;
+    const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * values.size()));
+    std::nth_element(values.begin(), values.begin() + k, values.end());
+    return values[k] > 0 ? -std::log2(values[k]) : 0.0;
+}
+
+Image rdmComparisonImage(const float* reference, const float* other, const RdmBins& bins,
+                         size_t incidentBin, int scale) {
+    const Image a = rdmSliceImage(reference, bins, incidentBin, scale);
+    const Image b = rdmSliceImage(other, bins, incidentBin, scale);
+    const int gap = 4 * scale;
+    Image out(2 * a.width + gap, a.height);
+    for (int y = 0; y < a.height; ++y)
+        for (int x = 0; x < a.width; ++x) {
+            out.set(x, y, a.get(x, y));
+            out.set(a.width + gap + x, y, b.get(x, y));
+        }
+    return out;
+}
+
 size_t writeRdmSlicePng(const std::string& rdmDir, const std::string& component,
                         double thetaIDeg, double phiIDeg, const std::string& pngPath) {
     if (component != "r" && component != "m")
@@ -32,12 +54,8 @@ size_t writeRdmSlicePng(const std::string& rdmDir, const std::string& component,
     const RdmBins& bins = rdm.bins;
     const std::vector<float>& map = component == "r" ? rdm.rdmR : rdm.rdmM;
     const size_t bin = bins.incidentBin(sphericalDirection(radians(thetaIDeg), radians(phiIDeg)));
-    Image image = rdmSliceImage(map.data(), bins, bin);
-    std::vector<float> values(image.pixels);
-    const size_t k = values.size() * 99 / 100;
-    std::nth_element(values.begin(), values.begin() + k, values.end());
-    const double white = values[k] > 0 ? values[k] : 1.0;
-    writePng(pngPath, image, -std::log2(white));
+    const Image image = rdmSliceImage(map.data(), bins, bin);
+    writePng(pngPath, image, quantileExposure(image));
     return bin;
 }
 

@@ -1,0 +1,673 @@
+#include "weft/fit/fit.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <set>
+
+#include "weft/core/error.h"
+#include "weft/core/file.h"
+#include "weft/core/math.h"
+#include "weft/core/progress.h"
+#include "weft/core/rng.h"
+#include "weft/fit/metrics.h"
+#include "weft/fit/yarn_lobes.h"
+
+namespace weft {
+
+// ---------------------------------------------------------------- config --
+
+namespace {
+
+const char* lossName(Loss loss) { return loss == Loss::Mse ? "mse" : "log-mse"; }
+
+Loss lossFromString(const std::string& name, const std::string& where) {
+    if (name == "mse") return Loss::Mse;
+    if (name == "log-mse") return Loss::LogMse;
+    throw InputError(where + ": unknown loss \"" + name + "\" (allowed: mse, log-mse)");
+}
+
+nlohmann::json trainingToJson(const NetworkTraining& t) {
+    return {{"hidden", t.hidden},          {"steps", t.steps}, {"restarts", t.restarts},
+            {"batch", t.batch},            {"learning_rate", t.learningRate},
+            {"final_learning_rate", t.finalLearningRate}, {"loss", lossName(t.loss)}};
+}
+
+template <typename T>
+T numberAt(const nlohmann::json& j, const std::string& where) {
+    if (!j.is_number()) throw InputError(where + ": expected a number");
+    if constexpr (std::is_integral_v<T>) {
+        if (!j.is_number_integer()) throw InputError(where + ": expected an integer");
+    }
+    return j.get<T>();
+}
+
+NetworkTraining trainingFromJson(const nlohmann::json& j, NetworkTraining t, const std::string& where) {
+    if (!j.is_object()) throw InputError(where + ": expected an object");
+    static const std::set<std::string> known = {"hidden", "steps", "restarts", "batch",
+                                                "learning_rate", "final_learning_rate", "loss"};
+    for (const auto& [key, value] : j.items())
+        if (!known.count(key)) throw InputError(where + ": unknown key \"" + key + "\"");
+    if (j.contains("hidden")) {
+        const auto& h = j["hidden"];
+        if (!h.is_array() || h.empty() || h.size() > 8)
+            throw InputError(where + ".hidden: expected 1 to 8 layer widths");
+        t.hidden.clear();
+        for (size_t k = 0; k < h.size(); ++k) {
+            const int w = numberAt<int>(h[k], where + ".hidden[" + std::to_string(k) + "]");
+            if (w < 1 || w > 256)
+                throw InputError(where + ".hidden[" + std::to_string(k) + "] = " + std::to_string(w) +
+                                 " is out of range: allowed [1, 256]");
+            t.hidden.push_back(w);
+        }
+    }
+    if (j.contains("steps")) t.steps = numberAt<int64_t>(j["steps"], where + ".steps");
+    if (j.contains("restarts")) t.restarts = numberAt<int>(j["restarts"], where + ".restarts");
+    if (j.contains("batch")) t.batch = numberAt<int>(j["batch"], where + ".batch");
+    if (j.contains("learning_rate"))
+        t.learningRate = numberAt<double>(j["learning_rate"], where + ".learning_rate");
+    if (j.contains("final_learning_rate"))
+        t.finalLearningRate = numberAt<double>(j["final_learning_rate"], where + ".final_learning_rate");
+    if (j.contains("loss")) {
+        if (!j["loss"].is_string()) throw InputError(where + ".loss: expected a string");
+        t.loss = lossFromString(j["loss"].get<std::string>(), where + ".loss");
+    }
+    if (t.steps < 1 || t.steps > 100'000'000)
+        throw InputError(where + ".steps = " + std::to_string(t.steps) + " is out of range: allowed [1, 1e8]");
+    if (t.restarts < 1 || t.restarts > 64)
+        throw InputError(where + ".restarts = " + std::to_string(t.restarts) + " is out of range: allowed [1, 64]");
+    if (t.batch < 8 || t.batch > 1 << 20)
+        throw InputError(where + ".batch = " + std::to_string(t.batch) + " is out of range: allowed [8, 1048576]");
+    for (auto [value, name] : {std::pair{t.learningRate, "learning_rate"},
+                               std::pair{t.finalLearningRate, "final_learning_rate"}})
+        if (!(value > 0 && value <= 1))
+            throw InputError(where + "." + name + " = " + std::to_string(value) +
+                             " is out of range: allowed (0, 1]");
+    return t;
+}
+
+}  // namespace
+
+FitConfig FitConfig::fromJson(const nlohmann::json& j, const std::string& source) {
+    if (!j.is_object()) throw InputError(source + ": the fit configuration must be a JSON object");
+    static const std::set<std::string> known = {"t_net", "m_net", "jitter", "masking", "threads"};
+    for (const auto& [key, value] : j.items())
+        if (!known.count(key))
+            throw InputError(source + ": unknown key \"" + key +
+                             "\" (allowed: t_net, m_net, jitter, masking, threads)");
+    FitConfig c;
+    if (j.contains("t_net")) c.t = trainingFromJson(j["t_net"], c.t, source + ": t_net");
+    if (j.contains("m_net")) c.m = trainingFromJson(j["m_net"], c.m, source + ": m_net");
+    for (auto [flag, name] : {std::pair{&c.jitter, "jitter"}, std::pair{&c.masking, "masking"}}) {
+        if (!j.contains(name)) continue;
+        if (!j[name].is_boolean()) throw InputError(source + ": " + name + ": expected true or false");
+        *flag = j[name].get<bool>();
+    }
+    if (j.contains("threads")) {
+        c.threads = numberAt<int>(j["threads"], source + ": threads");
+        if (c.threads < 0 || c.threads > 1024)
+            throw InputError(source + ": threads = " + std::to_string(c.threads) +
+                             " is out of range: allowed [0, 1024] (0: all cores)");
+    }
+    return c;
+}
+
+FitConfig FitConfig::fromJsonFile(const std::string& path) {
+    const std::string text = readFile(path);
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw InputError(path + ": malformed JSON at byte " + std::to_string(e.byte));
+    }
+    return fromJson(j, path);
+}
+
+nlohmann::json FitConfig::toJson() const {
+    return {{"t_net", trainingToJson(t)},
+            {"m_net", trainingToJson(m)},
+            {"jitter", jitter},
+            {"masking", masking},
+            {"threads", threads}};
+}
+
+// -------------------------------------------------------------- training --
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Every batch is split into this many chunks, whatever the thread count, and
+// their gradients are summed in chunk order: the fit depends on the seed only.
+constexpr int kChunks = 8;
+
+double learningRateAt(const NetworkTraining& t, int64_t step) {
+    if (t.steps <= 1) return t.learningRate;
+    const double f = static_cast<double>(step) / static_cast<double>(t.steps - 1);
+    return t.learningRate * std::pow(t.finalLearningRate / t.learningRate, f);
+}
+
+std::string formatLoss(double loss) {
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "loss %.3e", loss);
+    return buf;
+}
+
+// Trains `net` with Adam. fill(rng, x, target) writes one chunk of samples
+// (columns) drawn with rng. The chunks of a step run in parallel in `arena`,
+// or one after the other when it is null. Returns the loss curve.
+template <typename Fill>
+LossCurve train(Mlp<float>& net, const NetworkTraining& cfg, uint64_t seed, uint64_t netId,
+                tbb::task_arena* arena, Progress& progress, bool parallelRestarts,
+                const Fill& fill) {
+    using Matrix = Mlp<float>::Matrix;
+    std::vector<int> chunkSize(kChunks, cfg.batch / kChunks);
+    for (int c = 0; c < cfg.batch % kChunks; ++c) ++chunkSize[c];
+    std::vector<Matrix> x(kChunks), target(kChunks);
+    std::vector<std::vector<float>> gradient(kChunks);
+    std::vector<float> chunkLoss(kChunks), total(net.parameters().size());
+    for (int c = 0; c < kChunks; ++c) {
+        x[c].resize(net.inputs(), chunkSize[c]);
+        target[c].resize(net.outputs(), chunkSize[c]);
+    }
+    Adam<float> adam(net.parameters().size(), cfg.learningRate);
+    const Mlp<float>::Vector noWeights;
+    const int64_t logEvery = std::max<int64_t>(1, cfg.steps / 200);
+    LossCurve curve;
+    double intervalLoss = 0;
+    int64_t intervalSteps = 0;
+    for (int64_t step = 0; step < cfg.steps; ++step) {
+        auto chunk = [&](int c) {
+            if (chunkSize[c] == 0) return;
+            Rng rng((netId << 48) ^ (static_cast<uint64_t>(step) * kChunks + c), seed);
+            fill(rng, x[c], target[c]);
+            chunkLoss[c] = net.lossAndGradient(x[c], target[c], cfg.loss, noWeights, gradient[c]);
+        };
+        if (arena) arena->execute([&] { tbb::parallel_for(0, kChunks, chunk); });
+        else for (int c = 0; c < kChunks; ++c) chunk(c);
+        std::fill(total.begin(), total.end(), 0.0f);
+        double loss = 0;
+        for (int c = 0; c < kChunks; ++c) {
+            if (chunkSize[c] == 0) continue;
+            const float share = static_cast<float>(chunkSize[c]) / static_cast<float>(cfg.batch);
+            for (size_t k = 0; k < total.size(); ++k) total[k] += share * gradient[c][k];
+            loss += share * chunkLoss[c];
+        }
+        adam.setLearningRate(learningRateAt(cfg, step));
+        adam.step(net.parameters(), total);
+        intervalLoss += loss;
+        ++intervalSteps;
+        if (intervalSteps == logEvery || step + 1 == cfg.steps) {
+            curve.step.push_back(static_cast<double>(step + 1));
+            curve.loss.push_back(intervalLoss / static_cast<double>(intervalSteps));
+            if (!parallelRestarts) progress.setStatus(formatLoss(curve.loss.back()));
+            intervalLoss = 0;
+            intervalSteps = 0;
+        }
+        progress.add(1);
+    }
+    return curve;
+}
+
+// Index drawn from a cumulative table (last entry = total) with u in [0, 1).
+size_t drawFromCdf(const std::vector<double>& cdf, double u) {
+    const double target = u * cdf.back();
+    const size_t k = std::upper_bound(cdf.begin(), cdf.end(), target) - cdf.begin();
+    return std::min(k, cdf.size() - 1);
+}
+
+std::vector<int> widthsOf(int inputs, const std::vector<int>& hidden, int outputs) {
+    std::vector<int> w = {inputs};
+    w.insert(w.end(), hidden.begin(), hidden.end());
+    w.push_back(outputs);
+    return w;
+}
+
+void putColumn(Mlp<float>::Matrix& m, Eigen::Index col, const Vec3& a) {
+    m(0, col) = static_cast<float>(a.x), m(1, col) = static_cast<float>(a.y),
+          m(2, col) = static_cast<float>(a.z);
+}
+
+// Path-count-weighted RMS error of a T network against the gathered P(T | wi).
+double transmissionRmse(const Mlp<float>& net, const RdmData& rdm) {
+    YarnModel probe;
+    probe.tNet = net;
+    const std::vector<double> pT = modelTransmissionMap(probe, rdm.bins);
+    double se = 0, total = 0;
+    for (size_t i = 0; i < pT.size(); ++i) {
+        const double w = static_cast<double>(rdm.count[i]);
+        se += w * (pT[i] - rdm.pT[i]) * (pT[i] - rdm.pT[i]);
+        total += w;
+    }
+    return std::sqrt(se / total);
+}
+
+// The 3-7-7-1 network is small for the sharp grazing-angle edge of P(T | wi)
+// and its result depends on the initialisation: train `restarts` networks
+// from different seeds (in parallel, each on one thread) and keep the best.
+Mlp<float> fitTransmission(const RdmData& rdm, const FitConfig& config, uint64_t seed,
+                           tbb::task_arena& arena, bool quiet, LossCurve* curve) {
+    const RdmBins& bins = rdm.bins;
+    std::vector<double> cdf(bins.incidentCount());
+    double sum = 0;
+    for (size_t i = 0; i < cdf.size(); ++i) cdf[i] = sum += static_cast<double>(rdm.count[i]);
+    if (sum <= 0) throw InputError(rdm.dir + ": the gather has no paths (count.npy is all zero)");
+    const int restarts = config.t.restarts;
+    std::vector<Mlp<float>> nets(restarts);
+    std::vector<LossCurve> curves(restarts);
+    std::vector<double> rmse(restarts);
+    Progress progress("fit T", static_cast<uint64_t>(config.t.steps) * restarts, quiet);
+    arena.execute([&] {
+        tbb::parallel_for(0, restarts, [&](int r) {
+            const uint64_t netSeed = mixBits(seed + 0x9e3779b97f4a7c15ULL * static_cast<uint64_t>(r));
+            nets[r] = Mlp<float>(widthsOf(3, config.t.hidden, 1), OutputFunction::Sigmoid, netSeed);
+            curves[r] = train(nets[r], config.t, netSeed, 1, nullptr, progress, restarts > 1,
+                              [&](Rng& rng, Mlp<float>::Matrix& x, Mlp<float>::Matrix& target) {
+                                  for (Eigen::Index k = 0; k < x.cols(); ++k) {
+                                      const size_t i = drawFromCdf(cdf, rng.uniform());
+                                      const double u1 = rng.uniform(), u2 = rng.uniform();
+                                      putColumn(x, k,
+                                                config.jitter ? bins.incidentDirectionIn(i, u1, u2)
+                                                              : bins.incidentCentre(i));
+                                      target(0, k) = static_cast<float>(rdm.pT[i]);
+                                  }
+                              });
+            rmse[r] = transmissionRmse(nets[r], rdm);
+        });
+    });
+    const int best = static_cast<int>(std::min_element(rmse.begin(), rmse.end()) - rmse.begin());
+    progress.setStatus("best rmse " + std::to_string(rmse[best]));
+    progress.finish();
+    *curve = curves[best];
+    return nets[best];
+}
+
+Mlp<float> fitMultipleScattering(const RdmData& rdm, const FitConfig& config, uint64_t seed,
+                                 tbb::task_arena& arena, bool quiet, LossCurve* curve) {
+    const RdmBins& bins = rdm.bins;
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    // Outgoing theta rows in proportion to their solid angle (the metric's weight).
+    std::vector<double> rowCdf(bins.thetaO);
+    double sum = 0;
+    for (int t = 0; t < bins.thetaO; ++t)
+        rowCdf[t] = sum += bins.outgoingSolidAngle(static_cast<size_t>(t) * bins.phiO);
+    Mlp<float> net(widthsOf(6, config.m.hidden, 3), OutputFunction::Exp, seed);
+    Progress progress("fit M", static_cast<uint64_t>(config.m.steps), quiet);
+    *curve = train(net, config.m, seed, 2, &arena, progress, false,
+                   [&](Rng& rng, Mlp<float>::Matrix& x, Mlp<float>::Matrix& target) {
+                       for (Eigen::Index k = 0; k < x.cols(); ++k) {
+                           const size_t i = std::min<size_t>(nIn - 1, rng.uniform() * nIn);
+                           const size_t row = drawFromCdf(rowCdf, rng.uniform());
+                           const size_t o =
+                               row * bins.phiO +
+                               std::min<size_t>(bins.phiO - 1, rng.uniform() * bins.phiO);
+                           const double u1 = rng.uniform(), u2 = rng.uniform();
+                           const double u3 = rng.uniform(), u4 = rng.uniform();
+                           const Vec3 wi = config.jitter ? bins.incidentDirectionIn(i, u1, u2)
+                                                         : bins.incidentCentre(i);
+                           const Vec3 wo = config.jitter ? bins.outgoingDirectionIn(o, u3, u4)
+                                                         : bins.outgoingCentre(o);
+                           x(0, k) = static_cast<float>(wi.x), x(1, k) = static_cast<float>(wi.y),
+                           x(2, k) = static_cast<float>(wi.z), x(3, k) = static_cast<float>(wo.x),
+                           x(4, k) = static_cast<float>(wo.y), x(5, k) = static_cast<float>(wo.z);
+                           const float* t = &rdm.rdmM[(i * nOut + o) * 3];
+                           target(0, k) = t[0], target(1, k) = t[1], target(2, k) = t[2];
+                       }
+                   });
+    progress.finish();
+    return net;
+}
+
+// Energy of a (TI, PI, TO, PO, 3) map: mean over channels of
+// sum_i w_i sum_o v ΔΩ_o with w_i the incident solid angle (normalised).
+double mapEnergy(const std::vector<float>& map, const RdmBins& bins) {
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    double energy = 0, incidentTotal = 0;
+    for (size_t i = 0; i < nIn; ++i) {
+        const double wi = bins.incidentSolidAngle(i);
+        incidentTotal += wi;
+        double e = 0;
+        for (size_t o = 0; o < nOut; ++o) {
+            const float* v = &map[(i * nOut + o) * 3];
+            e += (v[0] + v[1] + v[2]) / 3.0 * bins.outgoingSolidAngle(o);
+        }
+        energy += wi * e;
+    }
+    return energy / incidentTotal;
+}
+
+// Least-squares masking coefficients: minimise
+// sum W_O (m(mu_I, mu_O) P_eq8 - P_rdm)^2 over the coarse grid and channels.
+std::vector<double> maskingLeastSquares(const std::vector<float>& eq8, const std::vector<float>& rdmR,
+                               const RdmBins& fine) {
+    const RdmBins& coarse = kCoarseErrorBins;
+    const std::vector<double> pe = poolRdm(eq8, fine, coarse), pr = poolRdm(rdmR, fine, coarse);
+    const size_t cIn = coarse.incidentCount(), cOut = coarse.outgoingCount();
+    Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d b = Eigen::Vector4d::Zero();
+    for (size_t I = 0; I < cIn; ++I) {
+        const double muI = coarse.incidentCentre(I).z;
+        for (size_t O = 0; O < cOut; ++O) {
+            const double muO = coarse.outgoingCentre(O).z;
+            if (muO <= 0) continue;
+            const double w = coarse.outgoingSolidAngle(O);
+            const auto basis = maskingBasis(muI, muO);
+            for (int c = 0; c < 3; ++c) {
+                const size_t k = (I * cOut + O) * 3 + c;
+                Eigen::Vector4d v;
+                for (int j = 0; j < kMaskingCoefficients; ++j) v[j] = basis[j] * pe[k];
+                a += w * v * v.transpose();
+                b += w * v * pr[k];
+            }
+        }
+    }
+    const Eigen::Vector4d c = a.ldlt().solve(b);
+    return {c[0], c[1], c[2], c[3]};
+}
+
+// ------------------------------------------------------- sampling lobe fit --
+
+// The second moment of the M estimator, sum_O f^2 / pdf ΔΩ / (sum_O f ΔΩ)^2,
+// averaged over incident directions (1 when pdf is proportional to f).
+class SecondMomentObjective {
+public:
+    SecondMomentObjective(const YarnModel& model, const std::vector<float>& mMap,
+                          const RdmBins& fine, tbb::task_arena& arena)
+        : model_(model), arena_(arena) {
+        // Coarse incident directions, fine outgoing ones: narrow lobes stay resolved.
+        bins_ = {std::min(fine.thetaI, 11), std::min(fine.phiI, 45), fine.thetaO, fine.phiO};
+        pooled_ = poolRdm(mMap, fine, bins_);
+        const size_t nIn = bins_.incidentCount(), nOut = bins_.outgoingCount();
+        solidAngle_.resize(nOut);
+        for (size_t o = 0; o < nOut; ++o) solidAngle_[o] = bins_.outgoingSolidAngle(o);
+        f_.resize(nIn * nOut);
+        normaliser_.assign(nIn, 0.0);
+        for (size_t i = 0; i < nIn; ++i)
+            for (size_t o = 0; o < nOut; ++o) {
+                const double* v = &pooled_[(i * nOut + o) * 3];
+                f_[i * nOut + o] = (v[0] + v[1] + v[2]) / 3.0;
+                normaliser_[i] += f_[i * nOut + o] * solidAngle_[o];
+            }
+        // The angles depend on the tilt only, not on the fitted parameters.
+        const SamplingLobes lobes(model.fiber, model.rLobe.tiltDeg, SamplingParams{});
+        for (size_t o = 0; o < nOut; ++o) outgoing_.push_back(lobes.anglesOf(bins_.outgoingCentre(o)));
+        for (size_t i = 0; i < nIn; ++i) thetaI_.push_back(lobes.anglesOf(bins_.incidentCentre(i)).theta);
+    }
+
+    double operator()(const SamplingParams& p) const {
+        const SamplingLobes lobes(model_.fiber, model_.rLobe.tiltDeg, p);
+        const size_t nIn = bins_.incidentCount(), nOut = bins_.outgoingCount();
+        std::vector<double> vonMises(nOut);
+        for (size_t o = 0; o < nOut; ++o) vonMises[o] = lobes.vonMisesM(outgoing_[o].cosPhi);
+        std::vector<double> perIncident(nIn, 0.0);
+        arena_.execute([&] {
+            tbb::parallel_for(size_t(0), nIn, [&](size_t i) {
+                if (normaliser_[i] <= 0) return;
+                const double inverseMass = lobes.longitudinalM().inverseMass(-thetaI_[i]);
+                double m = 0;
+                for (size_t o = 0; o < nOut; ++o) {
+                    const double f = f_[i * nOut + o];
+                    if (f <= 0) continue;
+                    m += f * f / lobes.pdfM(thetaI_[i], inverseMass, outgoing_[o], vonMises[o]) *
+                         solidAngle_[o];
+                }
+                perIncident[i] = m / (normaliser_[i] * normaliser_[i]);
+            });
+        });
+        double total = 0;
+        int used = 0;
+        for (size_t i = 0; i < nIn; ++i)
+            if (normaliser_[i] > 0) total += perIncident[i], ++used;
+        return used > 0 ? total / used : 0.0;
+    }
+
+private:
+    const YarnModel& model_;
+    tbb::task_arena& arena_;
+    RdmBins bins_;
+    std::vector<double> pooled_, solidAngle_, f_, normaliser_;
+    std::vector<SamplingLobes::Angles> outgoing_;
+    std::vector<double> thetaI_;
+};
+
+double logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
+
+// (log beta, log gamma, logit kappa) -> parameters, clamped to their ranges.
+SamplingParams samplingFromVector(const Eigen::Vector3d& v, double kappaR) {
+    SamplingParams p;
+    p.kappaR = kappaR;
+    p.betaMDeg = std::clamp(std::exp(v[0]), 0.5, 90.0);
+    p.gammaMDeg = std::clamp(std::exp(v[1]), 1.0, 180.0);
+    p.kappaM = std::clamp(logistic(v[2]), 0.0, 0.99);
+    return p;
+}
+
+// Nelder-Mead (standard coefficients) over 3 unconstrained variables.
+template <typename F>
+Eigen::Vector3d nelderMead(const F& f, Eigen::Vector3d start, double step, int iterations) {
+    std::array<Eigen::Vector3d, 4> x;
+    std::array<double, 4> y;
+    x[0] = start;
+    for (int k = 0; k < 3; ++k) {
+        x[k + 1] = start;
+        x[k + 1][k] += step;
+    }
+    for (int k = 0; k < 4; ++k) y[k] = f(x[k]);
+    for (int it = 0; it < iterations; ++it) {
+        std::array<int, 4> order = {0, 1, 2, 3};
+        std::sort(order.begin(), order.end(), [&](int a, int b) { return y[a] < y[b]; });
+        const int best = order[0], worst = order[3], second = order[2];
+        Eigen::Vector3d centroid = (x[order[0]] + x[order[1]] + x[order[2]]) / 3.0;
+        const Eigen::Vector3d reflected = centroid + (centroid - x[worst]);
+        const double yr = f(reflected);
+        if (yr < y[best]) {
+            const Eigen::Vector3d expanded = centroid + 2.0 * (centroid - x[worst]);
+            const double ye = f(expanded);
+            if (ye < yr) x[worst] = expanded, y[worst] = ye;
+            else x[worst] = reflected, y[worst] = yr;
+        } else if (yr < y[second]) {
+            x[worst] = reflected, y[worst] = yr;
+        } else {
+            const Eigen::Vector3d contracted = centroid + 0.5 * (x[worst] - centroid);
+            const double yc = f(contracted);
+            if (yc < y[worst]) {
+                x[worst] = contracted, y[worst] = yc;
+            } else {
+                for (int k : {order[1], order[2], order[3]}) {
+                    x[k] = x[best] + 0.5 * (x[k] - x[best]);
+                    y[k] = f(x[k]);
+                }
+            }
+        }
+    }
+    return x[std::min_element(y.begin(), y.end()) - y.begin()];
+}
+
+template <typename Eval>
+void forEachIncident(tbb::task_arena* arena, size_t count, const Eval& eval) {
+    auto run = [&] { tbb::parallel_for(size_t(0), count, eval); };
+    if (arena) arena->execute(run);
+    else run();
+}
+
+}  // namespace
+
+// ------------------------------------------------------------ model maps --
+
+std::vector<double> modelTransmissionMap(const YarnModel& model, const RdmBins& bins) {
+    const size_t nIn = bins.incidentCount();
+    Mlp<float>::Matrix x(3, static_cast<Eigen::Index>(nIn));
+    for (size_t i = 0; i < nIn; ++i) putColumn(x, static_cast<Eigen::Index>(i), bins.incidentCentre(i));
+    const Mlp<float>::Matrix y = model.tNet.forward(x);
+    std::vector<double> pT(nIn);
+    for (size_t i = 0; i < nIn; ++i) pT[i] = y(0, static_cast<Eigen::Index>(i));
+    return pT;
+}
+
+std::vector<float> modelReflectionMap(const YarnModel& model, const RdmBins& bins) {
+    const std::vector<double> pT = modelTransmissionMap(model, bins);
+    const RLobe lobe(model.fiber, model.rLobe);
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    std::vector<float> map(nIn * nOut * 3);
+    forEachIncident(nullptr, nIn, [&](size_t i) {
+        const Vec3 wi = bins.incidentCentre(i);
+        for (size_t o = 0; o < nOut; ++o) {
+            const Rgb v = lobe.eval(wi, bins.outgoingCentre(o), pT[i]);
+            for (int c = 0; c < 3; ++c) map[(i * nOut + o) * 3 + c] = static_cast<float>(v[c]);
+        }
+    });
+    return map;
+}
+
+std::vector<float> modelMultipleScatteringMap(const YarnModel& model, const RdmBins& bins) {
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    std::vector<Vec3> outgoing(nOut);
+    for (size_t o = 0; o < nOut; ++o) outgoing[o] = bins.outgoingCentre(o);
+    std::vector<float> map(nIn * nOut * 3);
+    forEachIncident(nullptr, nIn, [&](size_t i) {
+        Mlp<float>::Matrix x(6, static_cast<Eigen::Index>(nOut));
+        const Vec3 wi = bins.incidentCentre(i);
+        for (size_t o = 0; o < nOut; ++o) {
+            const auto col = static_cast<Eigen::Index>(o);
+            x(0, col) = static_cast<float>(wi.x), x(1, col) = static_cast<float>(wi.y),
+            x(2, col) = static_cast<float>(wi.z);
+            x(3, col) = static_cast<float>(outgoing[o].x), x(4, col) = static_cast<float>(outgoing[o].y),
+            x(5, col) = static_cast<float>(outgoing[o].z);
+        }
+        const Mlp<float>::Matrix y = model.mNet.forward(x);
+        for (size_t o = 0; o < nOut; ++o)
+            for (int c = 0; c < 3; ++c) map[(i * nOut + o) * 3 + c] = y(c, static_cast<Eigen::Index>(o));
+    });
+    return map;
+}
+
+// ------------------------------------------------------------------ fit --
+
+std::vector<double> fitMaskingCoefficients(const std::vector<float>& eq8,
+                                           const std::vector<float>& rdmR, const RdmBins& bins) {
+    return maskingLeastSquares(eq8, rdmR, bins);
+}
+
+SamplingParams fitSamplingLobe(const YarnModel& model, const std::vector<float>& mMap,
+                               const RdmBins& bins, double kappaR, double* secondMoment,
+                               int threads) {
+    tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
+    const SecondMomentObjective objective(model, mMap, bins, arena);
+    const Eigen::Vector3d best = nelderMead(
+        [&](const Eigen::Vector3d& v) { return objective(samplingFromVector(v, kappaR)); },
+        Eigen::Vector3d(std::log(20.0), std::log(40.0), 0.0), 0.5, 120);
+    const SamplingParams params = samplingFromVector(best, kappaR);
+    if (secondMoment) *secondMoment = objective(params);
+    return params;
+}
+
+FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t seed, bool quiet) {
+    const auto t0 = Clock::now();
+    const RdmBins& bins = rdm.bins;
+    const int threads = config.threads > 0 ? config.threads : tbb::this_task_arena::max_concurrency();
+    tbb::task_arena arena(threads);
+
+    // One line per phase on stderr (the long ones also have a progress bar).
+    auto phaseDone = [&](const char* what, Clock::time_point since) {
+        if (!quiet) std::fprintf(stderr, "fit: %s in %.1fs\n", what, secondsSince(since));
+    };
+    FitResult result;
+    YarnModel& model = result.model;
+    FitReport& report = result.report;
+    try {
+        model.fiber = FiberParams::fromJson(rdm.meta.at("fiber"), rdm.dir + "/meta.json: fiber");
+        const auto& ply = rdm.meta.at("ply");
+        model.ply = {ply.at("fibers").get<int>(), ply.at("density").get<double>(),
+                     ply.at("twist").get<double>()};
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(rdm.dir + "/meta.json: missing or malformed fiber/ply block (" + e.what() + ")");
+    }
+    model.ply.validate();
+
+    // 1. T network.
+    auto phase = Clock::now();
+    model.tNet = fitTransmission(rdm, config, seed, arena, quiet, &report.tLoss);
+    report.tSeconds = secondsSince(phase);
+    phase = Clock::now();
+    const std::vector<double> pT = modelTransmissionMap(model, bins);
+    double se = 0, seUnweighted = 0, countTotal = 0;
+    for (size_t i = 0; i < pT.size(); ++i) {
+        const double d = pT[i] - rdm.pT[i];
+        se += static_cast<double>(rdm.count[i]) * d * d;
+        seUnweighted += d * d;
+        countTotal += static_cast<double>(rdm.count[i]);
+    }
+    report.tRmse = std::sqrt(se / countTotal);
+    report.tRmseUnweighted = std::sqrt(seUnweighted / static_cast<double>(pT.size()));
+
+    // 2. R lobe: plain eq. 8, then the masking term.
+    model.rLobe.tiltDeg = SurfaceFiberFrame::tiltDegOfTwist(model.ply.twist);
+    model.rLobe.masking.clear();
+    std::vector<float> rEq8;
+    arena.execute([&] { rEq8 = modelReflectionMap(model, bins); });
+    report.rRelL2Eq8 = coarseRelativeL2(rEq8, rdm.rdmR, bins);
+    report.rEnergyRatio = mapEnergy(rdm.rdmR, bins) / mapEnergy(rEq8, bins);
+    report.rRelL2Masked = std::numeric_limits<double>::quiet_NaN();
+    phaseDone("R lobe (eq. 8)", phase);
+    phase = Clock::now();
+    if (config.masking) {
+        model.rLobe.masking = fitMaskingCoefficients(rEq8, rdm.rdmR, bins);
+        std::vector<float> rMasked;
+        arena.execute([&] { rMasked = modelReflectionMap(model, bins); });
+        report.rRelL2Masked = coarseRelativeL2(rMasked, rdm.rdmR, bins);
+        report.rRelL2 = report.rRelL2Masked;
+        phaseDone("R masking term", phase);
+    } else {
+        report.rRelL2 = report.rRelL2Eq8;
+    }
+
+    // 3. M network.
+    phase = Clock::now();
+    model.mNet = fitMultipleScattering(rdm, config, seed, arena, quiet, &report.mLoss);
+    report.mSeconds = secondsSince(phase);
+    report.mSamplesPerSecond =
+        static_cast<double>(config.m.steps) * config.m.batch / std::max(report.mSeconds, 1e-9);
+    std::vector<float> mFit;
+    arena.execute([&] { mFit = modelMultipleScatteringMap(model, bins); });
+    report.mRelL2 = coarseRelativeL2(mFit, rdm.rdmM, bins);
+    phase = Clock::now();
+
+    // 4. Sampling parameters.
+    std::vector<float> rFit;
+    arena.execute([&] { rFit = modelReflectionMap(model, bins); });
+    const double rEnergy = mapEnergy(rFit, bins), mEnergy = mapEnergy(mFit, bins);
+    const double kappaR = rEnergy + mEnergy > 0 ? rEnergy / (rEnergy + mEnergy) : 0.5;
+    model.sampling = fitSamplingLobe(model, mFit, bins, kappaR, &report.mSecondMoment, threads);
+    phaseDone("sampling lobe", phase);
+
+    report.seconds = secondsSince(t0);
+    model.fit = {{"t_rmse", report.tRmse},
+                 {"t_rmse_unweighted", report.tRmseUnweighted},
+                 {"m_rel_l2", report.mRelL2},
+                 {"r_rel_l2", report.rRelL2},
+                 {"r_rel_l2_eq8", report.rRelL2Eq8},
+                 {"r_energy_ratio", report.rEnergyRatio},
+                 {"m_second_moment", report.mSecondMoment},
+                 {"seconds", report.seconds},
+                 {"m_samples_per_second", report.mSamplesPerSecond},
+                 {"seed", seed},
+                 {"config", config.toJson()},
+                 {"rdm",
+                  {{"path", rdm.dir},
+                   {"paths", rdm.meta.value("paths", nlohmann::json())},
+                   {"seed", rdm.meta.value("seed", nlohmann::json())},
+                   {"ply_seed", rdm.meta.value("ply_seed", nlohmann::json())},
+                   {"bins", rdm.meta.value("bins", nlohmann::json())}}}};
+    if (config.masking) model.fit["r_rel_l2_masked"] = report.rRelL2Masked;
+    return result;
+}
+
+}  // namespace weft

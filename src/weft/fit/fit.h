@@ -1,0 +1,110 @@
+// weft/fit/fit.h — fitting the neural yarn model to a gathered RDM (weft fit).
+//
+// Paper 4.1-4.4, 5.2-5.3, DESIGN.md 6. From a gather directory:
+//   1. T network (3-7-7-1, PReLU, sigmoid) on P(T | wi): incident bins are
+//      drawn in proportion to their path counts (bins with few paths weigh
+//      less, exactly as their variance says), wi uniform in solid angle
+//      inside the bin, MSE, Adam.
+//   2. R lobe: plain eq. 8 with P(T|wi) from the T network, and optionally a
+//      masking term m(wi, wo) (yarn_lobes.h) fitted to RDM_R by linear least
+//      squares on the coarse error grid.
+//   3. M network (6-21-21-21-3 by default, PReLU, exp) on RDM_M: incident bins
+//      uniform, outgoing bins in proportion to their solid angle (the weights
+//      of the error metric), directions uniform in solid angle inside the bins
+//      ("jitter"); MSE or MSE on log(1 + x); Adam with an exponentially
+//      decaying learning rate. Each batch is split into a fixed number of
+//      chunks whose gradients are summed in order, so the result depends on
+//      the seed only, not on the thread count.
+//   4. Sampling: kappa_R = R energy / (R + M energy) of the model; beta_M,
+//      gamma_M, kappa_M minimise the second moment sum f_M^2 / pdf_M (the
+//      variance of the M estimator) over the RDM grid, by Nelder-Mead.
+// Errors use the one coarse-grid metric (metrics.h).
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "weft/fit/mlp.h"
+#include "weft/fit/yarn_model.h"
+#include "weft/gather/rdm_io.h"
+
+namespace weft {
+
+struct NetworkTraining {
+    std::vector<int> hidden;          // hidden layer widths
+    int64_t steps = 0;                // Adam steps
+    int restarts = 1;                 // independent trainings from different seeds; the best is kept (T only)
+    int batch = 0;                    // samples per step
+    double learningRate = 1e-3;       // at step 0
+    double finalLearningRate = 1e-5;  // at the last step (exponential decay in between)
+    Loss loss = Loss::Mse;
+};
+
+struct FitConfig {
+    NetworkTraining t{{7, 7}, 60000, 4, 512, 3e-2, 1e-5, Loss::Mse};
+    NetworkTraining m{{21, 21, 21}, 150000, 1, 1024, 3e-3, 3e-5, Loss::Mse};
+    bool jitter = true;     // train on random directions inside the bins (else bin centres)
+    bool masking = true;    // fit the R masking term (else plain eq. 8)
+    int threads = 0;        // 0: all cores; never changes the result
+
+    // Strict reading (unknown keys are errors naming the key); missing keys keep the defaults.
+    static FitConfig fromJson(const nlohmann::json& j, const std::string& source);
+    static FitConfig fromJsonFile(const std::string& path);
+    nlohmann::json toJson() const;
+};
+
+struct LossCurve {
+    std::vector<double> step, loss;  // mean batch loss over each logging interval
+};
+
+struct FitReport {
+    double tRmse = 0;            // path-count-weighted RMS error of P(T|wi) over incident bins
+    double tRmseUnweighted = 0;  // plain RMS over incident bins
+    double mRelL2 = 0;           // coarse-grid relative L2 (metrics.h) of M against the RDM
+    double rRelL2 = 0;           // the same for the R lobe as stored in the model
+    double rRelL2Eq8 = 0;        // plain eq. 8 (no masking)
+    double rRelL2Masked = 0;     // with the fitted masking term (NaN when not fitted)
+    double rEnergyRatio = 0;     // RDM_R energy / plain eq. 8 energy
+    double mSecondMoment = 0;    // sum f^2/pdf of the fitted M lobe, relative to the uniform sphere
+    double tSeconds = 0, mSeconds = 0, seconds = 0;
+    double mSamplesPerSecond = 0;
+    LossCurve tLoss, mLoss;
+};
+
+struct FitResult {
+    YarnModel model;
+    FitReport report;
+};
+
+// Fits every part of the model. `rdmPath` is recorded in the fit block.
+FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t seed, bool quiet);
+
+// Step 2: least-squares masking coefficients (yarn_lobes.h) so that
+// m(wi, wo) * eq8 matches rdmR on the coarse error grid (both maps on `bins`).
+std::vector<double> fitMaskingCoefficients(const std::vector<float>& eq8,
+                                           const std::vector<float>& rdmR, const RdmBins& bins);
+
+// Step 4: beta_M, gamma_M, kappa_M minimising the mean over incident
+// directions of sum_o f^2 / pdf_M dw / (sum_o f dw)^2 (f: the channel mean of
+// mMap; 1 when pdf_M is proportional to f), for the model's fiber and tilt.
+// kappaR is copied into the result; `secondMoment` receives the minimum.
+SamplingParams fitSamplingLobe(const YarnModel& model, const std::vector<float>& mMap,
+                               const RdmBins& bins, double kappaR, double* secondMoment = nullptr,
+                               int threads = 0);
+
+// The model's maps on an RDM grid, evaluated at bin centres, in the layout of
+// the gather's arrays: P(T|wi) (TI, PI); R and M (TI, PI, TO, PO, 3).
+std::vector<double> modelTransmissionMap(const YarnModel& model, const RdmBins& bins);
+std::vector<float> modelReflectionMap(const YarnModel& model, const RdmBins& bins);
+std::vector<float> modelMultipleScatteringMap(const YarnModel& model, const RdmBins& bins);
+
+// The report next to a model: errors.json, loss.png, and RDM-vs-fit slice
+// PNGs for a few incident directions; `reference` (an independent gather of
+// the same material) adds the errors against it and the noise floor.
+void writeFitReport(const FitResult& fit, const RdmData& rdm, const RdmData* reference,
+                    const std::string& dir);
+
+}  // namespace weft

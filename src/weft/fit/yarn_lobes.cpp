@@ -1,0 +1,149 @@
+#include "weft/fit/yarn_lobes.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "weft/core/error.h"
+#include "weft/core/math.h"
+
+namespace weft {
+
+SurfaceFiberFrame SurfaceFiberFrame::fromTiltDeg(double tiltDeg) {
+    return {std::cos(radians(tiltDeg)), std::sin(radians(tiltDeg))};
+}
+
+double SurfaceFiberFrame::tiltDegOfTwist(double twist) { return degrees(std::atan(kPi * twist)); }
+
+std::array<double, kMaskingCoefficients> maskingBasis(double muI, double muO) {
+    return {1.0, muI + muO, muI * muO, muI * muI + muO * muO};
+}
+
+RLobe::RLobe(const FiberParams& fiber, const RLobeParams& params)
+    : params_(params), frame_(SurfaceFiberFrame::fromTiltDeg(params.tiltDeg)), fiber_(fiber) {
+    if (!(params.tiltDeg >= 0 && params.tiltDeg < 90))
+        throw InputError("r_lobe.tilt_deg = " + std::to_string(params.tiltDeg) +
+                         " is out of range: allowed [0, 90)");
+    if (!params.masking.empty() && params.masking.size() != kMaskingCoefficients)
+        throw InputError("r_lobe.masking: expected " + std::to_string(kMaskingCoefficients) +
+                         " coefficients");
+}
+
+double RLobe::masking(const Vec3& wi, const Vec3& wo) const {
+    if (params_.masking.empty()) return 1.0;
+    const auto basis = maskingBasis(wi.z, wo.z);
+    double m = 0;
+    for (int k = 0; k < kMaskingCoefficients; ++k) m += params_.masking[k] * basis[k];
+    return std::clamp(m, 0.0, 1.0);
+}
+
+Rgb RLobe::evalFiber(const Vec3& wi, const Vec3& wo) const {
+    if (wi.z <= 0 || wo.z <= 0) return Rgb(0.0);
+    return fiber_.eval(frame_.toLocal(wi), frame_.toLocal(wo));
+}
+
+Rgb RLobe::eval(const Vec3& wi, const Vec3& wo, double pT) const {
+    if (wi.z <= 0 || wo.z <= 0) return Rgb(0.0);
+    return evalFiber(wi, wo) * ((1.0 - pT) * masking(wi, wo));
+}
+
+TruncatedGaussian::TruncatedGaussian(double beta) : beta_(beta) {
+    if (!(beta > 0 && beta <= kPi)) throw InputError("truncated Gaussian width out of range (0, pi]");
+}
+
+namespace {
+
+// erf of the standardised bounds of [-pi/2, pi/2] around mu.
+struct Bounds {
+    double lo, hi;
+};
+Bounds erfBounds(double mu, double beta) {
+    const double s = 1.0 / (beta * std::sqrt(2.0));
+    return {std::erf((-kPi / 2 - mu) * s), std::erf((kPi / 2 - mu) * s)};
+}
+
+}  // namespace
+
+double TruncatedGaussian::inverseMass(double mu) const {
+    const Bounds b = erfBounds(mu, beta_);
+    return 2.0 / (b.hi - b.lo);
+}
+
+double TruncatedGaussian::pdf(double theta, double mu, double inverseMass) const {
+    if (theta < -kPi / 2 || theta > kPi / 2) return 0.0;
+    const double x = (theta - mu) / beta_;
+    return std::exp(-0.5 * x * x) * inverseMass / (beta_ * std::sqrt(2.0 * kPi));
+}
+
+double TruncatedGaussian::pdf(double theta, double mu) const {
+    return pdf(theta, mu, inverseMass(mu));
+}
+
+double TruncatedGaussian::sample(double mu, double u) const {
+    const Bounds b = erfBounds(mu, beta_);
+    const double theta = mu + beta_ * std::sqrt(2.0) * erfInv(b.lo + u * (b.hi - b.lo));
+    return std::clamp(theta, -kPi / 2, kPi / 2);
+}
+
+namespace {
+
+void validateSampling(const SamplingParams& p) {
+    auto check = [](double v, bool ok, const char* name, const char* range) {
+        if (!ok || !std::isfinite(v))
+            throw InputError(std::string("sampling.") + name + " = " + std::to_string(v) +
+                             " is out of range: allowed " + range);
+    };
+    check(p.kappaR, p.kappaR >= 0 && p.kappaR <= 1, "kappa_r", "[0, 1]");
+    check(p.betaMDeg, p.betaMDeg > 0 && p.betaMDeg <= 90, "beta_m_deg", "(0, 90]");
+    check(p.gammaMDeg, p.gammaMDeg > 0 && p.gammaMDeg <= 180, "gamma_m_deg", "(0, 180]");
+    check(p.kappaM, p.kappaM >= 0 && p.kappaM <= 1, "kappa_m", "[0, 1]");
+}
+
+const SamplingParams& validated(const SamplingParams& p) {
+    validateSampling(p);
+    return p;
+}
+
+}  // namespace
+
+SamplingLobes::SamplingLobes(const FiberParams& fiber, double tiltDeg, const SamplingParams& params)
+    : params_(validated(params)),
+      frame_(SurfaceFiberFrame::fromTiltDeg(tiltDeg)),
+      gR_(radians(fiber.betaRDeg)),
+      gM_(radians(params.betaMDeg)),
+      vonMisesM_(1.0 / (radians(params.gammaMDeg) * radians(params.gammaMDeg))) {}
+
+double SamplingLobes::pdfR(const Vec3& wi, const Vec3& wo) const {
+    if (wo.z <= 0) return 0.0;  // the upper half cone |phi_o| < pi/2
+    const Vec3 i = frame_.toLocal(wi), o = frame_.toLocal(wo);
+    const double thetaI = std::asin(std::clamp(i.x, -1.0, 1.0));
+    const double thetaO = std::asin(std::clamp(o.x, -1.0, 1.0));
+    const double cosThetaO = std::sqrt(std::max(0.0, 1.0 - o.x * o.x));
+    if (cosThetaO <= 0) return 0.0;
+    return gR_.pdf(thetaO, -thetaI) / (kPi * cosThetaO);
+}
+
+SamplingLobes::Angles SamplingLobes::anglesOf(const Vec3& w) const {
+    const Vec3 local = frame_.toLocal(w);
+    const double sinTheta = std::clamp(local.x, -1.0, 1.0);
+    const double cosTheta = std::sqrt(std::max(0.0, 1.0 - sinTheta * sinTheta));
+    // cos(phi) with phi measured from n in the (b~, n) plane.
+    const double cosPhi = cosTheta > 0 ? std::clamp(local.z / cosTheta, -1.0, 1.0) : 1.0;
+    return {std::asin(sinTheta), cosTheta, cosPhi};
+}
+
+double SamplingLobes::pdfM(double thetaI, double inverseMass, const Angles& out,
+                           double vonMisesDensity) const {
+    const double uniform = (1.0 - params_.kappaM) / (4.0 * kPi);
+    if (out.cosTheta <= 0 || params_.kappaM == 0) return uniform;
+    return params_.kappaM * gM_.pdf(out.theta, -thetaI, inverseMass) * vonMisesDensity /
+               out.cosTheta +
+           uniform;
+}
+
+double SamplingLobes::pdfM(const Vec3& wi, const Vec3& wo) const {
+    const double thetaI = anglesOf(wi).theta;
+    const Angles out = anglesOf(wo);
+    return pdfM(thetaI, gM_.inverseMass(-thetaI), out, vonMisesM_.pdfOfCos(out.cosPhi));
+}
+
+}  // namespace weft

@@ -1,0 +1,73 @@
+// weft/fit/yarn_model.h — the fitted neural yarn model and its model.json file.
+//
+// One self-describing file per ply material (DESIGN.md 6, issue 5), format
+// "weft-yarn-model" version 1, documented key by key in docs/model-format.md:
+//   fiber     the fiber parameters (FiberParams JSON)
+//   ply       {"fibers": N, "density": rho, "twist": alpha}
+//   t_net     P(T | wi): 3-7-7-1, PReLU, sigmoid output (paper 5.2)
+//   m_net     S_M(wi, wo): 6-21-21(-21)-3, PReLU, exp output (paper 5.3)
+//   r_lobe    the analytic R lobe (paper eq. 8) and its optional masking term
+//   sampling  kappa_R, beta_M, gamma_M, kappa_M (paper eq. 9-11)
+//   fit       errors and provenance of the fit (free-form numbers and strings)
+// Networks: {"layers": [{"weight": [[in numbers] x out rows], "bias": [out],
+// "prelu": [out] or null}, ...], "output": "sigmoid" | "exp" | "identity"};
+// layer l computes y = W x + b, then the PReLU when present. Network inputs
+// are unit vectors in the yarn frame (t, b, n): wi for t_net, (wi, wo) for m_net.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "weft/fiber/fiber_params.h"
+#include "weft/fit/mlp.h"
+#include "weft/ply/ply.h"
+
+namespace weft {
+
+inline constexpr const char* kYarnModelFormat = "weft-yarn-model";
+inline constexpr int kYarnModelVersion = 1;
+
+// The R lobe (paper eq. 8): (1 - P(T|wi)) S_f(wi~, wo~) in the surface fiber
+// frame (tangent tilted by tiltDeg = atan(pi alpha) about n), zero unless both
+// wi and wo are in the upper hemisphere; optionally times a fitted masking
+// term m(wi, wo) (see yarn_lobes.h for its form).
+struct RLobeParams {
+    double tiltDeg = 0;           // in [0, 90)
+    std::vector<double> masking;  // empty: plain eq. 8 (JSON null); else kMaskingCoefficients numbers
+};
+
+// Lobe selection and the M sampling lobe (paper eq. 9-11, DESIGN.md 7).
+struct SamplingParams {
+    double kappaR = 0.5;   // share of R in the non-T energy, in [0, 1]
+    double betaMDeg = 20;  // longitudinal width of the M lobe, degrees in (0, 90]
+    double gammaMDeg = 40; // azimuthal width of the M lobe (von Mises kappa = 1/gamma^2), degrees in (0, 180]
+    double kappaM = 0.5;   // weight of the cone lobe against the uniform sphere, in [0, 1]
+};
+
+struct YarnModel {
+    FiberParams fiber;
+    PlyParams ply;
+    Mlp<float> tNet;  // 3 inputs, 1 output
+    Mlp<float> mNet;  // 6 inputs, 3 outputs
+    RLobeParams rLobe;
+    SamplingParams sampling;
+    nlohmann::json fit = nlohmann::json::object();  // errors and provenance, written as is
+};
+
+// JSON document of a model (the layout above).
+nlohmann::json yarnModelToJson(const YarnModel& model);
+// Validating reader: InputError naming `source` and the JSON path of the
+// offending field ("m_net.layers[1].weight: expected 21 rows of 21 numbers")
+// for a missing key, an unknown key, a wrong shape, a non-finite number, an
+// out-of-range parameter, a wrong format name or an unknown version.
+YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source);
+
+// File forms: the reader names the file (and the JSON parse error's byte
+// offset for malformed JSON); the writer is atomic (writeFileAtomic) and first
+// checks the document with the reader, so a non-finite weight is an InputError
+// rather than a null in the file.
+YarnModel loadYarnModel(const std::string& path);
+void saveYarnModel(const YarnModel& model, const std::string& path);
+
+}  // namespace weft

@@ -7,6 +7,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/json_file.h"
 
 namespace weft {
 
@@ -81,14 +82,7 @@ FiberParams FiberParams::fromJson(const nlohmann::json& j, const std::string& so
 }
 
 FiberParams FiberParams::fromJsonFile(const std::string& path) {
-    const std::string text = readFile(path);
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw InputError(path + ": malformed JSON: " + e.what());
-    }
-    return fromJson(j, path);
+    return fromJson(readJsonFile(path), path);
 }
 
 nlohmann::json FiberParams::toJson() const {

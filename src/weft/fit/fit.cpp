@@ -11,7 +11,7 @@
 #include <set>
 
 #include "weft/core/error.h"
-#include "weft/core/file.h"
+#include "weft/core/json_file.h"
 #include "weft/core/math.h"
 #include "weft/core/progress.h"
 #include "weft/core/rng.h"
@@ -118,14 +118,7 @@ FitConfig FitConfig::fromJson(const nlohmann::json& j, const std::string& source
 }
 
 FitConfig FitConfig::fromJsonFile(const std::string& path) {
-    const std::string text = readFile(path);
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw InputError(path + ": malformed JSON at byte " + std::to_string(e.byte));
-    }
-    return fromJson(j, path);
+    return fromJson(readJsonFile(path), path);
 }
 
 nlohmann::json FitConfig::toJson() const {

@@ -11,6 +11,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/json_file.h"
 #include "weft/fit/yarn_lobes.h"
 
 namespace weft {
@@ -445,15 +446,7 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
 }
 
 YarnModel loadYarnModel(const std::string& path) {
-    const std::string text = readFile(path);
-    json j;
-    try {
-        j = json::parse(text);
-    } catch (const json::parse_error& e) {
-        throw InputError(path + ": malformed JSON at byte " + std::to_string(e.byte) + ": " +
-                         e.what());
-    }
-    return yarnModelFromJson(j, path);
+    return yarnModelFromJson(readJsonFile(path), path);
 }
 
 void saveYarnModel(const YarnModel& model, const std::string& path) {

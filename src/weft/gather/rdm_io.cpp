@@ -6,6 +6,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/json_file.h"
 #include "weft/core/npy.h"
 
 namespace weft {
@@ -37,11 +38,7 @@ RdmData loadRdm(const std::string& dir) {
     RdmData d;
     d.dir = dir;
     const std::string metaPath = (fs::path(dir) / "meta.json").string();
-    try {
-        d.meta = nlohmann::json::parse(readFile(metaPath));
-    } catch (const nlohmann::json::parse_error& e) {
-        throw InputError(metaPath + ": malformed JSON: " + e.what());
-    }
+    d.meta = readJsonFile(metaPath);
     if (!d.meta.is_object() || d.meta.value("format", "") != "weft-gather")
         throw InputError(metaPath + ": not a weft gather (\"format\" must be \"weft-gather\")");
     if (d.meta.value("version", 0) != 1)

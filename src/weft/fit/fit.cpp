@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <set>
+#include <utility>
 
 #include "weft/core/error.h"
 #include "weft/core/json_file.h"
@@ -604,7 +605,7 @@ FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t see
     // 2. R lobe: plain eq. 8, then the masking term.
     model.rLobe.tiltDeg = SurfaceFiberFrame::tiltDegOfTwist(model.ply.twist);
     model.rLobe.masking.clear();
-    std::vector<float> rEq8;
+    std::vector<float> rEq8, rFit;  // plain eq. 8; the R lobe as stored in the model
     arena.execute([&] { rEq8 = modelReflectionMap(model, bins); });
     report.rRelL2Eq8 = coarseRelativeL2(rEq8, rdm.rdmR, bins);
     report.rEnergyRatio = mapEnergy(rdm.rdmR, bins) / mapEnergy(rEq8, bins);
@@ -613,9 +614,8 @@ FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t see
     phase = Clock::now();
     if (config.masking) {
         model.rLobe.masking = fitMaskingCoefficients(rEq8, rdm.rdmR, bins);
-        std::vector<float> rMasked;
-        arena.execute([&] { rMasked = modelReflectionMap(model, bins); });
-        report.rRelL2Masked = coarseRelativeL2(rMasked, rdm.rdmR, bins);
+        arena.execute([&] { rFit = modelReflectionMap(model, bins); });
+        report.rRelL2Masked = coarseRelativeL2(rFit, rdm.rdmR, bins);
         report.rRelL2 = report.rRelL2Masked;
         phaseDone("R masking term", phase);
     } else {
@@ -634,8 +634,7 @@ FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t see
     phase = Clock::now();
 
     // 4. Sampling parameters.
-    std::vector<float> rFit;
-    arena.execute([&] { rFit = modelReflectionMap(model, bins); });
+    if (!config.masking) rFit = std::move(rEq8);
     const double rEnergy = mapEnergy(rFit, bins), mEnergy = mapEnergy(mFit, bins);
     const double kappaR = rEnergy + mEnergy > 0 ? rEnergy / (rEnergy + mEnergy) : 0.5;
     model.sampling = fitSamplingLobe(model, mFit, bins, kappaR, &report.mSecondMoment, threads);

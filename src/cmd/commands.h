@@ -48,5 +48,6 @@ void addFiberCommands(CLI::App& app);
 void addPlyCommand(CLI::App& app);
 void addGatherCommand(CLI::App& app);
 void addFitCommand(CLI::App& app);
+void addYarnCommands(CLI::App& app);
 
 }  // namespace weft::cmd

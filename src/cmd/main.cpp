@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
     weft::cmd::addPlyCommand(app);
     weft::cmd::addGatherCommand(app);
     weft::cmd::addFitCommand(app);
+    weft::cmd::addYarnCommands(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -140,6 +140,35 @@ double SamplingLobes::pdfM(double thetaI, double inverseMass, const Angles& out,
            uniform;
 }
 
+namespace {
+
+// Surface-fiber-local direction of longitudinal angle theta and azimuth phi from n.
+Vec3 coneDirection(double theta, double phi) {
+    const double cosTheta = std::cos(theta);
+    return {std::sin(theta), cosTheta * std::sin(phi), cosTheta * std::cos(phi)};
+}
+
+}  // namespace
+
+Vec3 SamplingLobes::sampleR(const Vec3& wi, double u1, double u2) const {
+    const double thetaI = anglesOf(wi).theta;
+    const double thetaO = gR_.sample(-thetaI, u1);
+    return frame_.fromLocal(coneDirection(thetaO, kPi * (u2 - 0.5)));
+}
+
+Vec3 SamplingLobes::sampleM(const Vec3& wi, double uLobe, double u1, double u2, Rng& rng) const {
+    if (uLobe < params_.kappaM) {
+        const double thetaI = anglesOf(wi).theta;
+        const double thetaO = gM_.sample(-thetaI, u1);
+        return frame_.fromLocal(coneDirection(thetaO, vonMisesM_.sample(u2, rng)));
+    }
+    // Uniform sphere: z uniform in [-1, 1], azimuth uniform (any frame).
+    const double z = 1.0 - 2.0 * u1;
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double phi = kTwoPi * u2;
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
 double SamplingLobes::pdfM(const Vec3& wi, const Vec3& wo) const {
     const double thetaI = anglesOf(wi).theta;
     const Angles out = anglesOf(wo);

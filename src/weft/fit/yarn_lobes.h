@@ -107,6 +107,18 @@ public:
     const TruncatedGaussian& longitudinalM() const { return gM_; }
     double pdfM(double thetaI, double inverseMass, const Angles& out, double vonMisesDensity) const;
     double vonMisesM(double cosPhi) const { return vonMisesM_.pdfOfCos(cosPhi); }
+    const SurfaceFiberFrame& frame() const { return frame_; }
+
+    // Sampling (paper 4.4) with exactly the densities above. In the surface
+    // fiber frame a direction of longitudinal angle theta and azimuth phi
+    // (from n) is (sin theta, cos theta sin phi, cos theta cos phi).
+    // R: theta_o = g(.; -theta_i, beta_R) by its inverse CDF (u1), phi_o
+    // uniform in [-pi/2, pi/2) (u2).
+    Vec3 sampleR(const Vec3& wi, double u1, double u2) const;
+    // M: the cone lobe when uLobe < kappa_M (theta_o from g(.; -theta_i,
+    // beta_M) by u1, phi_o von Mises about 0: u2 drives the first proposal,
+    // rng the rejection steps), otherwise the uniform sphere (u1, u2).
+    Vec3 sampleM(const Vec3& wi, double uLobe, double u1, double u2, Rng& rng) const;
 
 private:
     SamplingParams params_;

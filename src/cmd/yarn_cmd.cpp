@@ -1,0 +1,158 @@
+// weft yarn eval | sample | check: probes of the aggregated yarn BSDF (docs/yarn.md).
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "weft/core/error.h"
+#include "weft/core/npy.h"
+#include "weft/gather/rdm_io.h"
+#include "weft/yarn/yarn_bsdf.h"
+#include "weft/yarn/yarn_check.h"
+
+namespace weft::cmd {
+
+namespace {
+
+// Row `row` of PAIRS as a unit vector (float32 input: length within 1e-3 of 1, renormalised).
+Vec3 unitVectorAt(const NpyMatrix& m, size_t row, size_t col, const std::string& path) {
+    const Vec3 v{m(row, col), m(row, col + 1), m(row, col + 2)};
+    const double len = length(v);
+    if (!isFinite(v) || !(std::fabs(len - 1.0) <= 1e-3)) {
+        std::ostringstream msg;
+        msg << path << ": row " << row << ": " << (col == 0 ? "wi" : "wo") << " = " << v
+            << " is not a unit vector (length must be within 1e-3 of 1)";
+        throw InputError(msg.str());
+    }
+    return v / len;
+}
+
+struct EvalOptions {
+    std::string model, in, out;
+    bool noGuard = false;
+};
+
+struct SampleOptions {
+    std::string model, wi, out;
+    int64_t count = 0;
+    uint64_t seed = 0;
+    bool noGuard = false;
+};
+
+struct CheckOptions {
+    std::string model, rdm, out;
+    int64_t minPaths = 1000;
+    int threads = 0;
+};
+
+void runEval(const EvalOptions& o) {
+    const YarnBsdf bsdf = YarnBsdf::load(o.model, YarnBsdfOptions{!o.noGuard});
+    const NpyMatrix pairs = readNpyMatrix(o.in, 6, "wi, wo pairs");
+    std::vector<double> values(pairs.rows * 3);
+    for (size_t i = 0; i < pairs.rows; ++i) {
+        const Rgb f = bsdf.eval(unitVectorAt(pairs, i, 0, o.in), unitVectorAt(pairs, i, 3, o.in));
+        for (int c = 0; c < 3; ++c) values[3 * i + c] = f[c];
+    }
+    writeNpy(o.out, values.data(), {pairs.rows, 3});
+}
+
+void runSample(const SampleOptions& o) {
+    const YarnBsdf bsdf = YarnBsdf::load(o.model, YarnBsdfOptions{!o.noGuard});
+    const Vec3 wi = parseDirection(o.wi, "--wi");
+    std::vector<double> rows(static_cast<size_t>(o.count) * 8);
+    for (int64_t i = 0; i < o.count; ++i) {
+        // One stream per sample index: the output does not depend on chunking.
+        Rng rng(static_cast<uint64_t>(i), o.seed);
+        const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
+        const BsdfSample s = bsdf.sample(wi, u, rng);
+        double* r = &rows[8 * i];
+        r[0] = s.wo.x, r[1] = s.wo.y, r[2] = s.wo.z;
+        r[3] = s.weight.r, r[4] = s.weight.g, r[5] = s.weight.b;
+        r[6] = s.pdf;
+        r[7] = s.lobe;
+    }
+    writeNpy(o.out, rows.data(), {static_cast<size_t>(o.count), 8});
+}
+
+void runCheck(const CheckOptions& o) {
+    if (o.threads < 0 || o.threads > 1024)
+        throw InputError("--threads " + std::to_string(o.threads) +
+                         " is out of range: allowed [0, 1024]");
+    const YarnModel model = loadYarnModel(o.model);
+    const RdmData rdm = loadRdm(o.rdm);
+    const nlohmann::json s = checkYarnModel(model, o.model, rdm, {o.minPaths, o.threads}, o.out);
+    // One line on stdout: the headline numbers (the full summary is in check.json).
+    const nlohmann::json line = {
+        {"out", o.out},
+        {"bins_checked", s.at("bins_checked")},
+        {"albedo_relative_error_mean_abs", s.at("albedo").at("relative_error_mean_abs")},
+        {"albedo_relative_error_worst", s.at("albedo").at("relative_error_worst")},
+        {"model_albedo_max", s.at("albedo").at("model_max_all_bins")},
+        {"guarded_albedo_max", s.at("energy_guard").at("albedo_max_all_bins")},
+        {"m_rel_l2", s.at("m_rel_l2")},
+        {"r_rel_l2", s.at("r_rel_l2")},
+        {"variance_proxy", s.at("variance_proxy")},
+        {"seconds", s.at("seconds")}};
+    std::printf("%s\n", line.dump().c_str());
+}
+
+}  // namespace
+
+void addYarnCommands(CLI::App& app) {
+    CLI::App* yarn = app.add_subcommand(
+        "yarn",
+        "Probe the aggregated yarn BSDF of a fitted MODEL.json in the yarn frame: "
+        "t = +x, b = +y, n = +z");
+    yarn->require_subcommand(1);
+
+    auto evalOpts = std::make_shared<EvalOptions>();
+    CLI::App* eval = yarn->add_subcommand(
+        "eval",
+        "continuous part R + M of eval(wi, wo), RGB including the cosine, for every row of "
+        "an (n,6) array");
+    eval->add_option("--model", evalOpts->model, "fitted model (weft fit)")->required();
+    eval->add_option("--in", evalOpts->in, "(n,6) float32/float64 .npy: rows wi(3), wo(3)")
+        ->required();
+    eval->add_option("--out", evalOpts->out, "(n,3) float64 .npy of RGB values")->required();
+    eval->add_flag("--no-energy-guard", evalOpts->noGuard,
+                   "the model's own S_M, even where its albedo exceeds 1");
+    eval->callback([evalOpts] { runEval(*evalOpts); });
+
+    auto sampleOpts = std::make_shared<SampleOptions>();
+    CLI::App* sample = yarn->add_subcommand(
+        "sample",
+        "draw outgoing directions for one wi: rows wo(3), weight RGB(3), pdf(1, 0 for "
+        "the delta lobe), lobe(1: 0 = T, 1 = R, 2 = M)");
+    sample->add_option("--model", sampleOpts->model, "fitted model (weft fit)")->required();
+    sample->add_option("--wi", sampleOpts->wi, "incident direction X,Y,Z (normalised)")->required();
+    sample->add_option("--count", sampleOpts->count, "number of samples")
+        ->required()
+        ->check(CLI::Range(int64_t{1}, int64_t{100000000}));
+    addSeedOption(*sample, sampleOpts->seed, "random seed");
+    sample->add_option("--out", sampleOpts->out, "(N,8) float64 .npy")->required();
+    sample->add_flag("--no-energy-guard", sampleOpts->noGuard,
+                     "the model's own S_M, even where its albedo exceeds 1");
+    sample->callback([sampleOpts] { runSample(*sampleOpts); });
+
+    auto checkOpts = std::make_shared<CheckOptions>();
+    CLI::App* check = yarn->add_subcommand(
+        "check",
+        "compare the model with a gathered RDM: directional albedo per incident bin, "
+        "coarse-grid errors of R and M, sampler variance proxies, slice PNGs");
+    check->add_option("--model", checkOpts->model, "fitted model (weft fit)")->required();
+    check->add_option("--rdm", checkOpts->rdm, "gather directory (weft gather)")->required();
+    check->add_option("--out", checkOpts->out, "report directory (written atomically)")->required();
+    check
+        ->add_option("--min-paths", checkOpts->minPaths,
+                     "incident bins with fewer paths are left out of the albedo summary")
+        ->default_val(1000)
+        ->check(CLI::Range(int64_t{0}, int64_t{1} << 62));
+    check->add_option("--threads", checkOpts->threads, "worker threads (0: all cores)")
+        ->default_val(0);
+    check->callback([checkOpts] { runCheck(*checkOpts); });
+}
+
+}  // namespace weft::cmd

@@ -1,0 +1,363 @@
+#include "weft/yarn/yarn_bsdf.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "weft/core/error.h"
+#include "weft/core/math.h"
+#include "weft/gather/rdm.h"
+#include "weft/yarn/quadrature.h"
+
+namespace weft {
+
+namespace {
+
+std::string widthsText(const Mlp<float>& net) {
+    std::string text;
+    for (int w : net.widths()) {
+        if (!text.empty()) text += '-';
+        text += std::to_string(w);
+    }
+    return text;
+}
+
+void checkNetwork(const Mlp<float>& net, const std::string& name, int inputs, int outputs,
+                  OutputFunction output, const char* why, const std::string& source) {
+    if (net.layers().empty())
+        throw InputError(source + ": " + name + ": the network has no layers");
+    if (net.inputs() != inputs || net.outputs() != outputs)
+        throw InputError(source + ": " + name + ": expected " + std::to_string(inputs) +
+                         " inputs and " + std::to_string(outputs) + " output" +
+                         (outputs == 1 ? "" : "s") + ", got " + widthsText(net));
+    if (net.output() != output)
+        throw InputError(source + ": " + name + ".output: the yarn BSDF needs \"" +
+                         toString(output) + "\" (" + why + "), got \"" + toString(net.output()) +
+                         "\"");
+}
+
+// The networks' shapes and output functions, checked before any member is built.
+const YarnModel& validated(const YarnModel& model, const std::string& source) {
+    checkNetwork(model.tNet, "t_net", 3, 1, OutputFunction::Sigmoid, "P(T|wi) must lie in [0, 1]",
+                 source);
+    checkNetwork(model.mNet, "m_net", 6, 3, OutputFunction::Exp, "S_M must be non-negative",
+                 source);
+    return model;
+}
+
+// Builds a member, prefixing the InputError of its constructor with `source`.
+template <typename T, typename... Args>
+T withSource(const std::string& source, const Args&... args) {
+    try {
+        return T(args...);
+    } catch (const InputError& e) {
+        throw InputError(source + ": " + e.what());
+    }
+}
+
+constexpr Vec3 mirrored(const Vec3& w) { return {w.x, w.y, -w.z}; }
+
+}  // namespace
+
+YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
+                   const YarnBsdfOptions& options)
+    : tNet_(validated(model, source).tNet, source + ": t_net"),
+      mNet_(model.mNet, source + ": m_net"),
+      rLobe_(withSource<RLobe>(source, model.fiber, model.rLobe)),
+      lobes_(withSource<SamplingLobes>(source, model.fiber, model.rLobe.tiltDeg, model.sampling)),
+      kappaR_(model.sampling.kappaR) {
+    if (options.energyGuard) buildEnergyGuard();
+}
+
+YarnBsdf YarnBsdf::load(const std::string& path, const YarnBsdfOptions& options) {
+    return YarnBsdf(loadYarnModel(path), path, options);
+}
+
+// ------------------------------------------------------------ energy guard --
+
+double YarnBsdf::guardPolarAngle(int index) {
+    const double u = 1.0 - static_cast<double>(index) / (kGuardTheta - 1);
+    return kHalfPi * (1.0 - u * u);
+}
+
+double YarnBsdf::guardFiberAngle(int index) { return -kHalfPi + kPi * index / (kGuardFiber - 1); }
+
+namespace {
+
+// Cell and fraction of `t` (in node units) on an axis of `count` nodes.
+void axisCell(double t, int count, int* i0, double* f) {
+    *i0 = std::clamp(static_cast<int>(std::floor(t)), 0, count - 2);
+    *f = std::clamp(t - *i0, 0.0, 1.0);
+}
+
+}  // namespace
+
+void YarnBsdf::buildEnergyGuard() {
+    using quadrature::panelRule;
+    using quadrature::uniformEdges;
+    const SurfaceFiberFrame& frame = lobes_.frame();
+    const double betaR = radians(rLobe_.fiber().params().betaRDeg);
+    // Outgoing rules in the surface fiber frame (yarn_integrals.h has the
+    // finer one of the checks): M is smooth, 8 x 8 panels over the sphere; R
+    // lives on the upper half cone |phi| < pi/2, within a few beta_R of
+    // theta = -theta_i for the fiber's R lobe, wider for its TT lobe.
+    std::vector<double> phiM, phiMW, phiR, phiRW, thetaM, thetaMW, edges;
+    uniformEdges(-kPi, kPi, 8, &edges);
+    panelRule(edges, &phiM, &phiMW);
+    edges.clear();
+    uniformEdges(-kHalfPi, kHalfPi, 4, &edges);
+    panelRule(edges, &phiR, &phiRW);
+    edges.clear();
+    uniformEdges(-kHalfPi, kHalfPi, 8, &edges);
+    panelRule(edges, &thetaM, &thetaMW);
+    auto direction = [&](double theta, double phi) {
+        const double c = std::cos(theta);
+        return frame.fromLocal({std::sin(theta), c * std::sin(phi), c * std::cos(phi)});
+    };
+
+    const size_t fiberNodes = static_cast<size_t>(kGuardFiber) * kGuardFiber;
+    const size_t nodes = static_cast<size_t>(kGuardTheta) * kGuardPhi;
+    guardReflectance_.assign(fiberNodes, Rgb());
+    guardEnergyM_.assign(nodes, Rgb());
+    // R table, in surface-fiber angles.
+    tbb::parallel_for(size_t(0), fiberNodes, [&](size_t node) {
+        const double thetaI = guardFiberAngle(static_cast<int>(node / kGuardFiber));
+        const Vec3 wi = direction(thetaI, guardFiberAngle(static_cast<int>(node % kGuardFiber)));
+        const double pT = transmissionUpper(wi);
+        std::vector<double> thetaEdges, thetaR, thetaRW;
+        uniformEdges(-kHalfPi, kHalfPi, 12, &thetaEdges);
+        uniformEdges(std::max(-kHalfPi, -thetaI - 5 * betaR),
+                     std::min(kHalfPi, -thetaI + 5 * betaR), 10, &thetaEdges);
+        std::sort(thetaEdges.begin(), thetaEdges.end());
+        panelRule(thetaEdges, &thetaR, &thetaRW);
+        Rgb energyR;
+        for (size_t i = 0; i < thetaR.size(); ++i)
+            for (size_t j = 0; j < phiR.size(); ++j)
+                energyR += rLobe_.eval(wi, direction(thetaR[i], phiR[j]), pT) *
+                           (thetaRW[i] * phiRW[j] * std::cos(thetaR[i]));
+        const Rgb af = fiberAlbedo(frame.toLocal(wi));
+        for (int c = 0; c < 3; ++c) {
+            const double full = (1.0 - pT) * af[c];
+            guardReflectance_[node][c] = full > 0 ? energyR[c] / full : 0.0;
+        }
+    });
+    // M table, in yarn angles; the guard is needed if any node's albedo comes near 1.
+    std::vector<double> albedo(nodes, 0.0);
+    tbb::parallel_for(size_t(0), nodes, [&](size_t node) {
+        const Vec3 wi =
+            sphericalDirection(guardPolarAngle(static_cast<int>(node / kGuardPhi)),
+                               -kPi + kTwoPi * static_cast<double>(node % kGuardPhi) / kGuardPhi);
+        Rgb energy;
+        for (size_t i = 0; i < thetaM.size(); ++i)
+            for (size_t j = 0; j < phiM.size(); ++j)
+                energy += evalM(wi, direction(thetaM[i], phiM[j])) *
+                          (thetaMW[i] * phiMW[j] * std::cos(thetaM[i]));
+        guardEnergyM_[node] = energy;
+        const double pT = transmissionUpper(wi);
+        const Rgb kept = keptReflectance(wi);
+        const Rgb af = fiberAlbedo(frame.toLocal(wi));
+        for (int c = 0; c < 3; ++c)
+            albedo[node] = std::max(albedo[node], pT + (1.0 - pT) * kept[c] * af[c] + energy[c]);
+    });
+    // A cell between rows a, a + 1 and columns b, b + 1 needs the guard if any
+    // node its cubic interpolation reads (rows a - 1 to a + 2) comes near 1;
+    // elsewhere s = 1 without further lookups.
+    guardCell_.assign(nodes, 0);
+    for (int a = 0; a + 1 < kGuardTheta; ++a)
+        for (int b = 0; b < kGuardPhi; ++b)
+            for (int r = std::max(a - 1, 0); r <= std::min(a + 2, kGuardTheta - 1); ++r)
+                for (int q : {b, (b + 1) % kGuardPhi})
+                    if (albedo[static_cast<size_t>(r) * kGuardPhi + q] > kGuardThreshold)
+                        guardCell_[static_cast<size_t>(a) * kGuardPhi + b] = 1;
+    guardActive_ = std::find(guardCell_.begin(), guardCell_.end(), 1) != guardCell_.end();
+}
+
+Rgb YarnBsdf::fiberAlbedo(const Vec3& local) const {
+    // FiberBcsdf::albedo without its longitudinal angle: F + (1 - F) C_TT.
+    const Rgb f = rLobe_.fiber().fresnel(std::sqrt(local.y * local.y + local.z * local.z));
+    return f + (Rgb(1.0) - f) * rLobe_.fiber().params().cTT;
+}
+
+Rgb YarnBsdf::keptReflectance(const Vec3& wi) const {
+    const Vec3 local = lobes_.frame().toLocal(wi);
+    const double theta = safeAsin(local.x), phi = std::atan2(local.y, std::max(local.z, 0.0));
+    int a0, b0;
+    double fa, fb;
+    axisCell((theta + kHalfPi) / kPi * (kGuardFiber - 1), kGuardFiber, &a0, &fa);
+    axisCell((phi + kHalfPi) / kPi * (kGuardFiber - 1), kGuardFiber, &b0, &fb);
+    auto at = [&](int a, int b) {
+        return guardReflectance_[static_cast<size_t>(a) * kGuardFiber + b];
+    };
+    return (at(a0, b0) * (1 - fb) + at(a0, b0 + 1) * fb) * (1 - fa) +
+           (at(a0 + 1, b0) * (1 - fb) + at(a0 + 1, b0 + 1) * fb) * fa;
+}
+
+YarnBsdf::GuardCell YarnBsdf::guardCell(const Vec3& wi) const {
+    // Polar angle -> row (the inverse of guardPolarAngle); azimuth periodic.
+    GuardCell cell;
+    const double theta = safeAcos(wi.z);
+    axisCell((1.0 - std::sqrt(std::max(0.0, 1.0 - theta / kHalfPi))) * (kGuardTheta - 1),
+             kGuardTheta, &cell.a0, &cell.fa);
+    const double p = (std::atan2(wi.y, wi.x) + kPi) / kTwoPi * kGuardPhi;
+    const int b = static_cast<int>(std::floor(p));
+    cell.fb = std::clamp(p - b, 0.0, 1.0);
+    cell.b0 = ((b % kGuardPhi) + kGuardPhi) % kGuardPhi;
+    cell.b1 = (cell.b0 + 1) % kGuardPhi;
+    return cell;
+}
+
+Rgb YarnBsdf::energyM(const GuardCell& cell) const {
+    // Cubic (Catmull-Rom) across rows: E_M bends sharply near grazing
+    // incidence, where linear interpolation would underestimate it; linear
+    // across azimuths.
+    auto row = [&](int a) {
+        a = std::clamp(a, 0, kGuardTheta - 1);
+        const size_t base = static_cast<size_t>(a) * kGuardPhi;
+        return guardEnergyM_[base + cell.b0] * (1 - cell.fb) +
+               guardEnergyM_[base + cell.b1] * cell.fb;
+    };
+    const Rgb pm = row(cell.a0 - 1), p0 = row(cell.a0), p1 = row(cell.a0 + 1),
+              p2 = row(cell.a0 + 2);
+    const double t = cell.fa, t2 = t * t, t3 = t2 * t;
+    Rgb value = (p0 * 2.0 + (p1 - pm) * t + (pm * 2.0 - p0 * 5.0 + p1 * 4.0 - p2) * t2 +
+                 (p0 * 3.0 - pm - p1 * 3.0 + p2) * t3) *
+                0.5;
+    for (int c = 0; c < 3; ++c) value[c] = std::max(value[c], 0.0);
+    return value;
+}
+
+Rgb YarnBsdf::scaleUpper(const Vec3& wi, double pT) const {
+    if (!guardActive_) return Rgb(1.0);
+    const GuardCell cell = guardCell(wi);
+    if (!guardCell_[static_cast<size_t>(cell.a0) * kGuardPhi + cell.b0]) return Rgb(1.0);
+    const Rgb kept = keptReflectance(wi), energy = energyM(cell);
+    const Rgb af = fiberAlbedo(lobes_.frame().toLocal(wi));
+    Rgb s(1.0);
+    for (int c = 0; c < 3; ++c) {
+        const double room = std::max(0.0, (1.0 - pT) * (1.0 - kept[c] * af[c]));
+        if (energy[c] > room) s[c] = room / energy[c];
+    }
+    return s;
+}
+
+Rgb YarnBsdf::multipleScatteringScale(const Vec3& wi) const {
+    const Vec3 i = wi.z < 0 ? mirrored(wi) : wi;
+    return scaleUpper(i, transmissionUpper(i));
+}
+
+// -------------------------------------------------------------- the BSDF --
+
+double YarnBsdf::transmissionUpper(const Vec3& wi) const {
+    const float x[3] = {static_cast<float>(wi.x), static_cast<float>(wi.y),
+                        static_cast<float>(wi.z)};
+    float y;
+    tNet_.forward(x, &y);
+    return y;
+}
+
+double YarnBsdf::transmission(const Vec3& wi) const {
+    return transmissionUpper(wi.z < 0 ? mirrored(wi) : wi);
+}
+
+YarnBsdf::Incident YarnBsdf::incident(const Vec3& wi) const {
+    const double pT = transmissionUpper(wi);
+    return {pT, scaleUpper(wi, pT)};
+}
+
+Rgb YarnBsdf::evalM(const Vec3& wi, const Vec3& wo) const {
+    const float x[6] = {static_cast<float>(wi.x), static_cast<float>(wi.y),
+                        static_cast<float>(wi.z), static_cast<float>(wo.x),
+                        static_cast<float>(wo.y), static_cast<float>(wo.z)};
+    float y[3];
+    mNet_.forward(x, y);
+    return {y[0], y[1], y[2]};
+}
+
+YarnBsdf::LobeProbabilities YarnBsdf::lobeProbabilities(const Vec3& wi) const {
+    const double pT = transmission(wi);
+    return {pT, (1.0 - pT) * kappaR_, (1.0 - pT) * (1.0 - kappaR_)};
+}
+
+void YarnBsdf::evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rgb* value,
+                          double* density) const {
+    if (value) *value = rLobe_.eval(wi, wo, in.pT) + evalM(wi, wo) * in.mScale;
+    if (density) {
+        // Paper eq. 10-11: the continuous mixture p_R pdf_R + p_M pdf_M.
+        const double pR = (1.0 - in.pT) * kappaR_, pM = (1.0 - in.pT) * (1.0 - kappaR_);
+        double d = 0;
+        if (pR > 0) d += pR * lobes_.pdfR(wi, wo);
+        if (pM > 0) d += pM * lobes_.pdfM(wi, wo);
+        *density = d;
+    }
+}
+
+Rgb YarnBsdf::eval(const Vec3& wi, const Vec3& wo) const {
+    const bool flip = wi.z < 0;
+    const Vec3 i = flip ? mirrored(wi) : wi, o = flip ? mirrored(wo) : wo;
+    Rgb value;
+    evalAndPdf(i, o, incident(i), &value, nullptr);
+    return value;
+}
+
+double YarnBsdf::pdf(const Vec3& wi, const Vec3& wo) const {
+    const bool flip = wi.z < 0;
+    const Vec3 i = flip ? mirrored(wi) : wi, o = flip ? mirrored(wo) : wo;
+    double density;
+    evalAndPdf(i, o, {transmissionUpper(i), Rgb(1.0)}, nullptr, &density);
+    return density;
+}
+
+YarnBsdf::Components YarnBsdf::components(const Vec3& wi, const Vec3& wo) const {
+    const bool flip = wi.z < 0;
+    const Vec3 i = flip ? mirrored(wi) : wi, o = flip ? mirrored(wo) : wo;
+    const Incident in = incident(i);
+    Components c;
+    c.pT = in.pT;
+    c.r = rLobe_.eval(i, o, in.pT);
+    c.m = evalM(i, o) * in.mScale;
+    return c;
+}
+
+BsdfSample YarnBsdf::sample(const Vec3& wi, const BsdfSampleInput& u) const {
+    // As FiberBcsdf: rejection steps draw from a generator seeded by the input
+    // numbers, so the result is a deterministic function of (wi, u).
+    Rng rng(hashDouble(u[0]) ^ (hashDouble(u[1]) >> 1), hashDouble(u[2]));
+    return sample(wi, u, rng);
+}
+
+BsdfSample YarnBsdf::sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) const {
+    const bool flip = wi.z < 0;
+    const Vec3 i = flip ? mirrored(wi) : wi;
+    const double pT = transmissionUpper(i);
+    BsdfSample s;
+    if (u[0] < pT) {
+        // S_T = P(T|wi) delta(wo + wi), chosen with probability p_T = P(T|wi).
+        s.wo = -wi;
+        s.weight = Rgb(1.0);
+        s.pdf = 0;
+        s.lobe = kLobeT;
+        s.isDelta = true;
+        return s;
+    }
+    const double pR = (1.0 - pT) * kappaR_, pM = (1.0 - pT) * (1.0 - kappaR_);
+    Vec3 o;
+    if (u[0] < pT + pR || !(pM > 0)) {
+        s.lobe = kLobeR;
+        o = lobes_.sampleR(i, u[1], u[2]);
+    } else {
+        s.lobe = kLobeM;
+        // The rest of u[0], rescaled to [0, 1), picks the cone or the uniform part of pdf_M.
+        const double uLobe = std::clamp((u[0] - pT - pR) / pM, 0.0, 0x1.fffffffffffffp-1);
+        o = lobes_.sampleM(i, uLobe, u[1], u[2], rng);
+    }
+    Rgb value;
+    evalAndPdf(i, o, {pT, scaleUpper(i, pT)}, &value, &s.pdf);
+    if (!(s.pdf > 0)) return BsdfSample{};
+    s.wo = flip ? mirrored(o) : o;
+    s.weight = value / s.pdf;
+    return s;
+}
+
+}  // namespace weft

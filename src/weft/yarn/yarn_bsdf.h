@@ -1,0 +1,174 @@
+// weft/yarn/yarn_bsdf.h — the aggregated yarn BSDF (paper 4, eq. 6-11; DESIGN.md 7).
+//
+// S(wi, wo) = S_T + S_R + S_M for one ply material, from a fitted model.json:
+//   S_T = P(T|wi) delta(wo + wi)           T network (3-7-7-1, sigmoid)
+//   S_R = (1 - P(T|wi)) S_f(wi~, wo~) m     paper eq. 8 in the surface fiber frame,
+//                                          with the fitted masking m (yarn_lobes.h)
+//   S_M = exp(M network(wi, wo))            6-21-21-21-3 by default, RGB
+// Directions are unit vectors in the yarn shading frame of the ply hit:
+// t = +x (ply tangent), b = +y, n = +z (outward normal), DESIGN.md 2; the
+// caller converts world directions with Frame(t, b, n). The BSDF contract is
+// core/bsdf.h: eval includes the foreshortening of wo (eq. 8 and the RDM the
+// M network learnt both do).
+//
+//   eval(wi, wo)  the continuous part R + M (the delta T is never returned).
+//   pdf(wi, wo)   density of sample() over the continuous part, per unit solid
+//                 angle: p_R pdf_R + p_M pdf_M (paper eq. 10, 11) with
+//                 p_T = P(T|wi), p_R = (1 - p_T) kappa_R, p_M = (1 - p_T)(1 - kappa_R).
+//                 It integrates to 1 - p_T over the sphere (the rest is the delta).
+//   sample(wi, u) picks T, R or M with p_T, p_R, p_M by u[0]:
+//                 T: wo = -wi exactly, weight = P(T|wi) / p_T = 1 (grey),
+//                    pdf = 0, isDelta = true, lobe kLobeT;
+//                 R, M: wo from the lobe's sampler (paper 4.4, u[1], u[2]), then
+//                    weight = eval / pdf with both from the one routine that
+//                    eval() and pdf() use, so the two lobes are combined by
+//                    one-sample MIS (the balance heuristic over the mixture).
+// Incident directions below the surface (wi.z < 0): the networks were trained
+// on the upper hemisphere only and a ply is never lit from inside, so the BSDF
+// is made two-sided the way Mitsuba's `twosided` adapter does it: wi and wo are
+// both mirrored through the surface plane (z -> -z) and the upper-hemisphere
+// BSDF is used. eval, pdf and sample all do this, so they stay consistent;
+// wi.z == 0 counts as upper.
+//
+// Energy guard (on by default, YarnBsdfOptions): a fitted M network can
+// overshoot, so that P(T|wi) + E_R(wi) + E_M(wi) > 1 for some wi (E: the
+// integral over wo; measured on real fits, mostly near grazing incidence and
+// for nearly lossless channels such as gabardine's red). In a path tracer
+// such a BSDF adds energy at every bounce. Since R <= (1 - P(T)) times the
+// fiber albedo, P(T) + E_R <= 1 always, so the guard scales S_M alone, per
+// channel, by s(wi) = min(1, (1 - P(T|wi) - E_R(wi)) / E_M(wi)). P(T|wi) and
+// the fiber albedo a_f = F + (1 - F) C_TT at wi (in the surface fiber frame),
+// which carry the sharp features, are exact at eval time; two tables,
+// computed at construction by Gauss-Legendre quadrature (in parallel) and
+// interpolated (bilinearly; cubic across the rows of E_M), give the rest:
+//   E_M on a 24 x 48 grid of the yarn frame's polar angle (crowded towards
+//       grazing incidence, where M changes fastest: 90 (1 - (1 - a/23)^2)
+//       degrees; cubic across rows) and azimuth (every 7.5 degrees);
+//   E_R / ((1 - P(T)) a_f), the part of eq. 8 left by masking and the half
+//       cone, on a 24 x 24 grid of the surface-fiber longitudinal angle and
+//       azimuth from n (uniform in [-90, 90] degrees), where it is smooth.
+// At the nodes the guarded albedo is 1 up to the quadrature error; between
+// them it is as good as the interpolation (docs/yarn.md gives measured
+// values). Only cells of the M table next to a node whose albedo exceeds 0.98
+// are guarded; elsewhere s = 1 after one table lookup, and when there is no
+// such node the guard is off altogether. Where the model conserves energy
+// s = 1 and eval is the model's own value.
+// `weft yarn check` reports the raw model's albedo against the RDM, since
+// that is what the fit must get right.
+//
+// The networks are evaluated by FixedMlp (float, no heap); R and the pdfs in
+// double. Construction validates the model once (InputError naming `source`).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "weft/core/bsdf.h"
+#include "weft/core/rng.h"
+#include "weft/fit/yarn_lobes.h"
+#include "weft/fit/yarn_model.h"
+#include "weft/yarn/fixed_mlp.h"
+
+namespace weft {
+
+struct YarnBsdfOptions {
+    bool energyGuard = true;  // scale S_M where the model's albedo exceeds 1 (above)
+};
+
+class YarnBsdf {
+  public:
+    static constexpr int kLobeT = 0;
+    static constexpr int kLobeR = 1;
+    static constexpr int kLobeM = 2;
+
+    // Validates what the model reader cannot know about the renderer: network
+    // shapes (3 -> 1 and 6 -> 3), output functions (sigmoid for t_net so that
+    // P(T) is a probability, exp for m_net so that S_M >= 0) and sizes that the
+    // fixed-size evaluator holds; the fiber, R lobe and sampling parameters.
+    explicit YarnBsdf(const YarnModel& model, const std::string& source = "yarn model",
+                      const YarnBsdfOptions& options = {});
+    // loadYarnModel(path), then the constructor with the path as source.
+    static YarnBsdf load(const std::string& path, const YarnBsdfOptions& options = {});
+
+    Rgb eval(const Vec3& wi, const Vec3& wo) const;
+    double pdf(const Vec3& wi, const Vec3& wo) const;
+    // Draws the von Mises rejection steps from a generator seeded by u (the
+    // result is a function of (wi, u)), as FiberBcsdf does.
+    BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u) const;
+    BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) const;
+
+    // P(T | wi) from the T network.
+    double transmission(const Vec3& wi) const;
+
+    // The parts of eval for one pair, and the lobe probabilities of sample().
+    struct Components {
+        double pT = 0;  // P(T | wi)
+        Rgb r, m;       // S_R and S_M (energy guard applied), foreshortening included
+    };
+    Components components(const Vec3& wi, const Vec3& wo) const;
+    struct LobeProbabilities {
+        double t = 0, r = 0, m = 0;
+    };
+    LobeProbabilities lobeProbabilities(const Vec3& wi) const;
+
+    // S_M alone (the network, no energy guard), in the upper-hemisphere convention (no mirroring).
+    Rgb evalM(const Vec3& wi, const Vec3& wo) const;
+    // The energy guard's factor on S_M for this wi (1 without the guard).
+    Rgb multipleScatteringScale(const Vec3& wi) const;
+    // Whether the guard scales S_M anywhere (false: eval is exactly the model).
+    bool energyGuardActive() const { return guardActive_; }
+
+    const RLobe& rLobe() const { return rLobe_; }
+    const SamplingLobes& samplingLobes() const { return lobes_; }
+    const SurfaceFiberFrame& surfaceFiberFrame() const { return lobes_.frame(); }
+
+    // The energy guard's tables (above). M table node (a, b), a < kGuardTheta,
+    // b < kGuardPhi: yarn-frame polar angle guardPolarAngle(a), azimuth
+    // -pi + 2 pi b / kGuardPhi. R table node (a, b), both < kGuardFiber:
+    // surface-fiber angles guardFiberAngle(a), guardFiberAngle(b), i.e. the
+    // local direction (sin theta~, cos theta~ sin phi~, cos theta~ cos phi~).
+    static constexpr int kGuardTheta = 24;
+    static constexpr int kGuardPhi = 48;
+    static constexpr int kGuardFiber = 24;
+    static constexpr double kGuardThreshold = 0.98;
+    static double guardPolarAngle(int index);  // pi/2 (1 - (1 - index / 23)^2)
+    static double guardFiberAngle(int index);  // -pi/2 + pi index / 23
+
+  private:
+    // What eval and pdf need of wi (in the upper hemisphere).
+    struct Incident {
+        double pT;
+        Rgb mScale;
+    };
+    Incident incident(const Vec3& wi) const;
+    // eval and pdf for wi in the upper hemisphere: the one place where both are computed.
+    void evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rgb* value,
+                    double* density) const;
+    double transmissionUpper(const Vec3& wi) const;
+    Rgb scaleUpper(const Vec3& wi, double pT) const;
+    void buildEnergyGuard();
+
+    FixedMlp<32, 2048> tNet_;
+    FixedMlp<64, 8192> mNet_;
+    RLobe rLobe_;
+    SamplingLobes lobes_;
+    double kappaR_;
+    bool guardActive_ = false;
+    // Tables per channel: E_R / ((1 - P(T)) a_f), kGuardFiber x kGuardFiber
+    // (fiber angles), and E_M, kGuardTheta x kGuardPhi (yarn angles).
+    std::vector<Rgb> guardReflectance_, guardEnergyM_;
+    // 1 where a cell of the M table (rows a, a + 1; columns b, b + 1) may need the guard.
+    std::vector<uint8_t> guardCell_;
+    // Lookups in the two tables.
+    struct GuardCell {
+        int a0 = 0, b0 = 0, b1 = 0;
+        double fa = 0, fb = 0;
+    };
+    GuardCell guardCell(const Vec3& wi) const;
+    Rgb keptReflectance(const Vec3& wi) const;
+    Rgb fiberAlbedo(const Vec3& local) const;  // a_f of a surface-fiber-local direction
+    Rgb energyM(const GuardCell& cell) const;
+};
+
+}  // namespace weft

@@ -1,0 +1,433 @@
+#include "weft/yarn/yarn_bsdf.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "weft/core/chi2.h"
+#include "weft/core/file.h"
+#include "weft/core/math.h"
+#include "weft/core/test_util.h"
+#include "weft/fit/fit.h"
+#include "weft/gather/rdm.h"
+#include "weft/yarn/yarn_integrals.h"
+
+namespace weft {
+namespace {
+
+// Models fitted by the pipeline (tests/data/README.md gives the commands).
+const char* const kModels[] = {"fleece-small", "gabardine-small"};
+
+std::string modelPath(const std::string& name) {
+    return std::string(WEFT_SOURCE_DIR) + "/tests/data/" + name + ".json";
+}
+
+const YarnModel& testModel(const std::string& name) {
+    static const YarnModel fleece = loadYarnModel(modelPath("fleece-small"));
+    static const YarnModel gabardine = loadYarnModel(modelPath("gabardine-small"));
+    return name == "fleece-small" ? fleece : gabardine;
+}
+
+// Built on first use only (the energy guard's tables take a moment).
+const YarnBsdf& testBsdf(const std::string& name) {
+    if (name == "fleece-small") {
+        static const YarnBsdf fleece(testModel(name), "fleece-small.json");
+        return fleece;
+    }
+    static const YarnBsdf gabardine(testModel("gabardine-small"), "gabardine-small.json");
+    return gabardine;
+}
+
+// Yarn-frame direction from the polar angle (from n) and azimuth (from t), degrees.
+Vec3 yarnDirection(double thetaDeg, double phiDeg) {
+    return sphericalDirection(radians(thetaDeg), radians(phiDeg));
+}
+
+Vec3 randomUnitVector(Rng& rng) {
+    const double z = 1 - 2 * rng.uniform(), phi = kTwoPi * rng.uniform();
+    const double r = std::sqrt(std::max(0.0, 1 - z * z));
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+std::string text(const Vec3& v) { return (std::ostringstream() << v).str(); }
+
+// Incident directions of the sampling tests: near normal, oblique, grazing to
+// the surface, along the surface fibers, and one below the surface (mirrored).
+struct Incident {
+    const char* name;
+    Vec3 (*direction)(const YarnBsdf&);
+};
+const Incident kIncident[] = {
+    {"normal", [](const YarnBsdf&) { return yarnDirection(3, 20); }},
+    {"oblique", [](const YarnBsdf&) { return yarnDirection(45, -60); }},
+    {"grazing", [](const YarnBsdf&) { return yarnDirection(87, 100); }},
+    {"along the surface fibers",
+     [](const YarnBsdf& b) {
+         return b.surfaceFiberFrame().fromLocal({std::sin(radians(85)), 0, std::cos(radians(85))});
+     }},
+    {"below the surface", [](const YarnBsdf&) { return yarnDirection(120, 30); }},
+};
+
+TEST(YarnBsdf, TransmissionIsADeltaWithUnitWeight) {
+    for (const char* name : kModels) {
+        const YarnBsdf& bsdf = testBsdf(name);
+        Rng rng(1, 2);
+        int deltas = 0;
+        for (int k = 0; k < 2000; ++k) {
+            const Vec3 wi = randomUnitVector(rng);
+            const double pT = bsdf.transmission(wi);
+            ASSERT_GE(pT, 0.0);
+            ASSERT_LE(pT, 1.0);
+            // u[0] just below P(T|wi) picks T: wo is exactly -wi.
+            const BsdfSample s = bsdf.sample(wi, {pT * 0.999, rng.uniform(), rng.uniform()});
+            if (pT == 0) continue;
+            ASSERT_TRUE(s.valid());
+            EXPECT_EQ(s.lobe, YarnBsdf::kLobeT);
+            EXPECT_TRUE(s.isDelta);
+            EXPECT_EQ(s.wo, -wi);
+            EXPECT_EQ(s.weight, Rgb(1.0));
+            EXPECT_EQ(s.pdf, 0.0);
+            ++deltas;
+        }
+        EXPECT_GT(deltas, 1900) << name;
+    }
+}
+
+TEST(YarnBsdf, SampleWeightIsEvalOverPdf) {
+    for (const char* name : kModels) {
+        const YarnBsdf& bsdf = testBsdf(name);
+        Rng rng(3, 4);
+        int counts[3] = {0, 0, 0};
+        for (int k = 0; k < 20000; ++k) {
+            const Vec3 wi = randomUnitVector(rng);
+            const BsdfSample s = bsdf.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()});
+            ASSERT_TRUE(s.valid()) << wi;
+            ++counts[s.lobe];
+            if (s.isDelta) continue;
+            EXPECT_NEAR(length(s.wo), 1.0, 1e-12);
+            const Rgb f = bsdf.eval(wi, s.wo);
+            const double pdf = bsdf.pdf(wi, s.wo);
+            ASSERT_GT(pdf, 0);
+            EXPECT_NEAR(s.pdf, pdf, 1e-12 * pdf);
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(s.weight[c], f[c] / pdf, 1e-12 * (f[c] / pdf) + 1e-300);
+            EXPECT_TRUE(s.weight.isFinite());
+            EXPECT_LT(s.weight.maxComponent(), 100.0) << "eval / pdf must stay bounded";
+        }
+        EXPECT_GT(counts[YarnBsdf::kLobeR], 0) << name;
+        EXPECT_GT(counts[YarnBsdf::kLobeM], 0) << name;
+        std::printf("%s: lobes T %d R %d M %d\n", name, counts[0], counts[1], counts[2]);
+    }
+}
+
+TEST(YarnBsdf, SamplingIsChiSquareConsistentWithPdf) {
+    const int tests = static_cast<int>(std::size(kModels) * std::size(kIncident));
+    const double alpha = sidakCorrectedLevel(0.01, tests);
+    // Cells in the surface fiber frame, where the R lobe is a band of theta.
+    const SphereGrid grid{90, 90};
+    double minP = 1;
+    for (const char* name : kModels) {
+        const YarnBsdf& bsdf = testBsdf(name);
+        const SurfaceFiberFrame& frame = bsdf.surfaceFiberFrame();
+        for (const Incident& incident : kIncident) {
+            const Vec3 wi = incident.direction(bsdf);
+            const int64_t n = testing::scaled(200000);
+            std::vector<double> observed(grid.cells() + 1, 0);
+            Rng rng(11, static_cast<uint64_t>(1e6 * (wi.x + 2 * wi.y + 3 * wi.z) + 1e7));
+            for (int64_t k = 0; k < n; ++k) {
+                const BsdfSample s =
+                    bsdf.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()}, rng);
+                ASSERT_TRUE(s.valid());
+                observed[s.isDelta ? grid.cells() : grid.cellOf(frame.toLocal(s.wo))] += 1;
+            }
+            std::vector<double> expected = grid.expectedCounts(
+                [&](const Vec3& local) { return bsdf.pdf(wi, frame.fromLocal(local)); },
+                static_cast<double>(n));
+            // The delta lobe is one more cell, expected n P(T|wi) times.
+            expected.push_back(static_cast<double>(n) * bsdf.transmission(wi));
+            const Chi2Result r = chi2Test(observed, expected);
+            std::printf("  %s, wi %s: chi2 %.1f, dof %d, p %.3g\n", name, incident.name,
+                        r.statistic, r.dof, r.pValue);
+            minP = std::min(minP, r.pValue);
+            EXPECT_GT(r.pValue, alpha) << name << ", wi " << incident.name
+                                       << ": chi2 = " << r.statistic << ", dof = " << r.dof;
+        }
+    }
+    std::printf("chi-square: %d tests, smallest p-value %.3g (level %.3g)\n", tests, minP, alpha);
+}
+
+// The same pair seen from below the surface: both directions mirrored (z -> -z).
+TEST(YarnBsdf, LowerHemisphereMirrorsBothDirections) {
+    const YarnBsdf& bsdf = testBsdf("fleece-small");
+    Rng rng(5, 6);
+    for (int k = 0; k < 200; ++k) {
+        Vec3 wi = randomUnitVector(rng);
+        wi.z = -std::fabs(wi.z);
+        const Vec3 wo = randomUnitVector(rng);
+        const Vec3 wiUp{wi.x, wi.y, -wi.z}, woUp{wo.x, wo.y, -wo.z};
+        EXPECT_EQ(bsdf.eval(wi, wo), bsdf.eval(wiUp, woUp));
+        EXPECT_EQ(bsdf.pdf(wi, wo), bsdf.pdf(wiUp, woUp));
+        EXPECT_EQ(bsdf.transmission(wi), bsdf.transmission(wiUp));
+        const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
+        const BsdfSample a = bsdf.sample(wi, u), b = bsdf.sample(wiUp, u);
+        EXPECT_EQ(a.lobe, b.lobe);
+        if (a.isDelta) {
+            EXPECT_EQ(a.wo, -wi);
+        } else {
+            EXPECT_EQ(a.wo, (Vec3{b.wo.x, b.wo.y, -b.wo.z}));
+        }
+        EXPECT_EQ(a.weight, b.weight);
+    }
+}
+
+TEST(YarnBsdf, FiniteForEveryDirection) {
+    const std::vector<Vec3> special = {{0, 0, 1},
+                                       {0, 0, -1},
+                                       {1, 0, 0},
+                                       {-1, 0, 0},
+                                       {0, 1, 0},
+                                       {0, -1, 0},
+                                       yarnDirection(89.999, 0),
+                                       yarnDirection(90, 45),
+                                       yarnDirection(90.001, -90),
+                                       yarnDirection(1e-9, 10)};
+    for (const char* name : kModels) {
+        const YarnBsdf& bsdf = testBsdf(name);
+        const SurfaceFiberFrame& frame = bsdf.surfaceFiberFrame();
+        std::vector<Vec3> dirs = special;
+        // Along the surface fibers, exactly and a hair above the surface.
+        for (const Vec3& local :
+             {Vec3{1, 0, 0}, Vec3{-1, 0, 0}, Vec3{std::sin(1.5707), 0, std::cos(1.5707)}})
+            dirs.push_back(frame.fromLocal(local));
+        Rng rng(7, 8);
+        for (int k = 0; k < 300; ++k) dirs.push_back(randomUnitVector(rng));
+        for (const Vec3& wi : dirs) {
+            std::vector<Vec3> outgoing = dirs;
+            outgoing.push_back(wi);
+            outgoing.push_back(-wi);
+            outgoing.push_back({wi.x, wi.y, -wi.z});
+            for (const Vec3& wo : outgoing) {
+                const Rgb f = bsdf.eval(wi, wo);
+                ASSERT_TRUE(f.isFinite()) << name << " " << wi << " " << wo;
+                ASSERT_GE(std::min({f.r, f.g, f.b}), 0.0);
+                const double p = bsdf.pdf(wi, wo);
+                ASSERT_TRUE(std::isfinite(p) && p >= 0) << name << " " << wi << " " << wo;
+            }
+            for (int k = 0; k < 20; ++k) {
+                const BsdfSample s = bsdf.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()});
+                if (!s.valid()) continue;
+                ASSERT_TRUE(s.weight.isFinite()) << name << " " << wi;
+                ASSERT_TRUE(isFinite(s.wo));
+            }
+        }
+    }
+}
+
+TEST(YarnBsdf, SampleIsDeterministicInItsInput) {
+    const YarnBsdf& bsdf = testBsdf("gabardine-small");
+    const Vec3 wi = yarnDirection(30, 40);
+    for (double u0 : {0.1, 0.5, 0.95}) {
+        const BsdfSample a = bsdf.sample(wi, {u0, 0.6, 0.9}), b = bsdf.sample(wi, {u0, 0.6, 0.9});
+        EXPECT_EQ(a.wo, b.wo);
+        EXPECT_EQ(a.weight, b.weight);
+    }
+}
+
+// The renderer's fast evaluation (energy guard off) agrees with the fit's
+// maps (Mlp::forward, RLobe), which `weft fit` and `weft yarn check` report.
+TEST(YarnBsdf, ComponentsMatchTheFitsModelMaps) {
+    const RdmBins bins{3, 5, 6, 8};
+    for (const char* name : kModels) {
+        const YarnModel& model = testModel(name);
+        const YarnBsdf bsdf(model, name, YarnBsdfOptions{false});
+        const std::vector<double> pT = modelTransmissionMap(model, bins);
+        const std::vector<float> r = modelReflectionMap(model, bins);
+        const std::vector<float> m = modelMultipleScatteringMap(model, bins);
+        for (size_t i = 0; i < bins.incidentCount(); ++i) {
+            const Vec3 wi = bins.incidentCentre(i);
+            EXPECT_NEAR(bsdf.transmission(wi), pT[i], 1e-6);
+            for (size_t o = 0; o < bins.outgoingCount(); ++o) {
+                const YarnBsdf::Components c = bsdf.components(wi, bins.outgoingCentre(o));
+                for (int k = 0; k < 3; ++k) {
+                    const size_t index = (i * bins.outgoingCount() + o) * 3 + k;
+                    EXPECT_NEAR(c.m[k], m[index], 1e-5 * m[index]);
+                    EXPECT_NEAR(c.r[k], r[index], 1e-5 * r[index] + 1e-7);
+                }
+            }
+        }
+    }
+}
+
+// --------------------------------------------------------- integrals / energy --
+
+TEST(YarnIntegrals, QuadratureConvergedAndPdfIntegratesToOneMinusPT) {
+    for (const char* name : kModels) {
+        const YarnBsdf& bsdf = testBsdf(name);
+        for (const Incident& incident : kIncident) {
+            const Vec3 wi = incident.direction(bsdf);
+            const DirectionalIntegrals a = integrateDirections(bsdf, wi, 1);
+            const DirectionalIntegrals b = integrateDirections(bsdf, wi, 3);
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_NEAR(a.r[c], b.r[c], 2e-3 * b.r[c] + 1e-6) << name << " " << incident.name;
+                EXPECT_NEAR(a.m[c], b.m[c], 1e-3 * b.m[c] + 1e-6) << name << " " << incident.name;
+            }
+            EXPECT_NEAR(a.secondMomentYarn, b.secondMomentYarn, 1e-2 * b.secondMomentYarn);
+            const SphereRule rule = yarnSphereRule(bsdf, wi, 1);
+            double pdfIntegral = 0;
+            for (size_t k = 0; k < rule.directions.size(); ++k)
+                pdfIntegral += bsdf.pdf(wi, rule.directions[k]) * rule.weights[k];
+            EXPECT_NEAR(pdfIntegral, 1 - bsdf.transmission(wi), 2e-3)
+                << name << " " << incident.name;
+        }
+    }
+}
+
+// The mean sample weight (T included) estimates the directional albedo: the
+// sampler is unbiased and the quadrature right, independently of each other.
+TEST(YarnIntegrals, MeanSampleWeightIsTheQuadratureAlbedo) {
+    for (const char* name : kModels) {
+        const YarnBsdf& bsdf = testBsdf(name);
+        for (const Vec3& wi :
+             {yarnDirection(10, 0), yarnDirection(60, 90), yarnDirection(80, -30)}) {
+            const Rgb albedo = integrateDirections(bsdf, wi).albedo();
+            const int64_t n = testing::scaled(100000);
+            Rng rng(13, 14);
+            Rgb sum, sumSq;
+            for (int64_t k = 0; k < n; ++k) {
+                const BsdfSample s =
+                    bsdf.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()}, rng);
+                sum += s.weight;
+                sumSq += s.weight * s.weight;
+            }
+            for (int c = 0; c < 3; ++c) {
+                const double mean = sum[c] / n;
+                const double sigma = std::sqrt(std::max(0.0, sumSq[c] / n - mean * mean) / n);
+                EXPECT_NEAR(mean, albedo[c], 4.5 * sigma + 1e-3)
+                    << name << " " << wi << " channel " << c;
+            }
+        }
+    }
+}
+
+// The energy guard: at the nodes of its M table the guarded albedo is at most
+// 1 (up to the difference between its quadrature and the finer one here, and
+// the interpolation of its R table), and it leaves S_M alone wherever the
+// model's own albedo stays clearly below 1.
+TEST(YarnIntegrals, EnergyGuardScalesOnlyOvershootingDirections) {
+    for (const char* name : kModels) {
+        const YarnBsdf& guarded = testBsdf(name);
+        const YarnBsdf raw(testModel(name), name, YarnBsdfOptions{false});
+        EXPECT_FALSE(raw.energyGuardActive());
+        int scaled = 0, nodes = 0;
+        double worstRaw = 0;
+        // Nodes of the M table (the R table's part is interpolated there);
+        // fewer of them under the sanitizers.
+        const int stride = testing::sampleScale() < 1 ? 3 : 1;
+        for (int a = 0; a < YarnBsdf::kGuardTheta; a += 2 * stride)
+            for (int b = 0; b < YarnBsdf::kGuardPhi; b += 4 * stride) {
+                const Vec3 wi = sphericalDirection(YarnBsdf::guardPolarAngle(a),
+                                                   -kPi + kTwoPi * b / YarnBsdf::kGuardPhi);
+                const Rgb before = integrateDirections(raw, wi).albedo();
+                const Rgb after = integrateDirections(guarded, wi).albedo();
+                const Rgb scale = guarded.multipleScatteringScale(wi);
+                ++nodes;
+                worstRaw = std::max(worstRaw, before.maxComponent());
+                for (int c = 0; c < 3; ++c) {
+                    EXPECT_LE(after[c], 1 + 5e-3) << name << " " << wi << " channel " << c;
+                    if (before[c] < 0.995) {
+                        EXPECT_EQ(scale[c], 1.0) << name << " " << wi;
+                    }
+                    if (scale[c] < 1) {
+                        ++scaled;
+                        EXPECT_NEAR(after[c], 1.0, 1e-2) << name << " " << wi << " channel " << c;
+                    }
+                }
+            }
+        std::printf(
+            "%s: energy guard active on %d of %d (node, channel) pairs tested; largest "
+            "raw albedo %.3f\n",
+            name, scaled, 3 * nodes, worstRaw);
+    }
+}
+
+// DESIGN.md 7 / issue 6: the directional albedo of the BSDF the renderer uses
+// never exceeds 1 + 1e-2, between the guard's nodes included.
+TEST(YarnIntegrals, AlbedoNeverExceedsOne) {
+    const int count = testing::sampleScale() < 1 ? 12 : 60;
+    for (const char* name : kModels) {
+        const YarnBsdf& bsdf = testBsdf(name);
+        std::vector<Vec3> incident;
+        for (double theta : {0.0, 30.0, 60.0, 80.0, 89.0, 89.99})
+            for (double phi : {0.0, 45.0, 90.0, 150.0})
+                incident.push_back(yarnDirection(theta, phi));
+        Rng rng(15, 16);
+        for (int k = 0; k < count; ++k) incident.push_back(randomUnitVector(rng));
+        double worst = 0;
+        Vec3 worstWi;
+        for (const Vec3& wi : incident) {
+            const DirectionalIntegrals d = integrateDirections(bsdf, wi);
+            const double top = d.albedo().maxComponent();
+            if (top > worst) worst = top, worstWi = wi;
+            EXPECT_LE(top, 1 + 1e-2) << name << " wi " << wi << " albedo " << d.albedo();
+        }
+        std::printf("%s: largest directional albedo %.4f at wi %s over %zu directions\n", name,
+                    worst, text(worstWi).c_str(), incident.size());
+    }
+}
+
+// ------------------------------------------------------------------ loading --
+
+TEST(YarnBsdf, RejectsModelsTheRendererCannotUse) {
+    const YarnModel good = testModel("fleece-small");
+    YarnModel m = good;
+    m.tNet = Mlp<float>({3, 7, 1}, OutputFunction::Exp, 1);
+    testing::expectInputError([&] { YarnBsdf(m, "a.json"); },
+                              {"a.json: t_net.output", "\"sigmoid\"", "got \"exp\""});
+    m = good;
+    m.mNet = Mlp<float>({6, 21, 3}, OutputFunction::Sigmoid, 1);
+    testing::expectInputError([&] { YarnBsdf(m, "a.json"); }, {"a.json: m_net.output", "\"exp\""});
+    m = good;
+    m.tNet = Mlp<float>({4, 7, 1}, OutputFunction::Sigmoid, 1);
+    testing::expectInputError([&] { YarnBsdf(m, "a.json"); },
+                              {"a.json: t_net", "3 inputs and 1 output", "got 4-7-1"});
+    m = good;
+    m.mNet = Mlp<float>({6, 100, 3}, OutputFunction::Exp, 1);
+    testing::expectInputError([&] { YarnBsdf(m, "a.json"); }, {"a.json: m_net", "widths up to 64"});
+    m = good;
+    m.sampling.kappaM = 1.5;
+    testing::expectInputError([&] { YarnBsdf(m, "a.json"); }, {"a.json: ", "kappa_m", "[0, 1]"});
+    m = good;
+    m.fiber.betaRDeg = 0;
+    testing::expectInputError([&] { YarnBsdf(m, "a.json"); }, {"a.json: ", "beta_r_deg"});
+    m = good;
+    m.rLobe.tiltDeg = 95;
+    testing::expectInputError([&] { YarnBsdf(m, "a.json"); }, {"a.json: ", "tilt_deg"});
+}
+
+class YarnBsdfFile : public testing::TempDirTest {};
+
+TEST_F(YarnBsdfFile, LoadNamesTheFile) {
+    const std::string original = readFile(modelPath("fleece-small"));
+    auto expectLoadError = [&](const std::string& from, const std::string& to,
+                               std::initializer_list<std::string> parts) {
+        std::string bad = original;
+        const size_t at = bad.find(from);
+        ASSERT_NE(at, std::string::npos) << from;
+        bad.replace(at, from.size(), to);
+        writeFileAtomic(path("bad.json"), bad);
+        testing::expectInputError([&] { YarnBsdf::load(path("bad.json")); }, parts);
+    };
+    expectLoadError("\"version\": 1", "\"version\": 2", {"bad.json", "version"});
+    expectLoadError("\"kappa_m\"", "\"kappa_mm\"", {"bad.json", "sampling", "kappa_mm"});
+    expectLoadError("\"output\": \"sigmoid\"", "\"output\": \"exp\"", {"bad.json", "t_net.output"});
+    expectLoadError("\"bias\": [", "\"bias\": [NaN, ", {"bad.json"});
+    EXPECT_NO_THROW(YarnBsdf::load(modelPath("fleece-small"), YarnBsdfOptions{false}));
+}
+
+}  // namespace
+}  // namespace weft

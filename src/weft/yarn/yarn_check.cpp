@@ -1,0 +1,298 @@
+#include "weft/yarn/yarn_check.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <tuple>
+#include <vector>
+
+#include "weft/core/file.h"
+#include "weft/core/image.h"
+#include "weft/core/math.h"
+#include "weft/core/npy.h"
+#include "weft/fit/fit.h"
+#include "weft/fit/metrics.h"
+#include "weft/gather/rdm_image.h"
+#include "weft/yarn/yarn_bsdf.h"
+#include "weft/yarn/yarn_integrals.h"
+
+namespace weft {
+
+namespace {
+
+// Incident directions of the slice pictures (as in the fit report).
+struct SliceDirection {
+    double thetaDeg, phiDeg;
+};
+constexpr SliceDirection kSliceDirections[] = {{10, 0}, {45, 0}, {45, 90}, {75, 0}, {75, 90}};
+
+constexpr double kAlbedoTolerance = 0.03;  // the target, reported as a fraction
+
+nlohmann::json rgbJson(const Rgb& c) { return nlohmann::json::array({c.r, c.g, c.b}); }
+
+// Polar and azimuthal angle (degrees) of an incident bin's centre.
+std::pair<double, double> binAngles(const RdmBins& bins, size_t i) {
+    const Vec3 w = bins.incidentCentre(i);
+    return {degrees(safeAcos(w.z)), degrees(std::atan2(w.y, w.x))};
+}
+
+// model / rdm - 1, with 0 / 0 = 0.
+double relativeError(double model, double rdm) {
+    if (rdm > 0) return model / rdm - 1;
+    return model > 0 ? INFINITY : 0.0;
+}
+
+}  // namespace
+
+nlohmann::json checkYarnModel(const YarnModel& model, const std::string& modelPath,
+                              const RdmData& rdm, const YarnCheckOptions& options,
+                              const std::string& outDir) {
+    const auto start = std::chrono::steady_clock::now();
+    const RdmBins& bins = rdm.bins;
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    TempDirCommit out(outDir);
+    tbb::task_arena arena(options.threads > 0 ? options.threads
+                                              : tbb::this_task_arena::max_concurrency());
+
+    // The model as fitted (the albedo comparison checks the fit), and the
+    // renderer's BSDF with its energy guard (reported beside it).
+    const YarnBsdf bsdf(model, modelPath, YarnBsdfOptions{false});
+    std::unique_ptr<YarnBsdf> guarded;
+    arena.execute([&] { guarded = std::make_unique<YarnBsdf>(model, modelPath); });
+
+    // Model side: quadrature per incident bin centre (the expensive part).
+    std::vector<DirectionalIntegrals> integrals(nIn);
+    arena.execute([&] {
+        tbb::parallel_for(size_t(0), nIn, [&](size_t i) {
+            integrals[i] = integrateDirections(bsdf, bins.incidentCentre(i));
+        });
+    });
+
+    // RDM side: energy of each component per incident bin.
+    std::vector<Rgb> rdmR(nIn), rdmM(nIn);
+    for (size_t i = 0; i < nIn; ++i)
+        for (size_t o = 0; o < nOut; ++o) {
+            const double omega = bins.outgoingSolidAngle(o);
+            const size_t at = (i * nOut + o) * 3;
+            for (int c = 0; c < 3; ++c) {
+                rdmR[i][c] += rdm.rdmR[at + c] * omega;
+                rdmM[i][c] += rdm.rdmM[at + c] * omega;
+            }
+        }
+
+    std::vector<double> albedoModel(nIn * 3), albedoRdm(nIn * 3), moments(nIn * 3);
+    std::vector<double> componentsModel(nIn * 9), componentsRdm(nIn * 9);
+    Rgb sumAbs, worst, modelMax, rdmMax, sumModel, sumRdm;
+    Rgb guardedMax, sumAbsGuarded, worstGuarded;
+    Rgb sumModelR, sumRdmR, sumModelM, sumRdmM;
+    double sumModelT = 0, sumRdmT = 0;
+    nlohmann::json worstBin = nullptr;
+    double worstAbs = -1;
+    size_t checked = 0, within = 0, binsScaled = 0;
+    double sumYarn = 0, sumUniform = 0, sumCosine = 0;
+    size_t beatsCosine = 0, beatsUniform = 0;
+    for (size_t i = 0; i < nIn; ++i) {
+        const DirectionalIntegrals& d = integrals[i];
+        const Rgb a = d.albedo(), b = rdmR[i] + rdmM[i] + Rgb(rdm.pT[i]);
+        const Rgb scale = guarded->multipleScatteringScale(bins.incidentCentre(i));
+        const Rgb g = Rgb(d.pT) + d.r + d.m * scale;
+        binsScaled += !(scale == Rgb(1.0));
+        for (int c = 0; c < 3; ++c) {
+            componentsModel[9 * i + c] = d.pT;
+            componentsModel[9 * i + 3 + c] = d.r[c];
+            componentsModel[9 * i + 6 + c] = d.m[c];
+            componentsRdm[9 * i + c] = rdm.pT[i];
+            componentsRdm[9 * i + 3 + c] = rdmR[i][c];
+            componentsRdm[9 * i + 6 + c] = rdmM[i][c];
+            albedoModel[3 * i + c] = a[c];
+            albedoRdm[3 * i + c] = b[c];
+            modelMax[c] = std::max(modelMax[c], a[c]);
+            guardedMax[c] = std::max(guardedMax[c], g[c]);
+            rdmMax[c] = std::max(rdmMax[c], b[c]);
+        }
+        moments[3 * i] = d.secondMomentYarn;
+        moments[3 * i + 1] = d.secondMomentUniform;
+        moments[3 * i + 2] = d.secondMomentCosine;
+        sumYarn += d.secondMomentYarn;
+        sumUniform += d.secondMomentUniform;
+        sumCosine += d.secondMomentCosine;
+        beatsCosine += d.secondMomentYarn < d.secondMomentCosine;
+        beatsUniform += d.secondMomentYarn < d.secondMomentUniform;
+        if (rdm.count[i] < options.minPaths) continue;
+        ++checked;
+        sumModel += a;
+        sumRdm += b;
+        sumModelT += d.pT;
+        sumRdmT += rdm.pT[i];
+        sumModelR += d.r;
+        sumRdmR += rdmR[i];
+        sumModelM += d.m;
+        sumRdmM += rdmM[i];
+        for (int c = 0; c < 3; ++c) {
+            const double rel = relativeError(a[c], b[c]);
+            sumAbs[c] += std::fabs(rel);
+            if (std::fabs(rel) > std::fabs(worst[c])) worst[c] = rel;
+            within += std::fabs(rel) <= kAlbedoTolerance;
+            const double relGuarded = relativeError(g[c], b[c]);
+            sumAbsGuarded[c] += std::fabs(relGuarded);
+            if (std::fabs(relGuarded) > std::fabs(worstGuarded[c])) worstGuarded[c] = relGuarded;
+            if (std::fabs(rel) > worstAbs) {
+                worstAbs = std::fabs(rel);
+                const auto [theta, phi] = binAngles(bins, i);
+                worstBin = {{"channel", c},     {"relative_error", rel}, {"theta_deg", theta},
+                            {"phi_deg", phi},   {"paths", rdm.count[i]}, {"model", rgbJson(a)},
+                            {"rdm", rgbJson(b)}};
+            }
+        }
+    }
+
+    // The same comparison on the coarse incident grid of the error metric
+    // (metrics.h): per-bin RDM albedos are as noisy as a few percent in dark
+    // channels even at 16M paths; pooling (path-count weighted, for model and
+    // RDM alike) averages that down.
+    const RdmBins coarse = kCoarseErrorBins;
+    std::vector<Rgb> coarseModel(coarse.incidentCount()), coarseRdm(coarse.incidentCount());
+    std::vector<double> coarseCount(coarse.incidentCount(), 0.0);
+    for (size_t i = 0; i < nIn; ++i) {
+        const size_t k = coarse.incidentBin(bins.incidentCentre(i));
+        const double w = static_cast<double>(rdm.count[i]);
+        coarseModel[k] += integrals[i].albedo() * w;
+        coarseRdm[k] += (rdmR[i] + rdmM[i] + Rgb(rdm.pT[i])) * w;
+        coarseCount[k] += w;
+    }
+    Rgb coarseSumAbs, coarseWorst;
+    size_t coarseChecked = 0, coarseWithin = 0;
+    for (size_t k = 0; k < coarseCount.size(); ++k) {
+        if (coarseCount[k] < static_cast<double>(options.minPaths) || coarseCount[k] <= 0) continue;
+        ++coarseChecked;
+        for (int c = 0; c < 3; ++c) {
+            const double rel = relativeError(coarseModel[k][c], coarseRdm[k][c]);
+            coarseSumAbs[c] += std::fabs(rel);
+            if (std::fabs(rel) > std::fabs(coarseWorst[c])) coarseWorst[c] = rel;
+            coarseWithin += std::fabs(rel) <= kAlbedoTolerance;
+        }
+    }
+
+    // Coarse-grid errors of the maps, the same numbers as `weft fit` reports.
+    std::vector<float> mMap, rMap;
+    std::vector<double> pT;
+    arena.execute([&] {
+        mMap = modelMultipleScatteringMap(model, bins);
+        rMap = modelReflectionMap(model, bins);
+        pT = modelTransmissionMap(model, bins);
+    });
+    double se = 0, weight = 0;
+    for (size_t i = 0; i < nIn; ++i) {
+        se += static_cast<double>(rdm.count[i]) * sqr(pT[i] - rdm.pT[i]);
+        weight += static_cast<double>(rdm.count[i]);
+    }
+
+    const size_t ti = static_cast<size_t>(bins.thetaI), pi = static_cast<size_t>(bins.phiI);
+    writeNpy(out.path() + "/albedo_model.npy", albedoModel.data(), {ti, pi, 3});
+    writeNpy(out.path() + "/albedo_rdm.npy", albedoRdm.data(), {ti, pi, 3});
+    writeNpy(out.path() + "/components_model.npy", componentsModel.data(), {ti, pi, 3, 3});
+    writeNpy(out.path() + "/components_rdm.npy", componentsRdm.data(), {ti, pi, 3, 3});
+    writeNpy(out.path() + "/second_moment.npy", moments.data(), {ti, pi, 3});
+
+    // Albedo maps as one (1, 1, TI, PI) "slice": RDM left, model right, same exposure.
+    {
+        const std::vector<float> a(albedoRdm.begin(), albedoRdm.end());
+        const std::vector<float> b(albedoModel.begin(), albedoModel.end());
+        const RdmBins albedoBins{1, 1, bins.thetaI, bins.phiI};
+        const int scale = std::max(1, 360 / std::max(bins.phiI, 1));
+        writePng(out.path() + "/albedo.png",
+                 rdmComparisonImage(a.data(), b.data(), albedoBins, 0, scale));
+    }
+    for (const SliceDirection& d : kSliceDirections) {
+        const size_t bin =
+            bins.incidentBin(sphericalDirection(radians(d.thetaDeg), radians(d.phiDeg)));
+        for (const auto& [name, rdmMap, modelMap] :
+             {std::tuple{"m", &rdm.rdmM, &mMap}, std::tuple{"r", &rdm.rdmR, &rMap}}) {
+            const Image exposureSource = rdmSliceImage(rdmMap->data(), bins, bin);
+            char file[96];
+            std::snprintf(file, sizeof file, "/slice-%s-theta%02.0f-phi%03.0f.png", name,
+                          d.thetaDeg, d.phiDeg);
+            writePng(out.path() + file,
+                     rdmComparisonImage(rdmMap->data(), modelMap->data(), bins, bin),
+                     quantileExposure(exposureSource));
+        }
+    }
+
+    const double n = static_cast<double>(checked), nAll = static_cast<double>(nIn);
+    auto meanOrNull = [&](const Rgb& sum) {
+        return checked ? rgbJson(sum / n) : nlohmann::json(nullptr);
+    };
+    auto scalarMeanOrNull = [&](double sum) {
+        return checked ? nlohmann::json(sum / n) : nlohmann::json(nullptr);
+    };
+    int64_t paths = 0;
+    for (int64_t c : rdm.count) paths += c;
+    auto orNull = [&](size_t count, const nlohmann::json& value) {
+        return count ? value : nlohmann::json(nullptr);
+    };
+    nlohmann::json summary;
+    summary["model"] = modelPath;
+    summary["rdm"] = rdm.dir;
+    summary["bins"] = bins.toString();
+    summary["paths"] = paths;
+    summary["min_paths"] = options.minPaths;
+    summary["bins_checked"] = checked;
+    summary["bins_total"] = nIn;
+
+    nlohmann::json& albedo = summary["albedo"];
+    albedo["relative_error_mean_abs"] = meanOrNull(sumAbs);
+    albedo["relative_error_worst"] = orNull(checked, rgbJson(worst));
+    albedo["worst_bin"] = worstBin;
+    albedo["within_3_percent"] = orNull(checked, within / (3 * n));
+    albedo["model_mean"] = meanOrNull(sumModel);
+    albedo["rdm_mean"] = meanOrNull(sumRdm);
+    albedo["model_max_all_bins"] = rgbJson(modelMax);
+    albedo["rdm_max_all_bins"] = rgbJson(rdmMax);
+    nlohmann::json& components = albedo["components_mean"];
+    components["model_t"] = scalarMeanOrNull(sumModelT);
+    components["rdm_t"] = scalarMeanOrNull(sumRdmT);
+    components["model_r"] = meanOrNull(sumModelR);
+    components["rdm_r"] = meanOrNull(sumRdmR);
+    components["model_m"] = meanOrNull(sumModelM);
+    components["rdm_m"] = meanOrNull(sumRdmM);
+
+    nlohmann::json& pooled = summary["albedo_coarse"];
+    pooled["grid"] = std::to_string(coarse.thetaI) + "," + std::to_string(coarse.phiI);
+    pooled["cells_checked"] = coarseChecked;
+    pooled["relative_error_mean_abs"] =
+        orNull(coarseChecked, rgbJson(coarseSumAbs / std::max<double>(1.0, coarseChecked)));
+    pooled["relative_error_worst"] = orNull(coarseChecked, rgbJson(coarseWorst));
+    pooled["within_3_percent"] =
+        orNull(coarseChecked, coarseWithin / (3.0 * std::max<double>(1.0, coarseChecked)));
+
+    nlohmann::json& guard = summary["energy_guard"];
+    guard["active"] = guarded->energyGuardActive();
+    guard["bins_scaled"] = binsScaled;
+    guard["albedo_max_all_bins"] = rgbJson(guardedMax);
+    guard["relative_error_mean_abs"] = meanOrNull(sumAbsGuarded);
+    guard["relative_error_worst"] = orNull(checked, rgbJson(worstGuarded));
+
+    summary["t_rmse"] = weight > 0 ? std::sqrt(se / weight) : 0.0;
+    summary["m_rel_l2"] = coarseRelativeL2(mMap, rdm.rdmM, bins);
+    summary["r_rel_l2"] = coarseRelativeL2(rMap, rdm.rdmR, bins);
+    summary["error_grid"] = kCoarseErrorBins.toString();
+
+    nlohmann::json& proxy = summary["variance_proxy"];
+    proxy["yarn"] = sumYarn / nAll;
+    proxy["uniform_sphere"] = sumUniform / nAll;
+    proxy["cosine"] = sumCosine / nAll;
+    proxy["bins_where_yarn_beats_cosine"] = static_cast<double>(beatsCosine) / nAll;
+    proxy["bins_where_yarn_beats_uniform"] = static_cast<double>(beatsUniform) / nAll;
+    summary["seconds"] =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    writeFileAtomic(out.path() + "/check.json", summary.dump(2) + "\n");
+    out.commit();
+    return summary;
+}
+
+}  // namespace weft

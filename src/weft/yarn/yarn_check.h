@@ -1,0 +1,48 @@
+// weft/yarn/yarn_check.h — checks a fitted yarn BSDF against a gathered RDM (weft yarn check).
+//
+// For every incident bin of the RDM, at the bin's centre direction wi:
+//   model albedo  P(T|wi) + integral of (R + M)(wi, wo) dwo   (yarn_integrals.h),
+//                 of the model as fitted (no energy guard; the guarded albedo,
+//                 what the renderer uses, is summarised beside it)
+//   RDM albedo    p_t + sum over outgoing bins o of (RDM_R + RDM_M)[i, o] * solid angle(o)
+// and their relative difference per channel, summarised over the bins with at
+// least `minPaths` paths (the RDM's own noise is about 1 / sqrt(paths)), and
+// again after pooling both to the coarse incident grid of metrics.h;
+// the coarse-grid relative L2 errors of R and M (metrics.h, the numbers of
+// `weft fit`) and the path-count-weighted RMS error of P(T); and the variance
+// proxies of the sampler (DirectionalIntegrals), averaged over incident bins.
+//
+// Report directory (written atomically):
+//   check.json                summary (docs/yarn.md lists the keys)
+//   albedo_model.npy          float64 (TI, PI, 3) model albedo at bin centres
+//   albedo_rdm.npy            float64 (TI, PI, 3) RDM albedo
+//   components_model.npy      float64 (TI, PI, 3, 3) the albedo's parts T, R, M (rows) per channel
+//   components_rdm.npy        float64 (TI, PI, 3, 3) the same for the RDM (T = p_t in each
+//                             channel)
+//   second_moment.npy         float64 (TI, PI, 3) relative second moments: yarn sampler,
+//                             uniform sphere, cosine (DirectionalIntegrals)
+//   albedo.png                RDM (left) and model (right) albedo: rows theta_i from 0 (top)
+//                             to 90 degrees, columns phi_i from -180 to 180 degrees
+//   slice-{m,r}-thetaTT-phiPPP.png  RDM (left) vs model (right) outgoing maps for a few wi
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "weft/fit/yarn_model.h"
+#include "weft/gather/rdm_io.h"
+
+namespace weft {
+
+struct YarnCheckOptions {
+    int64_t minPaths = 1000;  // incident bins with fewer paths are left out of the albedo summary
+    int threads = 0;          // 0: all cores; never changes the result
+};
+
+// Writes the report to `outDir` and returns check.json's document.
+nlohmann::json checkYarnModel(const YarnModel& model, const std::string& modelPath,
+                              const RdmData& rdm, const YarnCheckOptions& options,
+                              const std::string& outDir);
+
+}  // namespace weft

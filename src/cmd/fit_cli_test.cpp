@@ -60,6 +60,21 @@ TEST_F(FitCliTest, WritesAValidModelAndItsReport) {
     EXPECT_EQ(again.rLobe.masking, model.rLobe.masking);
     EXPECT_EQ(again.sampling.gammaMDeg, model.sampling.gammaMDeg);
     EXPECT_FALSE(std::filesystem::exists(path("again-report")));
+    EXPECT_EQ(again.calibration.r, model.calibration.r);
+
+    // --recalibrate keeps the networks and R lobe and redoes steps 4-5 only;
+    // on the same RDM and configuration that is the same calibration again.
+    const RunResult re = run("fit --recalibrate again.json --rdm rdm --out re.json --config short.json "
+                             "--no-report --quiet");
+    ASSERT_EQ(re.status, 0) << re.err;
+    const YarnModel recalibrated = loadYarnModel(path("re.json"));
+    EXPECT_EQ(recalibrated.mNet.parameters(), model.mNet.parameters());
+    EXPECT_EQ(recalibrated.calibration.degree, model.calibration.degree);
+    EXPECT_EQ(recalibrated.calibration.m, model.calibration.m);
+    EXPECT_EQ(recalibrated.sampling.kappaR, model.sampling.kappaR);
+    EXPECT_TRUE(recalibrated.fit.contains("recalibrated"));
+    expectUserError(run("fit --recalibrate missing.json --rdm rdm --out re2.json --quiet"),
+                    {"missing.json"});
 }
 
 TEST_F(FitCliTest, ReferenceAddsNoiseFloor) {

@@ -13,7 +13,7 @@ namespace weft::cmd {
 namespace {
 
 struct FitCliOptions {
-    std::string rdm, out, config, reference, report;
+    std::string rdm, out, config, reference, report, recalibrate;
     uint64_t seed = 0;
     int threads = -1;
     bool quiet = false, printConfig = false, noReport = false;
@@ -50,7 +50,9 @@ void runFit(const FitCliOptions& c) {
     const RdmData rdm = loadRdm(c.rdm);
     std::unique_ptr<RdmData> reference;
     if (!c.reference.empty()) reference = std::make_unique<RdmData>(loadRdm(c.reference));
-    const FitResult fit = fitYarnModel(rdm, config, c.seed, c.quiet);
+    const FitResult fit = c.recalibrate.empty()
+                              ? fitYarnModel(rdm, config, c.seed, c.quiet)
+                              : recalibrateYarnModel(loadYarnModel(c.recalibrate), rdm, config, c.quiet);
     saveYarnModel(fit.model, c.out);
     if (!c.noReport) writeFitReport(fit, rdm, reference.get(), reportDir);
     const FitReport& r = fit.report;
@@ -78,6 +80,9 @@ void addFitCommand(CLI::App& app) {
                     "an independent gather of the same material: adds errors against it and the "
                     "noise floor to the report");
     fit->add_option("--report", o->report, "report directory (default: MODEL path without .json + \"-report\")");
+    fit->add_option("--recalibrate", o->recalibrate,
+                    "an existing MODEL.json: keep its networks and R lobe, redo only the energy "
+                    "calibration and the sampling lobe against --rdm (seconds instead of minutes)");
     fit->add_flag("--no-report", o->noReport, "write only the model");
     fit->add_flag("--print-config", o->printConfig, "print the configuration in effect as JSON and exit");
     fit->add_flag("--quiet", o->quiet, "no progress output");

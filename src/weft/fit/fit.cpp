@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -17,6 +18,7 @@
 #include "weft/core/progress.h"
 #include "weft/core/rng.h"
 #include "weft/fit/metrics.h"
+#include "weft/fit/sphere_rule.h"
 #include "weft/fit/yarn_lobes.h"
 
 namespace weft {
@@ -96,11 +98,13 @@ NetworkTraining trainingFromJson(const nlohmann::json& j, NetworkTraining t, con
 
 FitConfig FitConfig::fromJson(const nlohmann::json& j, const std::string& source) {
     if (!j.is_object()) throw InputError(source + ": the fit configuration must be a JSON object");
-    static const std::set<std::string> known = {"t_net", "m_net", "jitter", "masking", "threads"};
+    static const std::set<std::string> known = {"t_net",   "m_net",   "jitter",
+                                                "masking", "threads", "energy_calibration_degree"};
     for (const auto& [key, value] : j.items())
         if (!known.count(key))
             throw InputError(source + ": unknown key \"" + key +
-                             "\" (allowed: t_net, m_net, jitter, masking, threads)");
+                             "\" (allowed: t_net, m_net, jitter, masking, threads, "
+                             "energy_calibration_degree)");
     FitConfig c;
     if (j.contains("t_net")) c.t = trainingFromJson(j["t_net"], c.t, source + ": t_net");
     if (j.contains("m_net")) c.m = trainingFromJson(j["m_net"], c.m, source + ": m_net");
@@ -108,6 +112,14 @@ FitConfig FitConfig::fromJson(const nlohmann::json& j, const std::string& source
         if (!j.contains(name)) continue;
         if (!j[name].is_boolean()) throw InputError(source + ": " + name + ": expected true or false");
         *flag = j[name].get<bool>();
+    }
+    if (j.contains("energy_calibration_degree")) {
+        c.calibrationDegree =
+            numberAt<int>(j["energy_calibration_degree"], source + ": energy_calibration_degree");
+        if (c.calibrationDegree < -1 || c.calibrationDegree > EnergyCalibration::kMaxDegree)
+            throw InputError(source + ": energy_calibration_degree = " +
+                             std::to_string(c.calibrationDegree) + " is out of range: allowed [-1, " +
+                             std::to_string(EnergyCalibration::kMaxDegree) + "] (-1: off)");
     }
     if (j.contains("threads")) {
         c.threads = numberAt<int>(j["threads"], source + ": threads");
@@ -127,6 +139,7 @@ nlohmann::json FitConfig::toJson() const {
             {"m_net", trainingToJson(m)},
             {"jitter", jitter},
             {"masking", masking},
+            {"energy_calibration_degree", calibrationDegree},
             {"threads", threads}};
 }
 
@@ -230,6 +243,13 @@ void putColumn(Mlp<float>::Matrix& m, Eigen::Index col, const Vec3& a) {
           m(2, col) = static_cast<float>(a.z);
 }
 
+// A column (wi, wo) of M network inputs.
+void putColumn(Mlp<float>::Matrix& m, Eigen::Index col, const Vec3& wi, const Vec3& wo) {
+    putColumn(m, col, wi);
+    m(3, col) = static_cast<float>(wo.x), m(4, col) = static_cast<float>(wo.y),
+          m(5, col) = static_cast<float>(wo.z);
+}
+
 // Path-count-weighted RMS error of a T network against the gathered P(T | wi).
 double transmissionRmse(const Mlp<float>& net, const RdmData& rdm) {
     YarnModel probe;
@@ -309,9 +329,7 @@ Mlp<float> fitMultipleScattering(const RdmData& rdm, const FitConfig& config, ui
                                                          : bins.incidentCentre(i);
                            const Vec3 wo = config.jitter ? bins.outgoingDirectionIn(o, u3, u4)
                                                          : bins.outgoingCentre(o);
-                           x(0, k) = static_cast<float>(wi.x), x(1, k) = static_cast<float>(wi.y),
-                           x(2, k) = static_cast<float>(wi.z), x(3, k) = static_cast<float>(wo.x),
-                           x(4, k) = static_cast<float>(wo.y), x(5, k) = static_cast<float>(wo.z);
+                           putColumn(x, k, wi, wo);
                            const float* t = &rdm.rdmM[(i * nOut + o) * 3];
                            target(0, k) = t[0], target(1, k) = t[1], target(2, k) = t[2];
                        }
@@ -513,8 +531,9 @@ std::vector<float> modelReflectionMap(const YarnModel& model, const RdmBins& bin
     std::vector<float> map(nIn * nOut * 3);
     forEachIncident(nullptr, nIn, [&](size_t i) {
         const Vec3 wi = bins.incidentCentre(i);
+        const Rgb scale = model.calibration.scales(wi).r;
         for (size_t o = 0; o < nOut; ++o) {
-            const Rgb v = lobe.eval(wi, bins.outgoingCentre(o), pT[i]);
+            const Rgb v = lobe.eval(wi, bins.outgoingCentre(o), pT[i]) * scale;
             for (int c = 0; c < 3; ++c) map[(i * nOut + o) * 3 + c] = static_cast<float>(v[c]);
         }
     });
@@ -529,18 +548,192 @@ std::vector<float> modelMultipleScatteringMap(const YarnModel& model, const RdmB
     forEachIncident(nullptr, nIn, [&](size_t i) {
         Mlp<float>::Matrix x(6, static_cast<Eigen::Index>(nOut));
         const Vec3 wi = bins.incidentCentre(i);
-        for (size_t o = 0; o < nOut; ++o) {
-            const auto col = static_cast<Eigen::Index>(o);
-            x(0, col) = static_cast<float>(wi.x), x(1, col) = static_cast<float>(wi.y),
-            x(2, col) = static_cast<float>(wi.z);
-            x(3, col) = static_cast<float>(outgoing[o].x), x(4, col) = static_cast<float>(outgoing[o].y),
-            x(5, col) = static_cast<float>(outgoing[o].z);
-        }
+        for (size_t o = 0; o < nOut; ++o) putColumn(x, static_cast<Eigen::Index>(o), wi, outgoing[o]);
         const Mlp<float>::Matrix y = model.mNet.forward(x);
+        const Rgb scale = model.calibration.scales(wi).m;
         for (size_t o = 0; o < nOut; ++o)
-            for (int c = 0; c < 3; ++c) map[(i * nOut + o) * 3 + c] = y(c, static_cast<Eigen::Index>(o));
+            for (int c = 0; c < 3; ++c)
+                map[(i * nOut + o) * 3 + c] =
+                    static_cast<float>(y(c, static_cast<Eigen::Index>(o)) * scale[c]);
     });
     return map;
+}
+
+// ------------------------------------------------------- energy calibration --
+
+namespace {
+
+// Model energies of R and M (integrals over wo, yarn BSDF quadrature) and the
+// RDM's (sums over outgoing bins) for every incident bin with enough paths.
+struct BinEnergies {
+    std::vector<size_t> bin;
+    std::vector<Rgb> modelR, modelM, rdmR, rdmM;
+};
+
+BinEnergies binEnergies(const YarnModel& model, const RdmData& rdm, int64_t minPaths,
+                        tbb::task_arena& arena) {
+    const RdmBins& bins = rdm.bins;
+    const size_t nOut = bins.outgoingCount();
+    BinEnergies e;
+    for (size_t i = 0; i < bins.incidentCount(); ++i)
+        if (rdm.count[i] >= minPaths) e.bin.push_back(i);
+    const size_t n = e.bin.size();
+    e.modelR.resize(n), e.modelM.resize(n), e.rdmR.resize(n), e.rdmM.resize(n);
+    const std::vector<double> pT = modelTransmissionMap(model, bins);
+    const RLobe lobe(model.fiber, model.rLobe);
+    const double betaR = radians(model.fiber.betaRDeg);
+    arena.execute([&] {
+        tbb::parallel_for(size_t(0), n, [&](size_t k) {
+            const size_t i = e.bin[k];
+            const Vec3 wi = bins.incidentCentre(i);
+            const SphereRule rule = surfaceFiberSphereRule(lobe.frame(), betaR, wi);
+            const auto nodes = static_cast<Eigen::Index>(rule.directions.size());
+            Mlp<float>::Matrix x(6, nodes);
+            Rgb r;
+            for (Eigen::Index q = 0; q < nodes; ++q) {
+                const Vec3& wo = rule.directions[static_cast<size_t>(q)];
+                r += lobe.eval(wi, wo, pT[i]) * rule.weights[static_cast<size_t>(q)];
+                putColumn(x, q, wi, wo);
+            }
+            const Mlp<float>::Matrix y = model.mNet.forward(x);
+            Rgb m;
+            for (Eigen::Index q = 0; q < nodes; ++q)
+                for (int c = 0; c < 3; ++c) m[c] += y(c, q) * rule.weights[static_cast<size_t>(q)];
+            Rgb rr, rm;
+            for (size_t o = 0; o < nOut; ++o) {
+                const double omega = bins.outgoingSolidAngle(o);
+                const size_t at = (i * nOut + o) * 3;
+                for (int c = 0; c < 3; ++c) {
+                    rr[c] += rdm.rdmR[at + c] * omega;
+                    rm[c] += rdm.rdmM[at + c] * omega;
+                }
+            }
+            e.modelR[k] = r, e.modelM[k] = m, e.rdmR[k] = rr, e.rdmM[k] = rm;
+        });
+    });
+    return e;
+}
+
+}  // namespace
+
+EnergyCalibration fitEnergyCalibration(const YarnModel& model, const RdmData& rdm, int degree,
+                                       int threads, nlohmann::json* summary) {
+    tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
+    const BinEnergies e = binEnergies(model, rdm, kCalibrationMinPaths, arena);
+    // Enough bins for a stable fit: at least 4 per coefficient.
+    const int bins = static_cast<int>(e.bin.size());
+    while (degree >= 0 && 4 * EnergyCalibration::termCount(degree) > bins) --degree;
+    EnergyCalibration cal;
+    cal.degree = degree;
+    std::vector<Vec3> wi(e.bin.size());
+    for (size_t k = 0; k < e.bin.size(); ++k) wi[k] = rdm.bins.incidentCentre(e.bin[k]);
+    // Per component and channel, the degree (or none) is chosen by two-fold
+    // cross-validation on interleaved bins: a noisy RDM (few paths per bin,
+    // or a dark channel) gets a low degree or no calibration at all instead
+    // of a polynomial fitted to its noise. Weights: path count times the
+    // model's energy, about the number of paths behind the bin's energy
+    // (whose inverse is the variance of its logarithm); the RDM's own energy
+    // would favour bins that fluctuated up.
+    std::array<std::array<int, 3>, 2> chosen{};
+    auto fitChannel = [&](const std::vector<Rgb>& modelE, const std::vector<Rgb>& rdmE, int c,
+                          int* chosenDegree) {
+        std::vector<Vec3> x[2];
+        std::vector<double> y[2], w[2];
+        for (size_t k = 0; k < e.bin.size(); ++k)
+            if (modelE[k][c] > 0 && rdmE[k][c] > 0) {
+                const int half = static_cast<int>(k % 2);
+                x[half].push_back(wi[k]);
+                y[half].push_back(std::log(rdmE[k][c] / modelE[k][c]));
+                w[half].push_back(static_cast<double>(rdm.count[e.bin[k]]) * modelE[k][c]);
+            }
+        auto heldOutError = [&](int d) {
+            double error = 0;
+            for (int half = 0; half < 2; ++half) {
+                const int other = 1 - half;
+                std::vector<double> coefficients;
+                if (d >= 0) {
+                    if (static_cast<int>(x[half].size()) < 4 * EnergyCalibration::termCount(d))
+                        return std::numeric_limits<double>::infinity();
+                    coefficients = fitLogPolynomial(x[half], y[half], w[half], d);
+                }
+                std::vector<double> f(static_cast<size_t>(EnergyCalibration::termCount(std::max(d, 0))));
+                for (size_t k = 0; k < x[other].size(); ++k) {
+                    double predicted = 0;
+                    if (d >= 0) {
+                        EnergyCalibration::basis(x[other][k], d, f.data());
+                        for (size_t q = 0; q < f.size(); ++q) predicted += coefficients[q] * f[q];
+                        predicted = std::clamp(predicted, -EnergyCalibration::kMaxLogScale,
+                                               EnergyCalibration::kMaxLogScale);
+                    }
+                    error += w[other][k] * sqr(predicted - y[other][k]);
+                }
+            }
+            return error;
+        };
+        int best = -1;
+        double bestError = heldOutError(-1);
+        for (int d = 0; d <= degree; ++d) {
+            const double err = heldOutError(d);
+            if (err < bestError) best = d, bestError = err;
+        }
+        *chosenDegree = best;
+        std::vector<double> full(static_cast<size_t>(EnergyCalibration::termCount(degree)), 0.0);
+        if (best < 0) return full;
+        std::vector<Vec3> xs = x[0];
+        std::vector<double> ys = y[0], ws = w[0];
+        xs.insert(xs.end(), x[1].begin(), x[1].end());
+        ys.insert(ys.end(), y[1].begin(), y[1].end());
+        ws.insert(ws.end(), w[1].begin(), w[1].end());
+        const std::vector<double> low = fitLogPolynomial(xs, ys, ws, best);
+        // The degree-`best` basis is a subset of the degree-`degree` one.
+        size_t n = 0;
+        for (int a = 0; a <= std::min(1, best); ++a)
+            for (int b = 0; b <= best - a; ++b)
+                for (int q = 0; q <= best - a - b; ++q)
+                    full[static_cast<size_t>(EnergyCalibration::termIndex(a, b, q, degree))] = low[n++];
+        return full;
+    };
+    if (degree >= 0)
+        for (int c = 0; c < 3; ++c) {
+            cal.r[c] = fitChannel(e.modelR, e.rdmR, c, &chosen[0][c]);
+            cal.m[c] = fitChannel(e.modelM, e.rdmM, c, &chosen[1][c]);
+        }
+
+    if (summary) {
+        // Albedo (T + R + M at the bin centres, T from the network for both,
+        // so that only the calibrated parts differ) against the RDM's, before and after.
+        Rgb before, after, rScaleMin(1e9), rScaleMax(0.0), mScaleMin(1e9), mScaleMax(0.0);
+        size_t within = 0;
+        const std::vector<double> pT = modelTransmissionMap(model, rdm.bins);
+        for (size_t k = 0; k < e.bin.size(); ++k) {
+            const size_t i = e.bin[k];
+            const EnergyCalibration::Scales s =
+                degree >= 0 ? cal.scales(wi[k]) : EnergyCalibration::Scales{};
+            const Rgb target = e.rdmR[k] + e.rdmM[k] + Rgb(rdm.pT[i]);
+            const Rgb raw = e.modelR[k] + e.modelM[k] + Rgb(pT[i]);
+            const Rgb scaled = e.modelR[k] * s.r + e.modelM[k] * s.m + Rgb(pT[i]);
+            for (int c = 0; c < 3; ++c) {
+                if (!(target[c] > 0)) continue;
+                before[c] += std::fabs(raw[c] / target[c] - 1);
+                after[c] += std::fabs(scaled[c] / target[c] - 1);
+                within += std::fabs(scaled[c] / target[c] - 1) <= 0.03;
+                rScaleMin[c] = std::min(rScaleMin[c], s.r[c]), rScaleMax[c] = std::max(rScaleMax[c], s.r[c]);
+                mScaleMin[c] = std::min(mScaleMin[c], s.m[c]), mScaleMax[c] = std::max(mScaleMax[c], s.m[c]);
+            }
+        }
+        const double n = std::max<double>(1.0, static_cast<double>(e.bin.size()));
+        auto rgb = [](const Rgb& c) { return nlohmann::json::array({c.r, c.g, c.b}); };
+        *summary = {{"degree", degree},
+                    {"degrees_chosen", {{"r", chosen[0]}, {"m", chosen[1]}}},
+                    {"bins", e.bin.size()},
+                    {"min_paths", kCalibrationMinPaths},
+                    {"albedo_rel_error_mean_abs_before", rgb(before / n)},
+                    {"albedo_rel_error_mean_abs_after", rgb(after / n)},
+                    {"albedo_within_3_percent_after", static_cast<double>(within) / (3 * n)},
+                    {"r_scale_range", {rgb(rScaleMin), rgb(rScaleMax)}},
+                    {"m_scale_range", {rgb(mScaleMin), rgb(mScaleMax)}}};
+    }
+    return cal;
 }
 
 // ------------------------------------------------------------------ fit --
@@ -562,6 +755,73 @@ SamplingParams fitSamplingLobe(const YarnModel& model, const std::vector<float>&
     if (secondMoment) *secondMoment = objective(params);
     return params;
 }
+
+namespace {
+
+// Steps 4 and 5 of the fit on a model whose networks and R lobe are in place;
+// rFit and mFit are its R and M maps on the RDM's bins (updated).
+void finishFit(YarnModel& model, const RdmData& rdm, const FitConfig& config, int threads,
+               bool quiet, std::vector<float>& rFit, std::vector<float>& mFit, FitReport& report) {
+    const RdmBins& bins = rdm.bins;
+    tbb::task_arena arena(threads);
+    auto phase = Clock::now();
+    auto phaseDone = [&](const char* what) {
+        if (!quiet) std::fprintf(stderr, "fit: %s in %.1fs\n", what, secondsSince(phase));
+        phase = Clock::now();
+    };
+    // 4. Energy calibration of R and M (energy_calibration.h).
+    report.mRelL2Uncalibrated = report.mRelL2;
+    report.rRelL2Uncalibrated = report.rRelL2;
+    model.calibration = EnergyCalibration{};
+    report.calibration = nullptr;
+    if (config.calibrationDegree >= 0) {
+        model.calibration = fitEnergyCalibration(model, rdm, config.calibrationDegree, threads,
+                                                 &report.calibration);
+        arena.execute([&] {
+            rFit = modelReflectionMap(model, bins);
+            mFit = modelMultipleScatteringMap(model, bins);
+        });
+        report.rRelL2 = coarseRelativeL2(rFit, rdm.rdmR, bins);
+        report.mRelL2 = coarseRelativeL2(mFit, rdm.rdmM, bins);
+        phaseDone("energy calibration");
+    }
+    // 5. Sampling parameters.
+    const double rEnergy = mapEnergy(rFit, bins), mEnergy = mapEnergy(mFit, bins);
+    const double kappaR = rEnergy + mEnergy > 0 ? rEnergy / (rEnergy + mEnergy) : 0.5;
+    model.sampling = fitSamplingLobe(model, mFit, bins, kappaR, &report.mSecondMoment, threads);
+    phaseDone("sampling lobe");
+}
+
+nlohmann::json fitRecord(const FitReport& report, const FitConfig& config, uint64_t seed,
+                         const RdmData& rdm) {
+    nlohmann::json fit;
+    fit = {{"t_rmse", report.tRmse},
+                 {"t_rmse_unweighted", report.tRmseUnweighted},
+                 {"m_rel_l2", report.mRelL2},
+                 {"r_rel_l2", report.rRelL2},
+                 {"r_rel_l2_eq8", report.rRelL2Eq8},
+                 {"r_energy_ratio", report.rEnergyRatio},
+                 {"m_second_moment", report.mSecondMoment},
+                 {"seconds", report.seconds},
+                 {"m_samples_per_second", report.mSamplesPerSecond},
+                 {"seed", seed},
+                 {"config", config.toJson()},
+                 {"rdm",
+                  {{"path", rdm.dir},
+                   {"paths", rdm.meta.value("paths", nlohmann::json())},
+                   {"seed", rdm.meta.value("seed", nlohmann::json())},
+                   {"ply_seed", rdm.meta.value("ply_seed", nlohmann::json())},
+                   {"bins", rdm.meta.value("bins", nlohmann::json())}}}};
+    if (config.masking) fit["r_rel_l2_masked"] = report.rRelL2Masked;
+    if (config.calibrationDegree >= 0) {
+        fit["m_rel_l2_uncalibrated"] = report.mRelL2Uncalibrated;
+        fit["r_rel_l2_uncalibrated"] = report.rRelL2Uncalibrated;
+        fit["energy_calibration"] = report.calibration;
+    }
+    return fit;
+}
+
+}  // namespace
 
 FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t seed, bool quiet) {
     const auto t0 = Clock::now();
@@ -631,34 +891,57 @@ FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t see
     std::vector<float> mFit;
     arena.execute([&] { mFit = modelMultipleScatteringMap(model, bins); });
     report.mRelL2 = coarseRelativeL2(mFit, rdm.rdmM, bins);
+    if (!config.masking) rFit = std::move(rEq8);
     phase = Clock::now();
 
-    // 4. Sampling parameters.
-    if (!config.masking) rFit = std::move(rEq8);
-    const double rEnergy = mapEnergy(rFit, bins), mEnergy = mapEnergy(mFit, bins);
-    const double kappaR = rEnergy + mEnergy > 0 ? rEnergy / (rEnergy + mEnergy) : 0.5;
-    model.sampling = fitSamplingLobe(model, mFit, bins, kappaR, &report.mSecondMoment, threads);
-    phaseDone("sampling lobe", phase);
+    // 4-5. Energy calibration and sampling lobe.
+    finishFit(model, rdm, config, threads, quiet, rFit, mFit, report);
 
     report.seconds = secondsSince(t0);
-    model.fit = {{"t_rmse", report.tRmse},
-                 {"t_rmse_unweighted", report.tRmseUnweighted},
-                 {"m_rel_l2", report.mRelL2},
-                 {"r_rel_l2", report.rRelL2},
-                 {"r_rel_l2_eq8", report.rRelL2Eq8},
-                 {"r_energy_ratio", report.rEnergyRatio},
-                 {"m_second_moment", report.mSecondMoment},
-                 {"seconds", report.seconds},
-                 {"m_samples_per_second", report.mSamplesPerSecond},
-                 {"seed", seed},
-                 {"config", config.toJson()},
-                 {"rdm",
-                  {{"path", rdm.dir},
-                   {"paths", rdm.meta.value("paths", nlohmann::json())},
-                   {"seed", rdm.meta.value("seed", nlohmann::json())},
-                   {"ply_seed", rdm.meta.value("ply_seed", nlohmann::json())},
-                   {"bins", rdm.meta.value("bins", nlohmann::json())}}}};
-    if (config.masking) model.fit["r_rel_l2_masked"] = report.rRelL2Masked;
+    model.fit = fitRecord(report, config, seed, rdm);
+    return result;
+}
+
+FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& rdm, const FitConfig& config,
+                               bool quiet) {
+    const auto t0 = Clock::now();
+    const int threads = config.threads > 0 ? config.threads : tbb::this_task_arena::max_concurrency();
+    FitResult result;
+    result.model = fitted;
+    YarnModel& model = result.model;
+    FitReport& report = result.report;
+    model.calibration = EnergyCalibration{};
+    std::vector<float> rFit, mFit;
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+        rFit = modelReflectionMap(model, rdm.bins);
+        mFit = modelMultipleScatteringMap(model, rdm.bins);
+    });
+    report.rRelL2 = coarseRelativeL2(rFit, rdm.rdmR, rdm.bins);
+    report.mRelL2 = coarseRelativeL2(mFit, rdm.rdmM, rdm.bins);
+    const std::vector<double> pT = modelTransmissionMap(model, rdm.bins);
+    double se = 0, countTotal = 0;
+    for (size_t i = 0; i < pT.size(); ++i) {
+        se += static_cast<double>(rdm.count[i]) * sqr(pT[i] - rdm.pT[i]);
+        countTotal += static_cast<double>(rdm.count[i]);
+    }
+    report.tRmse = std::sqrt(se / std::max(countTotal, 1.0));
+    report.rRelL2Eq8 = fitted.fit.value("r_rel_l2_eq8", 0.0);
+    finishFit(model, rdm, config, threads, quiet, rFit, mFit, report);
+    report.seconds = secondsSince(t0);
+    // Keep the original record (training errors, timings, seed); update what moved.
+    nlohmann::json record = fitted.fit;
+    record["t_rmse"] = report.tRmse;
+    record["m_rel_l2"] = report.mRelL2;
+    record["r_rel_l2"] = report.rRelL2;
+    record["m_rel_l2_uncalibrated"] = report.mRelL2Uncalibrated;
+    record["r_rel_l2_uncalibrated"] = report.rRelL2Uncalibrated;
+    record["m_second_moment"] = report.mSecondMoment;
+    record["energy_calibration"] = report.calibration;
+    record["recalibrated"] = {{"rdm", rdm.dir},
+                              {"energy_calibration_degree", config.calibrationDegree},
+                              {"seconds", report.seconds}};
+    model.fit = record;
     return result;
 }
 

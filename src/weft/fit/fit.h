@@ -15,7 +15,12 @@
 //      decaying learning rate. Each batch is split into a fixed number of
 //      chunks whose gradients are summed in order, so the result depends on
 //      the seed only, not on the thread count.
-//   4. Sampling: kappa_R = R energy / (R + M energy) of the model; beta_M,
+//   4. Energy calibration (energy_calibration.h): smooth per-direction scales
+//      of R and M so that their integrals over wo match the RDM's energies at
+//      every incident bin with enough paths (log-ratio least squares weighted
+//      by path count; the degree is lowered when there are fewer than 4 bins
+//      per coefficient).
+//   5. Sampling: kappa_R = R energy / (R + M energy) of the model; beta_M,
 //      gamma_M, kappa_M minimise the second moment sum f_M^2 / pdf_M (the
 //      variance of the M estimator) over the RDM grid, by Nelder-Mead.
 // Errors use the one coarse-grid metric (metrics.h).
@@ -48,6 +53,7 @@ struct FitConfig {
     NetworkTraining m{{21, 21, 21}, 150000, 1, 1024, 3e-3, 3e-5, Loss::Mse};
     bool jitter = true;     // train on random directions inside the bins (else bin centres)
     bool masking = true;    // fit the R masking term (else plain eq. 8)
+    int calibrationDegree = 8;  // energy calibration polynomial degree; -1: none
     int threads = 0;        // 0: all cores; never changes the result
 
     // Strict reading (unknown keys are errors naming the key); missing keys keep the defaults.
@@ -65,6 +71,8 @@ struct FitReport {
     double tRmseUnweighted = 0;  // plain RMS over incident bins
     double mRelL2 = 0;           // coarse-grid relative L2 (metrics.h) of M against the RDM
     double rRelL2 = 0;           // the same for the R lobe as stored in the model
+    double mRelL2Uncalibrated = 0, rRelL2Uncalibrated = 0;  // before step 4
+    nlohmann::json calibration;  // step 4's summary (fitEnergyCalibration), null when off
     double rRelL2Eq8 = 0;        // plain eq. 8 (no masking)
     double rRelL2Masked = 0;     // with the fitted masking term (NaN when not fitted)
     double rEnergyRatio = 0;     // RDM_R energy / plain eq. 8 energy
@@ -81,6 +89,20 @@ struct FitResult {
 
 // Fits every part of the model. `rdmPath` is recorded in the fit block.
 FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t seed, bool quiet);
+
+// Steps 4 and 5 again on a fitted model (its networks and R lobe kept, its
+// calibration replaced): for models fitted before the calibration existed or
+// with another configuration. The fit record keeps the original entries and
+// gets the new errors and a "recalibrated" entry.
+FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& rdm, const FitConfig& config,
+                               bool quiet);
+
+// Step 4: the energy calibration of `model` (its calibration is ignored) on
+// incident bins with at least kCalibrationMinPaths paths; `summary` (optional)
+// gets the albedo errors before and after and the range of the scales.
+inline constexpr int64_t kCalibrationMinPaths = 100;
+EnergyCalibration fitEnergyCalibration(const YarnModel& model, const RdmData& rdm, int degree,
+                                       int threads, nlohmann::json* summary = nullptr);
 
 // Step 2: least-squares masking coefficients (yarn_lobes.h) so that
 // m(wi, wo) * eq8 matches rdmR on the coarse error grid (both maps on `bins`).

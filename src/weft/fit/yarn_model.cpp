@@ -24,6 +24,7 @@ using nlohmann::json;
 constexpr int kMaxNetworkLayers = 16;
 constexpr int kMaxNetworkWidth = 4096;
 constexpr const char* kMaskingForm = "symmetric-quadratic";
+constexpr const char* kCalibrationForm = "log-polynomial-sphere";
 
 // Shortest round-trip decimal form ("0.1", "nan", "inf") for messages.
 std::string formatNumber(double v) {
@@ -323,12 +324,46 @@ SamplingParams readSampling(const Reader& r, const json& j) {
     return p;
 }
 
+EnergyCalibration readCalibration(const Reader& r, const json& j) {
+    EnergyCalibration cal;
+    if (j.is_null()) return cal;
+    r.expectKeys(j, "energy_calibration", {"form", "degree", "r", "m"});
+    const json& form = j.at("form");
+    if (!form.is_string() || form.get<std::string>() != kCalibrationForm)
+        r.fail("energy_calibration.form",
+               std::string("expected \"") + kCalibrationForm + "\", got " + describe(form));
+    const json& degree = j.at("degree");
+    if (!degree.is_number_integer() || degree.get<int64_t>() < 0 ||
+        degree.get<int64_t>() > EnergyCalibration::kMaxDegree)
+        r.fail("energy_calibration.degree",
+               "expected an integer in [0, " + std::to_string(EnergyCalibration::kMaxDegree) +
+                   "], got " + describe(degree));
+    cal.degree = degree.get<int>();
+    const size_t terms = static_cast<size_t>(EnergyCalibration::termCount(cal.degree));
+    for (const auto& [key, target] : {std::pair{"r", &cal.r}, std::pair{"m", &cal.m}}) {
+        const std::string path = std::string("energy_calibration.") + key;
+        const json& rows = j.at(key);
+        if (!rows.is_array() || rows.size() != 3)
+            r.fail(path, "expected 3 rows (R, G, B) of " + std::to_string(terms) +
+                             " numbers, got " + describe(rows));
+        for (size_t c = 0; c < 3; ++c) {
+            const std::string rowPath = indexPath(path, c);
+            if (!rows[c].is_array() || rows[c].size() != terms)
+                r.fail(rowPath, "expected " + std::to_string(terms) + " numbers ((degree + 1)^2), got " +
+                                    describe(rows[c]));
+            for (size_t k = 0; k < terms; ++k)
+                (*target)[c].push_back(r.number(rows[c][k], indexPath(rowPath, k)));
+        }
+    }
+    return cal;
+}
+
 // Key order of the written file: the layout order of docs/model-format.md
 // (JSON objects are unordered; this is for the human reader). Keys not listed
 // (the free-form "fit" block) follow in alphabetical order.
-constexpr std::array<std::string_view, 30> kKeyOrder = {
+constexpr std::array<std::string_view, 34> kKeyOrder = {
     "format",      "version",      "fiber",    "ply",        "t_net",       "m_net",
-    "r_lobe",      "sampling",     "fit",      "layers",     "output",      "weight",
+    "r_lobe",      "sampling",     "energy_calibration", "degree", "r", "m", "fit",      "layers",     "output",      "weight",
     "bias",        "prelu",        "tilt_deg", "masking",    "form",        "coefficients",
     "fibers",      "density",      "twist",    "c_r",        "c_tt",        "beta_r_deg",
     "beta_tt_deg", "gamma_tt_deg", "kappa_r",  "beta_m_deg", "gamma_m_deg", "kappa_m"};
@@ -389,6 +424,12 @@ nlohmann::json yarnModelToJson(const YarnModel& model) {
     json masking = nullptr;
     if (!model.rLobe.masking.empty())
         masking = {{"form", kMaskingForm}, {"coefficients", model.rLobe.masking}};
+    json calibration = nullptr;
+    if (!model.calibration.empty())
+        calibration = {{"form", kCalibrationForm},
+                       {"degree", model.calibration.degree},
+                       {"r", model.calibration.r},
+                       {"m", model.calibration.m}};
     return {{"format", kYarnModelFormat},
             {"version", kYarnModelVersion},
             {"fiber", model.fiber.toJson()},
@@ -404,6 +445,7 @@ nlohmann::json yarnModelToJson(const YarnModel& model) {
               {"beta_m_deg", model.sampling.betaMDeg},
               {"gamma_m_deg", model.sampling.gammaMDeg},
               {"kappa_m", model.sampling.kappaM}}},
+            {"energy_calibration", calibration},
             {"fit", model.fit}};
 }
 
@@ -428,9 +470,13 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     if (version.get<int64_t>() != kYarnModelVersion)
         r.fail("version", "unsupported version " + describe(version) +
                               " (supported: " + std::to_string(kYarnModelVersion) + ")");
-    r.expectKeys(
-        j, "",
-        {"format", "version", "fiber", "ply", "t_net", "m_net", "r_lobe", "sampling", "fit"});
+    // energy_calibration may be absent (files written before it existed): null.
+    json keys = json::object();
+    for (const auto& item : j.items()) keys[item.key()] = nullptr;
+    keys["energy_calibration"] = nullptr;
+    r.expectKeys(keys, "",
+                 {"format", "version", "fiber", "ply", "t_net", "m_net", "r_lobe", "sampling",
+                  "energy_calibration", "fit"});
 
     YarnModel model;
     model.fiber = FiberParams::fromJson(j.at("fiber"), source + ": fiber");
@@ -439,6 +485,8 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     model.mNet = readNetwork(r, j.at("m_net"), "m_net", 6, 3);
     model.rLobe = readRLobe(r, j.at("r_lobe"));
     model.sampling = readSampling(r, j.at("sampling"));
+    if (j.contains("energy_calibration"))
+        model.calibration = readCalibration(r, j.at("energy_calibration"));
     const json& fit = j.at("fit");
     if (!fit.is_object()) r.fail("fit", "expected an object, got " + describe(fit));
     model.fit = fit;

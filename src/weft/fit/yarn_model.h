@@ -8,6 +8,8 @@
 //   m_net     S_M(wi, wo): 6-21-21(-21)-3, PReLU, exp output (paper 5.3)
 //   r_lobe    the analytic R lobe (paper eq. 8) and its optional masking term
 //   sampling  kappa_R, beta_M, gamma_M, kappa_M (paper eq. 9-11)
+//   energy_calibration  per-direction energy scales of R and M
+//             (energy_calibration.h), or null / absent for none
 //   fit       errors and provenance of the fit (free-form numbers and strings)
 // Networks: {"layers": [{"weight": [[in numbers] x out rows], "bias": [out],
 // "prelu": [out] or null}, ...], "output": "sigmoid" | "exp" | "identity"};
@@ -20,6 +22,7 @@
 #include <vector>
 
 #include "weft/fiber/fiber_params.h"
+#include "weft/fit/energy_calibration.h"
 #include "weft/fit/mlp.h"
 #include "weft/ply/ply.h"
 
@@ -52,6 +55,7 @@ struct YarnModel {
     Mlp<float> mNet;  // 6 inputs, 3 outputs
     RLobeParams rLobe;
     SamplingParams sampling;
+    EnergyCalibration calibration;  // empty: none
     nlohmann::json fit = nlohmann::json::object();  // errors and provenance, written as is
 };
 

@@ -47,6 +47,11 @@ YarnModel sampleModel() {
     m.rLobe.tiltDeg = 37.0245;
     m.rLobe.masking = {0.42, 0.31, -0.125, 0.0625};
     m.sampling = {0.37, 12.5, 33.25, 0.81};
+    m.calibration.degree = 2;
+    for (int c = 0; c < 3; ++c) {
+        m.calibration.r[c] = {0.1 * c, -0.2, 0.3, 1e-17, 0, -0.0, 0.5, 0.25, 1.0 / 3.0};
+        m.calibration.m[c] = {-0.1, 0.2 * c, 0, 0, 0, 0, 0, 0, 0.7};
+    }
     m.fit = {{"t_rmse", 0.0123},
              {"m_rel_l2", 0.21},
              {"r_rel_l2", 0.33},
@@ -96,6 +101,9 @@ void expectSameModel(const YarnModel& a, const YarnModel& b) {
     EXPECT_EQ(a.sampling.betaMDeg, b.sampling.betaMDeg);
     EXPECT_EQ(a.sampling.gammaMDeg, b.sampling.gammaMDeg);
     EXPECT_EQ(a.sampling.kappaM, b.sampling.kappaM);
+    EXPECT_EQ(a.calibration.degree, b.calibration.degree);
+    EXPECT_EQ(a.calibration.r, b.calibration.r);
+    EXPECT_EQ(a.calibration.m, b.calibration.m);
     EXPECT_EQ(a.fit, b.fit);
 }
 
@@ -341,6 +349,30 @@ TEST(YarnModel, Masking) {
     j = yarnModelToJson(sampleModel());
     j["r_lobe"]["masking"]["extra"] = 1;
     expectModelError(j, {"r_lobe.masking: unknown key \"extra\""});
+}
+
+TEST(YarnModel, EnergyCalibration) {
+    // Absent or null: no calibration (files written before it existed).
+    json j = yarnModelToJson(sampleModel());
+    j.erase("energy_calibration");
+    EXPECT_TRUE(yarnModelFromJson(j, "model.json").calibration.empty());
+    j["energy_calibration"] = nullptr;
+    EXPECT_TRUE(yarnModelFromJson(j, "model.json").calibration.empty());
+    j = yarnModelToJson(sampleModel());
+    j["energy_calibration"]["degree"] = 13;
+    expectModelError(j, {"energy_calibration.degree: expected an integer in [0, 12], got 13"});
+    j = yarnModelToJson(sampleModel());
+    j["energy_calibration"]["degree"] = 3;
+    expectModelError(j, {"energy_calibration.r[0]: expected 16 numbers"});
+    j = yarnModelToJson(sampleModel());
+    j["energy_calibration"]["m"].erase(2);
+    expectModelError(j, {"energy_calibration.m: expected 3 rows"});
+    j = yarnModelToJson(sampleModel());
+    j["energy_calibration"]["r"][1][4] = "nan";
+    expectModelError(j, {"energy_calibration.r[1][4]: expected a number"});
+    j = yarnModelToJson(sampleModel());
+    j["energy_calibration"]["form"] = "table";
+    expectModelError(j, {"energy_calibration.form: expected \"log-polynomial-sphere\""});
 }
 
 TEST(YarnModel, OutputFunction) {

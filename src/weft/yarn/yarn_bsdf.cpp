@@ -9,7 +9,7 @@
 #include "weft/core/error.h"
 #include "weft/core/math.h"
 #include "weft/gather/rdm.h"
-#include "weft/yarn/quadrature.h"
+#include "weft/core/quadrature.h"
 
 namespace weft {
 
@@ -67,7 +67,8 @@ YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
       mNet_(model.mNet, source + ": m_net"),
       rLobe_(withSource<RLobe>(source, model.fiber, model.rLobe)),
       lobes_(withSource<SamplingLobes>(source, model.fiber, model.rLobe.tiltDeg, model.sampling)),
-      kappaR_(model.sampling.kappaR) {
+      kappaR_(model.sampling.kappaR),
+      calibration_(model.calibration) {
     if (options.energyGuard) buildEnergyGuard();
 }
 
@@ -154,9 +155,11 @@ void YarnBsdf::buildEnergyGuard() {
             for (size_t j = 0; j < phiM.size(); ++j)
                 energy += evalM(wi, direction(thetaM[i], phiM[j])) *
                           (thetaMW[i] * phiMW[j] * std::cos(thetaM[i]));
+        energy = energy * calibration_.scales(wi).m;
         guardEnergyM_[node] = energy;
         const double pT = transmissionUpper(wi);
-        const Rgb kept = keptReflectance(wi);
+        // The R table is smooth in fiber angles without the calibration, which is exact at eval time.
+        const Rgb kept = keptReflectance(wi) * calibration_.scales(wi).r;
         const Rgb af = fiberAlbedo(frame.toLocal(wi));
         for (int c = 0; c < 3; ++c)
             albedo[node] = std::max(albedo[node], pT + (1.0 - pT) * kept[c] * af[c] + energy[c]);
@@ -228,23 +231,27 @@ Rgb YarnBsdf::energyM(const GuardCell& cell) const {
     return value;
 }
 
-Rgb YarnBsdf::scaleUpper(const Vec3& wi, double pT) const {
-    if (!guardActive_) return Rgb(1.0);
+YarnBsdf::GuardScales YarnBsdf::scaleUpper(const Vec3& wi, double pT,
+                                           const EnergyCalibration::Scales& calibration) const {
+    GuardScales s;
+    if (!guardActive_) return s;
     const GuardCell cell = guardCell(wi);
-    if (!guardCell_[static_cast<size_t>(cell.a0) * kGuardPhi + cell.b0]) return Rgb(1.0);
-    const Rgb kept = keptReflectance(wi), energy = energyM(cell);
+    if (!guardCell_[static_cast<size_t>(cell.a0) * kGuardPhi + cell.b0]) return s;
+    const Rgb kept = keptReflectance(wi) * calibration.r, energy = energyM(cell);
     const Rgb af = fiberAlbedo(lobes_.frame().toLocal(wi));
-    Rgb s(1.0);
     for (int c = 0; c < 3; ++c) {
-        const double room = std::max(0.0, (1.0 - pT) * (1.0 - kept[c] * af[c]));
-        if (energy[c] > room) s[c] = room / energy[c];
+        // R alone can exceed 1 - P(T) only through an energy calibration above 1.
+        const double r = kept[c] * af[c];
+        if (r > 1) s.r[c] = 1 / r;
+        const double room = std::max(0.0, (1.0 - pT) * (1.0 - std::min(r, 1.0)));
+        if (energy[c] > room) s.m[c] = room / energy[c];
     }
     return s;
 }
 
 Rgb YarnBsdf::multipleScatteringScale(const Vec3& wi) const {
     const Vec3 i = wi.z < 0 ? mirrored(wi) : wi;
-    return scaleUpper(i, transmissionUpper(i));
+    return scaleUpper(i, transmissionUpper(i), calibration_.scales(i)).m;
 }
 
 // -------------------------------------------------------------- the BSDF --
@@ -261,9 +268,10 @@ double YarnBsdf::transmission(const Vec3& wi) const {
     return transmissionUpper(wi.z < 0 ? mirrored(wi) : wi);
 }
 
-YarnBsdf::Incident YarnBsdf::incident(const Vec3& wi) const {
-    const double pT = transmissionUpper(wi);
-    return {pT, scaleUpper(wi, pT)};
+YarnBsdf::Incident YarnBsdf::incident(const Vec3& wi, double pT) const {
+    const EnergyCalibration::Scales s = calibration_.scales(wi);
+    const GuardScales g = scaleUpper(wi, pT, s);
+    return {pT, s.r * g.r, s.m * g.m};
 }
 
 Rgb YarnBsdf::evalM(const Vec3& wi, const Vec3& wo) const {
@@ -282,7 +290,7 @@ YarnBsdf::LobeProbabilities YarnBsdf::lobeProbabilities(const Vec3& wi) const {
 
 void YarnBsdf::evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rgb* value,
                           double* density) const {
-    if (value) *value = rLobe_.eval(wi, wo, in.pT) + evalM(wi, wo) * in.mScale;
+    if (value) *value = rLobe_.eval(wi, wo, in.pT) * in.rScale + evalM(wi, wo) * in.mScale;
     if (density) {
         // Paper eq. 10-11: the continuous mixture p_R pdf_R + p_M pdf_M.
         const double pR = (1.0 - in.pT) * kappaR_, pM = (1.0 - in.pT) * (1.0 - kappaR_);
@@ -297,7 +305,7 @@ Rgb YarnBsdf::eval(const Vec3& wi, const Vec3& wo) const {
     const bool flip = wi.z < 0;
     const Vec3 i = flip ? mirrored(wi) : wi, o = flip ? mirrored(wo) : wo;
     Rgb value;
-    evalAndPdf(i, o, incident(i), &value, nullptr);
+    evalAndPdf(i, o, incident(i, transmissionUpper(i)), &value, nullptr);
     return value;
 }
 
@@ -305,17 +313,17 @@ double YarnBsdf::pdf(const Vec3& wi, const Vec3& wo) const {
     const bool flip = wi.z < 0;
     const Vec3 i = flip ? mirrored(wi) : wi, o = flip ? mirrored(wo) : wo;
     double density;
-    evalAndPdf(i, o, {transmissionUpper(i), Rgb(1.0)}, nullptr, &density);
+    evalAndPdf(i, o, {transmissionUpper(i), Rgb(1.0), Rgb(1.0)}, nullptr, &density);
     return density;
 }
 
 YarnBsdf::Components YarnBsdf::components(const Vec3& wi, const Vec3& wo) const {
     const bool flip = wi.z < 0;
     const Vec3 i = flip ? mirrored(wi) : wi, o = flip ? mirrored(wo) : wo;
-    const Incident in = incident(i);
+    const Incident in = incident(i, transmissionUpper(i));
     Components c;
     c.pT = in.pT;
-    c.r = rLobe_.eval(i, o, in.pT);
+    c.r = rLobe_.eval(i, o, in.pT) * in.rScale;
     c.m = evalM(i, o) * in.mScale;
     return c;
 }
@@ -353,7 +361,7 @@ BsdfSample YarnBsdf::sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) 
         o = lobes_.sampleM(i, uLobe, u[1], u[2], rng);
     }
     Rgb value;
-    evalAndPdf(i, o, {pT, scaleUpper(i, pT)}, &value, &s.pdf);
+    evalAndPdf(i, o, incident(i, pT), &value, &s.pdf);
     if (!(s.pdf > 0)) return BsdfSample{};
     s.wo = flip ? mirrored(o) : o;
     s.weight = value / s.pdf;

@@ -5,6 +5,8 @@
 //   S_R = (1 - P(T|wi)) S_f(wi~, wo~) m     paper eq. 8 in the surface fiber frame,
 //                                          with the fitted masking m (yarn_lobes.h)
 //   S_M = exp(M network(wi, wo))            6-21-21-21-3 by default, RGB
+// and, when the model has one, S_R and S_M times the fit's energy calibration
+// s_R(wi), s_M(wi) (fit/energy_calibration.h).
 // Directions are unit vectors in the yarn shading frame of the ply hit:
 // t = +x (ply tangent), b = +y, n = +z (outward normal), DESIGN.md 2; the
 // caller converts world directions with Frame(t, b, n). The BSDF contract is
@@ -35,8 +37,9 @@
 // integral over wo; measured on real fits, mostly near grazing incidence and
 // for nearly lossless channels such as gabardine's red). In a path tracer
 // such a BSDF adds energy at every bounce. Since R <= (1 - P(T)) times the
-// fiber albedo, P(T) + E_R <= 1 always, so the guard scales S_M alone, per
-// channel, by s(wi) = min(1, (1 - P(T|wi) - E_R(wi)) / E_M(wi)). P(T|wi) and
+// fiber albedo, P(T) + E_R <= 1 without an energy calibration, so the guard
+// scales S_M, per channel, by s(wi) = min(1, (1 - P(T|wi) - E_R(wi)) / E_M(wi));
+// should a calibration push E_R above 1 - P(T), R is scaled down to it and M to 0. P(T|wi) and
 // the fiber albedo a_f = F + (1 - F) C_TT at wi (in the surface fiber frame),
 // which carry the sharp features, are exact at eval time; two tables,
 // computed at construction by Gauss-Legendre quadrature (in parallel) and
@@ -104,7 +107,7 @@ class YarnBsdf {
     // The parts of eval for one pair, and the lobe probabilities of sample().
     struct Components {
         double pT = 0;  // P(T | wi)
-        Rgb r, m;       // S_R and S_M (energy guard applied), foreshortening included
+        Rgb r, m;       // S_R and S_M (calibration and energy guard applied), cosine included
     };
     Components components(const Vec3& wi, const Vec3& wo) const;
     struct LobeProbabilities {
@@ -136,17 +139,22 @@ class YarnBsdf {
     static double guardFiberAngle(int index);  // -pi/2 + pi index / 23
 
   private:
-    // What eval and pdf need of wi (in the upper hemisphere).
+    // What eval and pdf need of wi (in the upper hemisphere): P(T), the
+    // calibration of R, and the calibration times the energy guard of M.
     struct Incident {
         double pT;
-        Rgb mScale;
+        Rgb rScale, mScale;
     };
-    Incident incident(const Vec3& wi) const;
+    Incident incident(const Vec3& wi, double pT) const;
     // eval and pdf for wi in the upper hemisphere: the one place where both are computed.
     void evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rgb* value,
                     double* density) const;
     double transmissionUpper(const Vec3& wi) const;
-    Rgb scaleUpper(const Vec3& wi, double pT) const;
+    struct GuardScales {
+        Rgb r{1.0}, m{1.0};
+    };
+    GuardScales scaleUpper(const Vec3& wi, double pT,
+                           const EnergyCalibration::Scales& calibration) const;
     void buildEnergyGuard();
 
     FixedMlp<32, 2048> tNet_;
@@ -154,8 +162,10 @@ class YarnBsdf {
     RLobe rLobe_;
     SamplingLobes lobes_;
     double kappaR_;
+    EnergyCalibration calibration_;
     bool guardActive_ = false;
-    // Tables per channel: E_R / ((1 - P(T)) a_f), kGuardFiber x kGuardFiber
+    // Tables per channel: E_R / ((1 - P(T)) a_f) before the calibration (whose
+    // scale is exact at eval time), kGuardFiber x kGuardFiber
     // (fiber angles), and E_M, kGuardTheta x kGuardPhi (yarn angles).
     std::vector<Rgb> guardReflectance_, guardEnergyM_;
     // 1 where a cell of the M table (rows a, a + 1; columns b, b + 1) may need the guard.

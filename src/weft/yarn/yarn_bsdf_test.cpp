@@ -240,10 +240,39 @@ TEST(YarnBsdf, SampleIsDeterministicInItsInput) {
 
 // The renderer's fast evaluation (energy guard off) agrees with the fit's
 // maps (Mlp::forward, RLobe), which `weft fit` and `weft yarn check` report.
+// A hand-set energy calibration: S_R times 1/2 and S_M times 2 exp(0.3 x).
+YarnModel withCalibration(YarnModel model) {
+    model.calibration.degree = 1;
+    for (int c = 0; c < 3; ++c) {
+        model.calibration.r[c] = {-std::log(2.0), 0, 0, 0};
+        model.calibration.m[c] = {std::log(2.0), 0, 0, 0.3};  // 1, z, y, x
+    }
+    return model;
+}
+
+TEST(YarnBsdf, EnergyCalibrationScalesTheLobes) {
+    const YarnModel& model = testModel("fleece-small");
+    YarnModel plain = model;
+    plain.calibration = EnergyCalibration{};
+    const YarnBsdf a(plain, "plain", YarnBsdfOptions{false});
+    const YarnBsdf b(withCalibration(plain), "calibrated", YarnBsdfOptions{false});
+    Rng rng(5, 5);
+    for (int k = 0; k < 200; ++k) {
+        const Vec3 wi = randomUnitVector(rng), wo = randomUnitVector(rng);
+        const YarnBsdf::Components ca = a.components(wi, wo), cb = b.components(wi, wo);
+        const double x = wi.x;  // the mirroring below the surface keeps x
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_NEAR(cb.r[c], 0.5 * ca.r[c], 1e-12 + 1e-9 * ca.r[c]);
+            EXPECT_NEAR(cb.m[c], 2 * std::exp(0.3 * x) * ca.m[c], 1e-6 * cb.m[c]);
+        }
+        EXPECT_EQ(a.pdf(wi, wo), b.pdf(wi, wo));  // the sampling densities do not move
+    }
+}
+
 TEST(YarnBsdf, ComponentsMatchTheFitsModelMaps) {
     const RdmBins bins{3, 5, 6, 8};
-    for (const char* name : kModels) {
-        const YarnModel& model = testModel(name);
+    for (const char* name : kModels)
+    for (const YarnModel& model : {testModel(name), withCalibration(testModel(name))}) {
         const YarnBsdf bsdf(model, name, YarnBsdfOptions{false});
         const std::vector<double> pT = modelTransmissionMap(model, bins);
         const std::vector<float> r = modelReflectionMap(model, bins);

@@ -1,21 +1,16 @@
 // weft/yarn/yarn_integrals.h — integrals of the yarn BSDF over outgoing directions.
 //
-// For one incident direction wi, by a product Gauss-Legendre rule over the
-// sphere in the surface fiber frame (longitudinal angle theta from -pi/2 to
-// pi/2, azimuth phi from n), with the solid-angle weight cos(theta):
-//   theta: 4-node panels of 7.5 degrees, and of beta_R / 2 within 6 beta_R of
-//          the specular cone theta = -theta_i, where the R lobe (as narrow as
-//          1 degree) lives;
-//   phi:   16 panels of 4 nodes, with edges at phi = 0, +-pi/2 (where R and
-//          pdf_R jump to zero: the surface plane) and +-pi.
-// About 12,000 nodes; `refinement` divides every panel width (the tests check
-// that 1 agrees with 3). Used by `weft yarn check` and the energy tests.
+// For one incident direction wi, by the product Gauss-Legendre rule of
+// fit/sphere_rule.h (about 12,000 nodes; `refinement` divides every panel
+// width: the tests check that 1 agrees with 3). Used by `weft yarn check` and
+// the energy tests.
 #pragma once
 
 #include <vector>
 
 #include "weft/core/rgb.h"
 #include "weft/core/vec.h"
+#include "weft/fit/sphere_rule.h"
 #include "weft/yarn/yarn_bsdf.h"
 
 namespace weft {
@@ -38,10 +33,6 @@ struct DirectionalIntegrals {
 DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, int refinement = 1);
 
 // The nodes of that rule (yarn-frame directions) and their weights, for tests.
-struct SphereRule {
-    std::vector<Vec3> directions;
-    std::vector<double> weights;
-};
 SphereRule yarnSphereRule(const YarnBsdf& bsdf, const Vec3& wi, int refinement = 1);
 
 }  // namespace weft

@@ -1,4 +1,4 @@
-// weft/yarn/quadrature.h — composite Gauss-Legendre rules on panels, for the
+// weft/core/quadrature.h — composite Gauss-Legendre rules on panels, for the
 // integrals of the yarn BSDF over outgoing directions (yarn_integrals.h and
 // the energy guard of yarn_bsdf.h).
 #pragma once

@@ -1,0 +1,57 @@
+// weft/fit/energy_calibration.h — per-direction energy calibration of the R
+// lobe and the M network (a weft addition to the paper's model).
+//
+// Why: the analytic R lobe (eq. 8 with masking) has the right shape but not
+// the right energy at every incident direction (on fleece, 20-40% low near
+// normal and grazing incidence, 15-30% high around 60 degrees), and the M
+// network, trained on point values, drifts by 5-15% in energy near grazing
+// incidence. The directional albedo is what a path tracer's brightness and
+// colour after many bounces depend on, so the fit ends with one smooth scale
+// per component, channel and incident direction that makes the model's
+// energies match the RDM's:
+//   S_R(wi, wo) <- s_R,c(wi) S_R(wi, wo),   S_M(wi, wo) <- s_M,c(wi) S_M(wi, wo)
+//   log s(wi) = sum_k coefficient_k * basis_k(wi)
+// with basis_k the monomials x^a y^b z^c of the (upper-hemisphere) yarn-frame
+// direction with a in {0, 1} and a + b + c <= degree: a basis of the
+// polynomials of that degree on the sphere, (degree + 1)^2 terms, smooth
+// everywhere (no seam in azimuth, no pole at the normal). log s is clamped to
+// [-log 4, log 4] so that no extrapolation can blow up. The lobe shapes, the
+// sampling densities and P(T) are unchanged; only the magnitudes move.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "weft/core/rgb.h"
+#include "weft/core/vec.h"
+
+namespace weft {
+
+struct EnergyCalibration {
+    static constexpr int kMaxDegree = 12;
+    static constexpr double kMaxLogScale = 1.3862943611198906;  // log 4
+
+    int degree = -1;  // -1: no calibration (every scale is 1)
+    std::array<std::vector<double>, 3> r, m;  // per channel, termCount(degree) coefficients
+
+    bool empty() const { return degree < 0; }
+    static int termCount(int degree) { return (degree + 1) * (degree + 1); }
+    // Position of x^a y^b z^c (a in {0, 1}, a + b + c <= degree) in the basis.
+    static int termIndex(int a, int b, int c, int degree);
+    // The basis at a yarn-frame unit direction, in the order a, then b, then c.
+    static void basis(const Vec3& w, int degree, double* out);
+
+    struct Scales {
+        Rgb r{1.0}, m{1.0};
+    };
+    // Scales at an upper-hemisphere wi (all 1 when empty()).
+    Scales scales(const Vec3& wi) const;
+};
+
+// Weighted least squares for one channel: coefficients minimising
+// sum_i weight_i (sum_k c_k basis_k(wi_i) - logRatio_i)^2 (column-pivoted QR).
+std::vector<double> fitLogPolynomial(const std::vector<Vec3>& wi,
+                                     const std::vector<double>& logRatio,
+                                     const std::vector<double>& weight, int degree);
+
+}  // namespace weft

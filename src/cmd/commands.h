@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
+#include "weft/core/npy.h"
 #include "weft/fiber/fiber_params.h"
 
 namespace weft::cmd {
@@ -38,6 +39,11 @@ struct PlyGeometryOptions {
 Vec3 parseVec3(const std::string& text, const std::string& flag);
 // parseVec3, then normalised (any non-zero finite vector, however large or small).
 Vec3 parseDirection(const std::string& text, const std::string& flag);
+
+// Row `row`, columns col..col+2 of an (n, 6) PAIRS array as a unit vector
+// (wi at col 0, wo at col 3): length within 1e-3 of 1 (float32 inputs),
+// renormalised; InputError naming `path` and the row otherwise.
+Vec3 unitVectorAt(const NpyMatrix& m, size_t row, size_t col, const std::string& path);
 
 // Adds a seed flag (an unsigned 64-bit integer, default 0; negative values are
 // refused instead of wrapping around) to a command.

@@ -16,20 +16,6 @@ namespace weft::cmd {
 
 namespace {
 
-// Row `row` of PAIRS as a unit vector; inputs may be float32, so a deviation
-// from unit length up to 1e-3 is accepted and normalised away.
-Vec3 unitVectorAt(const NpyMatrix& m, size_t row, size_t col, const std::string& path) {
-    const Vec3 v{m(row, col), m(row, col + 1), m(row, col + 2)};
-    const double len = length(v);
-    if (!isFinite(v) || !(std::fabs(len - 1.0) <= 1e-3)) {
-        std::ostringstream msg;
-        msg << path << ": row " << row << ": " << (col == 0 ? "wi" : "wo") << " = " << v
-            << " is not a unit vector (length must be within 1e-3 of 1)";
-        throw InputError(msg.str());
-    }
-    return v / len;
-}
-
 struct EvalOptions {
     MaterialOptions material;
     std::string in, out;

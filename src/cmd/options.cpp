@@ -4,6 +4,7 @@
 
 #include "commands.h"
 #include "weft/core/error.h"
+#include "weft/core/npy.h"
 
 namespace weft::cmd {
 
@@ -66,6 +67,20 @@ Vec3 parseDirection(const std::string& text, const std::string& flag) {
     const double largest = std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
     if (!(largest > 0)) throw InputError(flag + " \"" + text + "\" must be a non-zero vector");
     return normalize(v / largest);
+}
+
+// Row `row` of PAIRS as a unit vector; inputs may be float32, so a deviation
+// from unit length up to 1e-3 is accepted and normalised away.
+Vec3 unitVectorAt(const NpyMatrix& m, size_t row, size_t col, const std::string& path) {
+    const Vec3 v{m(row, col), m(row, col + 1), m(row, col + 2)};
+    const double len = length(v);
+    if (!isFinite(v) || !(std::fabs(len - 1.0) <= 1e-3)) {
+        std::ostringstream msg;
+        msg << path << ": row " << row << ": " << (col == 0 ? "wi" : "wo") << " = " << v
+            << " is not a unit vector (length must be within 1e-3 of 1)";
+        throw InputError(msg.str());
+    }
+    return v / len;
 }
 
 }  // namespace weft::cmd

@@ -17,19 +17,6 @@ namespace weft::cmd {
 
 namespace {
 
-// Row `row` of PAIRS as a unit vector (float32 input: length within 1e-3 of 1, renormalised).
-Vec3 unitVectorAt(const NpyMatrix& m, size_t row, size_t col, const std::string& path) {
-    const Vec3 v{m(row, col), m(row, col + 1), m(row, col + 2)};
-    const double len = length(v);
-    if (!isFinite(v) || !(std::fabs(len - 1.0) <= 1e-3)) {
-        std::ostringstream msg;
-        msg << path << ": row " << row << ": " << (col == 0 ? "wi" : "wo") << " = " << v
-            << " is not a unit vector (length must be within 1e-3 of 1)";
-        throw InputError(msg.str());
-    }
-    return v / len;
-}
-
 struct EvalOptions {
     std::string model, in, out;
     bool noGuard = false;

@@ -6,9 +6,13 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cstdint>
 #include <string>
+#include <vector>
 
+#include "weft/core/bsdf.h"
 #include "weft/core/npy.h"
+#include "weft/core/rng.h"
 #include "weft/fiber/fiber_params.h"
 
 namespace weft::cmd {
@@ -44,6 +48,40 @@ Vec3 parseDirection(const std::string& text, const std::string& flag);
 // (wi at col 0, wo at col 3): length within 1e-3 of 1 (float32 inputs),
 // renormalised; InputError naming `path` and the row otherwise.
 Vec3 unitVectorAt(const NpyMatrix& m, size_t row, size_t col, const std::string& path);
+
+// weft {fiber,yarn} eval: bsdf.eval for every row of the (n, 6) PAIRS file
+// `in`, written to `out` as (n, 3) float64.
+template <typename Bsdf>
+void writeEvalValues(const Bsdf& bsdf, const std::string& in, const std::string& out) {
+    const NpyMatrix pairs = readNpyMatrix(in, 6, "wi, wo pairs");
+    std::vector<double> values(pairs.rows * 3);
+    for (size_t i = 0; i < pairs.rows; ++i) {
+        const Rgb f = bsdf.eval(unitVectorAt(pairs, i, 0, in), unitVectorAt(pairs, i, 3, in));
+        for (int c = 0; c < 3; ++c) values[3 * i + c] = f[c];
+    }
+    writeNpy(out, values.data(), {pairs.rows, 3});
+}
+
+// weft {fiber,yarn} sample: `count` samples for wi, rows wo (3), weight RGB
+// (3), pdf (1) and, with `withLobe`, the lobe id (1), written as float64.
+template <typename Bsdf>
+void writeSamples(const Bsdf& bsdf, const Vec3& wi, int64_t count, uint64_t seed, bool withLobe,
+                  const std::string& out) {
+    const size_t columns = withLobe ? 8 : 7;
+    std::vector<double> rows(static_cast<size_t>(count) * columns);
+    for (int64_t i = 0; i < count; ++i) {
+        // One stream per sample index: the output does not depend on chunking.
+        Rng rng(static_cast<uint64_t>(i), seed);
+        const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
+        const BsdfSample s = bsdf.sample(wi, u, rng);
+        double* r = &rows[columns * static_cast<size_t>(i)];
+        r[0] = s.wo.x, r[1] = s.wo.y, r[2] = s.wo.z;
+        r[3] = s.weight.r, r[4] = s.weight.g, r[5] = s.weight.b;
+        r[6] = s.pdf;
+        if (withLobe) r[7] = s.lobe;
+    }
+    writeNpy(out, rows.data(), {static_cast<size_t>(count), columns});
+}
 
 // Adds a seed flag (an unsigned 64-bit integer, default 0; negative values are
 // refused instead of wrapping around) to a command.

@@ -30,30 +30,13 @@ struct SampleOptions {
 
 void runEval(const EvalOptions& o) {
     const FiberBcsdf fiber(o.material.fiber());
-    const NpyMatrix pairs = readNpyMatrix(o.in, 6, "wi, wo pairs");
-    std::vector<double> values(pairs.rows * 3);
-    for (size_t i = 0; i < pairs.rows; ++i) {
-        const Rgb f = fiber.eval(unitVectorAt(pairs, i, 0, o.in), unitVectorAt(pairs, i, 3, o.in));
-        for (int c = 0; c < 3; ++c) values[3 * i + c] = f[c];
-    }
-    writeNpy(o.out, values.data(), {pairs.rows, 3});
+    writeEvalValues(fiber, o.in, o.out);
 }
 
 void runSample(const SampleOptions& o) {
     const FiberBcsdf fiber(o.material.fiber());
     const Vec3 wi = parseDirection(o.wi, "--wi");
-    std::vector<double> rows(static_cast<size_t>(o.count) * 7);
-    for (int64_t i = 0; i < o.count; ++i) {
-        // One stream per sample index: the output does not depend on chunking.
-        Rng rng(static_cast<uint64_t>(i), o.seed);
-        const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
-        const BsdfSample s = fiber.sample(wi, u, rng);
-        double* r = &rows[7 * i];
-        r[0] = s.wo.x, r[1] = s.wo.y, r[2] = s.wo.z;
-        r[3] = s.weight.r, r[4] = s.weight.g, r[5] = s.weight.b;
-        r[6] = s.pdf;
-    }
-    writeNpy(o.out, rows.data(), {static_cast<size_t>(o.count), 7});
+    writeSamples(fiber, wi, o.count, o.seed, false, o.out);
 }
 
 struct MapOptions {

@@ -261,7 +261,7 @@ double transmissionRmse(const Mlp<float>& net, const RdmData& rdm) {
         se += w * (pT[i] - rdm.pT[i]) * (pT[i] - rdm.pT[i]);
         total += w;
     }
-    return std::sqrt(se / total);
+    return total > 0 ? std::sqrt(se / total) : 0.0;
 }
 
 // The 3-7-7-1 network is small for the sharp grazing-angle edge of P(T | wi)
@@ -568,6 +568,7 @@ namespace {
 struct BinEnergies {
     std::vector<size_t> bin;
     std::vector<Rgb> modelR, modelM, rdmR, rdmM;
+    std::vector<double> pT;  // P(T) of the model at every incident bin centre
 };
 
 BinEnergies binEnergies(const YarnModel& model, const RdmData& rdm, int64_t minPaths,
@@ -579,7 +580,8 @@ BinEnergies binEnergies(const YarnModel& model, const RdmData& rdm, int64_t minP
         if (rdm.count[i] >= minPaths) e.bin.push_back(i);
     const size_t n = e.bin.size();
     e.modelR.resize(n), e.modelM.resize(n), e.rdmR.resize(n), e.rdmM.resize(n);
-    const std::vector<double> pT = modelTransmissionMap(model, bins);
+    e.pT = modelTransmissionMap(model, bins);
+    const std::vector<double>& pT = e.pT;
     const RLobe lobe(model.fiber, model.rLobe);
     const double betaR = radians(model.fiber.betaRDeg);
     arena.execute([&] {
@@ -704,7 +706,7 @@ EnergyCalibration fitEnergyCalibration(const YarnModel& model, const RdmData& rd
         // so that only the calibrated parts differ) against the RDM's, before and after.
         Rgb before, after, rScaleMin(1e9), rScaleMax(0.0), mScaleMin(1e9), mScaleMax(0.0);
         size_t within = 0;
-        const std::vector<double> pT = modelTransmissionMap(model, rdm.bins);
+        const std::vector<double>& pT = e.pT;
         for (size_t k = 0; k < e.bin.size(); ++k) {
             const size_t i = e.bin[k];
             const EnergyCalibration::Scales s =
@@ -919,13 +921,7 @@ FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& rdm, cons
     });
     report.rRelL2 = coarseRelativeL2(rFit, rdm.rdmR, rdm.bins);
     report.mRelL2 = coarseRelativeL2(mFit, rdm.rdmM, rdm.bins);
-    const std::vector<double> pT = modelTransmissionMap(model, rdm.bins);
-    double se = 0, countTotal = 0;
-    for (size_t i = 0; i < pT.size(); ++i) {
-        se += static_cast<double>(rdm.count[i]) * sqr(pT[i] - rdm.pT[i]);
-        countTotal += static_cast<double>(rdm.count[i]);
-    }
-    report.tRmse = std::sqrt(se / std::max(countTotal, 1.0));
+    report.tRmse = transmissionRmse(model.tNet, rdm);
     report.rRelL2Eq8 = fitted.fit.value("r_rel_l2_eq8", 0.0);
     finishFit(model, rdm, config, threads, quiet, rFit, mFit, report);
     report.seconds = secondsSince(t0);

@@ -1,0 +1,429 @@
+#include "weft/render/curves.h"
+
+#include <algorithm>
+#include <bit>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+
+#include "weft/core/error.h"
+#include "weft/core/file.h"
+
+namespace weft::render {
+
+static_assert(std::endian::native == std::endian::little,
+              "the BCC reader assumes a little-endian host (BCC is little-endian)");
+
+namespace {
+
+// BCC layout (Yuksel, cyCodeBase "Using BCC files"): a 64-byte header, then per
+// curve an int32 point count (negative: closed) and count float32 xyz triples.
+constexpr size_t kBccHeaderSize = 64;
+constexpr size_t kBccOffsetBytesPerValue = 3;
+constexpr size_t kBccOffsetCurveType = 4;
+constexpr size_t kBccOffsetDimensions = 6;
+constexpr size_t kBccOffsetCurveCount = 8;
+constexpr size_t kBccOffsetPointCount = 16;
+constexpr size_t kBccPointSize = 12;
+// The smallest valid curve: its count and 2 points. Bounds the curve count by
+// the file size before anything is reserved.
+constexpr size_t kBccMinCurveSize = 4 + 2 * kBccPointSize;
+
+// Coordinates end up in float32 geometry (Embree): a finite double beyond this
+// would become infinite there.
+constexpr double kFloatMax = std::numeric_limits<float>::max();
+
+template <typename T>
+T loadLittleEndian(const char* p) {
+    T v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+
+// The bytes of `s` with non-printable ones as \xNN, for messages.
+std::string printable(std::string_view s, size_t maxLength = 60) {
+    std::string out;
+    for (char c : s.substr(0, maxLength)) {
+        const auto u = static_cast<unsigned char>(c);
+        if (u >= 0x20 && u < 0x7f) {
+            out += c;
+        } else {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\x%02x", u);
+            out += buf;
+        }
+    }
+    if (s.size() > maxLength) out += "...";
+    return out;
+}
+
+std::string hexByte(unsigned char b) {
+    char buf[8];
+    std::snprintf(buf, sizeof buf, "0x%02x", b);
+    return buf;
+}
+
+std::string_view trim(std::string_view s) {
+    const char* ws = " \t\r\f\v";
+    const size_t b = s.find_first_not_of(ws);
+    if (b == std::string_view::npos) return {};
+    return s.substr(b, s.find_last_not_of(ws) - b + 1);
+}
+
+std::vector<std::string_view> splitWhitespace(std::string_view s) {
+    std::vector<std::string_view> tokens;
+    size_t i = 0;
+    const auto isSpace = [](char c) {
+        return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
+    };
+    while (i < s.size()) {
+        while (i < s.size() && isSpace(s[i])) ++i;
+        const size_t start = i;
+        while (i < s.size() && !isSpace(s[i])) ++i;
+        if (i > start) tokens.push_back(s.substr(start, i - start));
+    }
+    return tokens;
+}
+
+// The whole token as a double; "+1" and "1e-3" are accepted, so are "nan" and
+// "inf" (the callers reject them with a clearer message).
+bool parseDouble(std::string_view tok, double* v) {
+    if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
+    if (tok.empty()) return false;
+    const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), *v);
+    return ec == std::errc() && end == tok.data() + tok.size();
+}
+
+bool parseInt(std::string_view tok, int64_t* v) {
+    if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
+    if (tok.empty()) return false;
+    const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), *v);
+    return ec == std::errc() && end == tok.data() + tok.size();
+}
+
+// Calls f(lineNumber, line) for every line (1-based, without "\n" or "\r").
+template <typename F>
+void forEachLine(std::string_view text, F&& f) {
+    size_t lineNo = 0, pos = 0;
+    while (pos < text.size()) {
+        size_t end = text.find('\n', pos);
+        if (end == std::string_view::npos) end = text.size();
+        std::string_view line = text.substr(pos, end - pos);
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        f(++lineNo, line);
+        pos = end + 1;
+    }
+}
+
+std::string lowercase(std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+}
+
+}  // namespace
+
+size_t CurveSet::pointCount() const {
+    size_t n = 0;
+    for (const Curve& c : curves) n += c.points.size();
+    return n;
+}
+
+void Bounds3::extend(const Vec3& p) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+}
+
+size_t segmentCount(const Curve& curve) {
+    const size_t n = curve.points.size();
+    if (n < 2) return 0;
+    return curve.closed ? n : n - 1;
+}
+
+size_t segmentCount(const CurveSet& set) {
+    size_t n = 0;
+    for (const Curve& c : set.curves) n += segmentCount(c);
+    return n;
+}
+
+Bounds3 bounds(const CurveSet& set) {
+    Bounds3 b;
+    for (const Curve& c : set.curves)
+        for (const Vec3& p : c.points) b.extend(p);
+    return b;
+}
+
+CurveSet readCurves(const std::string& path) {
+    const std::string ext = lowercase(std::filesystem::path(path).extension().string());
+    if (ext == ".bcc") return parseBccCurves(readFile(path), path);
+    if (ext == ".txt") return parseTextCurves(readFile(path), path);
+    if (ext == ".obj") return parseObjCurves(readFile(path), path);
+    throw InputError(path + ": unsupported curve file extension '" +
+                     (ext.empty() ? std::string("(none)") : ext) + "' (allowed: .bcc, .txt, .obj)");
+}
+
+// ---------------------------------------------------------------------------
+// BCC
+
+CurveSet parseBccCurves(std::string_view bytes, const std::string& path) {
+    const auto fail = [&](size_t offset, const std::string& what) {
+        throw InputError(path + ": byte offset " + std::to_string(offset) + ": " + what);
+    };
+    const size_t size = bytes.size();
+    if (size < kBccHeaderSize)
+        fail(size,
+             "truncated header: a BCC header is 64 bytes but the file has " + std::to_string(size));
+    const char* h = bytes.data();
+    if (std::string_view(h, 3) != "BCC")
+        fail(0, "not a BCC file: signature '" + printable(std::string_view(h, 3)) +
+                    "', expected 'BCC'");
+    const auto bytesPerValue = static_cast<unsigned char>(h[kBccOffsetBytesPerValue]);
+    if (bytesPerValue != 0x44)
+        fail(kBccOffsetBytesPerValue,
+             "unsupported bytes-per-value " + hexByte(bytesPerValue) +
+                 " (only 0x44, 4-byte integer counts and 4-byte float values, is supported)");
+    const std::string_view type(h + kBccOffsetCurveType, 2);
+    CurveBasis basis = CurveBasis::Polyline;
+    if (type == "PL") {
+        basis = CurveBasis::Polyline;
+    } else if (type == "C0") {
+        basis = CurveBasis::CatmullRom;
+    } else {
+        fail(kBccOffsetCurveType, "unsupported curve type '" + printable(type) +
+                                      "' (supported: 'PL' polyline, 'C0' uniform Catmull-Rom)");
+    }
+    const auto dimensions = static_cast<unsigned char>(h[kBccOffsetDimensions]);
+    if (dimensions != 3)
+        fail(kBccOffsetDimensions, "unsupported dimension count " + std::to_string(dimensions) +
+                                       " (only 3 is supported)");
+    // Byte 7 (up direction) is a viewing hint; the renderer's scene decides
+    // orientation, so any value is accepted.
+    const auto curveCount = loadLittleEndian<uint64_t>(h + kBccOffsetCurveCount);
+    const auto declaredPoints = loadLittleEndian<uint64_t>(h + kBccOffsetPointCount);
+
+    const size_t bodySize = size - kBccHeaderSize;
+    if (curveCount == 0) fail(kBccOffsetCurveCount, "the header declares no curves");
+    if (curveCount > bodySize / kBccMinCurveSize)
+        fail(kBccOffsetCurveCount,
+             "the header declares " + std::to_string(curveCount) + " curves but the " +
+                 std::to_string(bodySize) + " bytes after the header hold at most " +
+                 std::to_string(bodySize / kBccMinCurveSize) + " (a curve takes at least " +
+                 std::to_string(kBccMinCurveSize) + " bytes)");
+    // Checked here only against the file size; the exact match is checked once
+    // the curves are read.
+    const size_t maxPoints = (bodySize - 4 * curveCount) / kBccPointSize;
+    if (declaredPoints > maxPoints)
+        fail(kBccOffsetPointCount, "the header declares " + std::to_string(declaredPoints) +
+                                       " control points but the file has room for at most " +
+                                       std::to_string(maxPoints));
+
+    CurveSet set;
+    set.curves.resize(static_cast<size_t>(curveCount));
+    size_t offset = kBccHeaderSize;
+    uint64_t pointsRead = 0;
+    for (size_t i = 0; i < set.curves.size(); ++i) {
+        const std::string curveName = "curve " + std::to_string(i) + ": ";
+        if (size - offset < 4)
+            fail(offset, curveName + "truncated: the file ends inside the point count (curve " +
+                             std::to_string(i) + " of " + std::to_string(curveCount) + ")");
+        const auto signedCount = loadLittleEndian<int32_t>(h + offset);
+        const size_t countOffset = offset;
+        offset += 4;
+        // |INT32_MIN| does not fit an int32; go through int64.
+        const auto count = static_cast<uint64_t>(std::abs(static_cast<int64_t>(signedCount)));
+        if (count < 2)
+            fail(countOffset, curveName + "point count " + std::to_string(signedCount) +
+                                  " (a curve needs at least 2 points; negative means closed)");
+        const size_t room = (size - offset) / kBccPointSize;
+        if (count > room)
+            fail(countOffset, curveName + "truncated: the point count is " +
+                                  std::to_string(signedCount) + " but the file holds at most " +
+                                  std::to_string(room) + " more points");
+        Curve& curve = set.curves[i];
+        curve.closed = signedCount < 0;
+        curve.basis = basis;
+        curve.points.resize(static_cast<size_t>(count));
+        for (size_t j = 0; j < count; ++j, offset += kBccPointSize) {
+            float xyz[3];
+            std::memcpy(xyz, h + offset, sizeof xyz);
+            for (int k = 0; k < 3; ++k)
+                if (!std::isfinite(xyz[k]))
+                    fail(offset + 4 * static_cast<size_t>(k),
+                         curveName + "point " + std::to_string(j) + " has a non-finite " +
+                             "xyz"[k] + " coordinate (" + std::to_string(xyz[k]) + ")");
+            curve.points[j] = Vec3(xyz[0], xyz[1], xyz[2]);
+        }
+        pointsRead += count;
+    }
+    if (offset != size)
+        fail(offset, std::to_string(size - offset) + " unexpected bytes after the last of the " +
+                         std::to_string(curveCount) + " curves the header declares");
+    if (pointsRead != declaredPoints)
+        fail(kBccOffsetPointCount, "the header declares " + std::to_string(declaredPoints) +
+                                       " control points but the curves hold " +
+                                       std::to_string(pointsRead));
+    return set;
+}
+
+// ---------------------------------------------------------------------------
+// Text polylines
+
+CurveSet parseTextCurves(std::string_view text, const std::string& path) {
+    CurveSet set;
+    bool inCurve = false, nextClosed = false;
+    size_t curveStartLine = 0;
+    // Radii are all-or-nothing per file; the first point decides.
+    size_t firstPointLine = 0;
+    bool fileHasRadii = false;
+
+    const auto finishCurve = [&] {
+        if (inCurve && set.curves.back().points.size() < 2)
+            throw InputError(path + ":" + std::to_string(curveStartLine) +
+                             ": the curve starting here has 1 point; a curve needs at least 2 "
+                             "(curves are separated by blank lines)");
+        inCurve = false;
+    };
+
+    forEachLine(text, [&](size_t lineNo, std::string_view raw) {
+        const auto fail = [&](const std::string& what) {
+            throw InputError(path + ":" + std::to_string(lineNo) + ": " + what);
+        };
+        std::string_view line = trim(raw);
+        if (line.empty()) {
+            finishCurve();
+            return;
+        }
+        if (line[0] == '#') {
+            // "# closed" before a curve marks it closed (core formatCurveText
+            // writes it, so `weft ply` output reads back unchanged).
+            if (!inCurve && trim(line.substr(1)) == "closed") nextClosed = true;
+            return;
+        }
+        line = trim(line.substr(0, line.find('#')));
+        const std::vector<std::string_view> tok = splitWhitespace(line);
+        double v[4];
+        bool ok = tok.size() == 3 || tok.size() == 4;
+        for (size_t k = 0; ok && k < tok.size(); ++k) ok = parseDouble(tok[k], &v[k]);
+        if (!ok)
+            fail("expected a point 'x y z' or 'x y z radius' (3 or 4 numbers), got '" +
+                 printable(line) + "'");
+        for (size_t k = 0; k < 3; ++k)
+            if (!std::isfinite(v[k]) || std::abs(v[k]) > kFloatMax)
+                fail("coordinate '" + std::string(tok[k]) +
+                     "' is not a finite number in float range");
+        const bool hasRadius = tok.size() == 4;
+        float radius = 0;
+        if (hasRadius) {
+            radius = static_cast<float>(v[3]);
+            if (!std::isfinite(radius) || !(radius > 0))
+                fail("radius '" + std::string(tok[3]) +
+                     "' must be a finite number > 0 (in float range)");
+        }
+        if (firstPointLine == 0) {
+            firstPointLine = lineNo;
+            fileHasRadii = hasRadius;
+        } else if (hasRadius != fileHasRadii) {
+            fail(std::string(hasRadius ? "point has a radius" : "point has no radius") +
+                 " but the first point of the file (line " + std::to_string(firstPointLine) + ") " +
+                 (fileHasRadii ? "has one" : "has none") +
+                 "; give every point of the file a radius, or none");
+        }
+        if (!inCurve) {
+            Curve& curve = set.curves.emplace_back();
+            curve.closed = nextClosed;
+            nextClosed = false;
+            inCurve = true;
+            curveStartLine = lineNo;
+        }
+        Curve& curve = set.curves.back();
+        curve.points.emplace_back(v[0], v[1], v[2]);
+        if (hasRadius) curve.radii.push_back(radius);
+    });
+    finishCurve();
+    if (set.curves.empty()) throw InputError(path + ": no curves (no point lines)");
+    return set;
+}
+
+// ---------------------------------------------------------------------------
+// OBJ
+
+CurveSet parseObjCurves(std::string_view text, const std::string& path) {
+    // Positive indices may refer to vertices defined later in the file, so
+    // they are resolved once all vertices are known.
+    struct PendingIndex {
+        int64_t index;  // 1-based, absolute
+        size_t line;
+    };
+    std::vector<Vec3> vertices;
+    std::vector<std::vector<PendingIndex>> polylines;
+
+    forEachLine(text, [&](size_t lineNo, std::string_view raw) {
+        const auto fail = [&](const std::string& what) {
+            throw InputError(path + ":" + std::to_string(lineNo) + ": " + what);
+        };
+        const std::string_view line = trim(raw.substr(0, raw.find('#')));
+        const std::vector<std::string_view> tok = splitWhitespace(line);
+        if (tok.empty()) return;
+        if (tok[0] == "v") {
+            // "v x y z", optionally followed by w or by r g b (vertex colours):
+            // all must be numbers, only x y z are used.
+            double xyz[3] = {0, 0, 0};
+            bool ok = tok.size() >= 4;
+            for (size_t k = 1; ok && k < tok.size(); ++k) {
+                double value;
+                ok = parseDouble(tok[k], &value);
+                if (ok && k <= 3) xyz[k - 1] = value;
+            }
+            if (!ok) fail("expected 'v x y z' with numbers, got '" + printable(line) + "'");
+            for (int k = 0; k < 3; ++k)
+                if (!std::isfinite(xyz[k]) || std::abs(xyz[k]) > kFloatMax)
+                    fail("vertex coordinate '" + std::string(tok[static_cast<size_t>(k) + 1]) +
+                         "' is not a finite number in float range");
+            vertices.emplace_back(xyz[0], xyz[1], xyz[2]);
+        } else if (tok[0] == "l") {
+            if (tok.size() < 3)
+                fail("a line element needs at least 2 vertex indices, got '" + printable(line) +
+                     "'");
+            std::vector<PendingIndex>& indices = polylines.emplace_back();
+            indices.reserve(tok.size() - 1);
+            for (size_t k = 1; k < tok.size(); ++k) {
+                // "l v/vt" is allowed; only the vertex index matters here.
+                const std::string_view vertexToken = tok[k].substr(0, tok[k].find('/'));
+                int64_t index = 0;
+                if (!parseInt(vertexToken, &index) || index == 0)
+                    fail("invalid vertex index '" + printable(tok[k]) +
+                         "' (expected a non-zero integer: 1-based, or negative relative)");
+                if (index < 0) {
+                    const auto defined = static_cast<int64_t>(vertices.size());
+                    if (index < -defined)
+                        fail("vertex index " + std::to_string(index) + " out of range: only " +
+                             std::to_string(defined) + " vertices are defined before this line");
+                    index += defined + 1;
+                }
+                indices.push_back({index, lineNo});
+            }
+        }
+        // Everything else (vn, vt, f, o, g, s, usemtl, mtllib, ...) is not a curve.
+    });
+
+    if (polylines.empty()) throw InputError(path + ": no curves (no 'l' elements)");
+    CurveSet set;
+    set.curves.reserve(polylines.size());
+    for (const std::vector<PendingIndex>& indices : polylines) {
+        Curve& curve = set.curves.emplace_back();
+        curve.points.reserve(indices.size());
+        for (const PendingIndex& p : indices) {
+            if (p.index > static_cast<int64_t>(vertices.size()))
+                throw InputError(path + ":" + std::to_string(p.line) + ": vertex index " +
+                                 std::to_string(p.index) + " out of range (the file has " +
+                                 std::to_string(vertices.size()) + " vertices)");
+            curve.points.push_back(vertices[static_cast<size_t>(p.index - 1)]);
+        }
+    }
+    return set;
+}
+
+}  // namespace weft::render

@@ -1,0 +1,104 @@
+// weft/render/scene_file.h — the scene file of `weft render` (issue 7, DESIGN.md 8).
+//
+// A JSON object (every key documented in docs/scene-format.md):
+//   {
+//     "camera": {"from": [x,y,z], "to": [x,y,z], "up": [0,1,0], "fov_deg": 30},
+//     "film":   {"width": 512, "height": 512},
+//     "render": {"spp": 64, "max_depth": 100, "seed": 0},
+//     "lights": [ {"type": "sky", "scale": 1},
+//                 {"type": "envmap", "file": "sky.exr", "scale": 1.0, "rotate_deg": 0},
+//                 {"type": "sphere", "center": [x,y,z], "radius": r, "radiance": [r,g,b]},
+//                 {"type": "constant", "radiance": [r,g,b]} ],
+//     "yarns":  [ {"curves": "knit.bcc", "scale": 1.0, "radius": 0.02, "plies": 3,
+//                  "ply_twist": 0.3, "model": "fleece.json"} ]
+//   }
+// Parsing validates everything once: a missing required key, an unknown key,
+// a wrong type, a value out of range or a NaN is an InputError that names the
+// scene file and the JSON path of the key (e.g. `scene.json: yarns[1].plies =
+// 0 is out of range: allowed [1, 16]`). Relative file paths ("curves",
+// "model", "file") are resolved against the folder of the scene file and
+// stored absolute-or-as-joined; files are not opened here.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "weft/core/rgb.h"
+#include "weft/core/vec.h"
+
+namespace weft::render {
+
+struct CameraDesc {
+    Vec3 from, to;     // required; from != to
+    Vec3 up{0, 1, 0};  // not parallel to to - from
+    double fovDeg = 30;  // full field of view of the shorter image side, in (0, 180)
+};
+
+struct FilmDesc {
+    int width = 512, height = 512;  // each in [1, 16384]
+};
+
+struct RenderDesc {
+    int spp = 64;        // [1, 1 << 20]
+    int maxDepth = 100;  // scattering events per path, [1, 10000]
+    uint64_t seed = 0;   // any non-negative integer
+};
+
+struct LightDesc {
+    enum class Type { Sky, Envmap, Sphere, Constant };
+    Type type = Type::Sky;
+    std::string file;      // envmap: resolved path
+    double scale = 1;      // sky, envmap: finite, >= 0
+    double rotateDeg = 0;  // envmap: finite
+    Vec3 center;           // sphere: finite
+    double radius = 0;     // sphere: finite, > 0
+    Rgb radiance;          // sphere, constant: finite, >= 0 (required for both)
+};
+
+struct YarnDesc {
+    std::string curves;            // resolved path of a .bcc, .txt or .obj file (required)
+    double scale = 1;              // multiplies positions; finite, > 0
+    std::optional<double> radius;  // yarn radius in scene units (not multiplied by scale);
+                                   // finite, > 0; absent: the file's per-point radii times
+                                   // scale (an InputError at load if the file has none)
+    int plies = 1;                 // [1, 16]
+    double plyTwist = 0;           // finite, |ply_twist| <= 100; sign: + right-handed
+    std::string model;             // resolved path of a MODEL.json from `weft fit` (required)
+};
+
+struct SceneDesc {
+    std::string path;     // the scene file (for messages); "" when parsed from memory
+    std::string baseDir;  // folder relative paths were resolved against
+    CameraDesc camera;
+    FilmDesc film;
+    RenderDesc render;
+    std::vector<LightDesc> lights;  // empty: the procedural sky
+    std::vector<YarnDesc> yarns;    // may be empty (an environment-only scene)
+};
+
+// Parses and validates a scene; `pathForErrors` names it in messages and
+// relative paths resolve against `baseDir`.
+SceneDesc parseScene(const nlohmann::json& json, const std::string& pathForErrors,
+                     const std::string& baseDir);
+// The same on JSON text (a syntax error names the line and column).
+SceneDesc parseSceneText(std::string_view text, const std::string& pathForErrors,
+                         const std::string& baseDir);
+// Reads the file and parses it; relative paths resolve against its folder.
+SceneDesc loadScene(const std::string& path);
+
+// The scene as JSON with every key written (defaults included) and paths as
+// stored; parseScene(toJson(s), ...) gives back s (a round-trip test).
+nlohmann::json toJson(const SceneDesc& scene);
+
+// 16 hex digits identifying what a render of the scene depends on: the
+// canonical JSON of the scene (toJson, with paths replaced by the files'
+// contents hashed) and the bytes of every referenced file. InputError naming
+// a referenced file that cannot be read.
+std::string sceneHash(const SceneDesc& scene);
+
+}  // namespace weft::render

@@ -1,0 +1,99 @@
+// weft/render/yarn_geometry.h — from a yarn centre line to plies and fibers (issue 7).
+//
+// A yarn curve (render/curves.h) is drawn either as k plies (neural mode: each
+// ply is one tube shaded with the yarn BSDF) or as the fibers of those plies
+// (fiber mode: each fiber is one tube shaded with the fiber BCSDF), DESIGN.md 8.
+//
+// 1. frameCurve samples the centre line (a uniform Catmull-Rom spline is
+//    evaluated; polyline spans are split) so that no sample spacing exceeds
+//    maxStep, and propagates a rotation-minimising frame (T, N, B = T x N)
+//    along it by the double reflection method (Wang, Juettler, Zheng, Liu
+//    2008, "Computation of rotation minimizing frames"). On a closed curve
+//    the frame that comes back to the start is turned by some angle (the
+//    curve's holonomy); that angle is spread linearly over the arc length so
+//    that the frame, and every helix built on it, has no seam.
+// 2. plyCurves wraps k plies around the yarn: ply j's centre is
+//        c_j(s) = p(s) + (R(s) - R_ply(s)) (cos theta_j(s) N(s) + sin theta_j(s) B(s)),
+//        theta_j(s) = 2 pi j / k + integral_0^s pi ply_twist / R(u) du
+//    (right-handed about T for ply_twist > 0, like the fibers of DESIGN.md 4;
+//    left-handed for ply_twist < 0), R_ply = R sin(pi/k) / (1 + sin(pi/k)) for
+//    k >= 2 and R for k = 1, so that the plies touch each other and the yarn
+//    surface. On a closed curve ply_twist is rounded so that the total turn
+//    is a whole multiple of 2 pi / k (the plies close on themselves or on a
+//    neighbour). Each ply centre line gets its own rotation-minimising frame.
+// 3. fiberTubes fills one ply with the fibers of the model's ply block: the
+//    fiber centres of generatePly (ply/ply.h, the generator the gather uses)
+//    at radius R_ply, turned about the ply's T by pi alpha s / R_ply (the
+//    right-handed twist of DESIGN.md 4, with N and B standing for x and y),
+//    scaled with R_ply(s) / R_ply(0) where the radius varies. On a closed ply
+//    alpha is rounded to a whole number of turns.
+//
+// Lengths are scene units (positions times the yarn's scale).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "weft/core/vec.h"
+#include "weft/ply/ply.h"
+#include "weft/render/curves.h"
+
+namespace weft::render {
+
+// A centre line with a radius per point: what Embree draws as one round
+// linear curve (cones joined by spheres). A closed tube's last point joins
+// its first (the first point is not repeated).
+struct Tube {
+    std::vector<Vec3> points;  // >= 2
+    std::vector<float> radii;  // one per point, > 0
+    bool closed = false;
+
+    size_t segmentCount() const { return closed ? points.size() : points.size() - 1; }
+};
+
+// A densely sampled centre line with a rotation-minimising frame per sample.
+struct FramedCurve {
+    std::vector<Vec3> points;
+    std::vector<Vec3> tangents;     // unit
+    std::vector<Vec3> normals;      // unit, orthogonal to the tangent
+    std::vector<Vec3> binormals;    // tangent x normal
+    std::vector<double> arcLength;  // from the first sample (0) along the polyline
+    std::vector<double> radius;     // > 0
+    bool closed = false;
+    double length = 0;  // total polyline length, closing segment included
+
+    size_t size() const { return points.size(); }
+};
+
+// Samples and frames `curve` (positions times scale). radius: the tube radius
+// everywhere; absent: the curve's per-point radii times scale (InputError
+// naming `source` and the curve index if it has none). Consecutive
+// coincident control points are dropped; a curve with fewer than 2 distinct
+// points is an InputError naming `source` and the curve index. maxStep > 0.
+FramedCurve frameCurve(const Curve& curve, double scale, std::optional<double> radius,
+                       double maxStep, const std::string& source, size_t curveIndex);
+
+// R_ply for k plies in a yarn of radius R (above). InputError unless k >= 1, R > 0.
+double plyRadius(double yarnRadius, int plies);
+
+// The k ply centre lines of a framed yarn (above), each framed, with R_ply per point.
+std::vector<FramedCurve> plyCurves(const FramedCurve& yarn, int plies, double plyTwist);
+
+// The curve as one tube (neural mode).
+Tube toTube(const FramedCurve& curve);
+
+// The fibers of one ply (fiber mode), from the fiber layout of
+// generatePly(params, R_ply(0), ..., seed). Fiber radius r = R_ply sqrt(rho / N).
+std::vector<Tube> fiberTubes(const FramedCurve& ply, const PlyParams& params, uint64_t seed);
+
+// Largest sample spacing for frameCurve so that every helix is resolved with
+// at least `pointsPerTwist` points per turn, and never more than R / 4:
+//   min(R / 4, P_ply / n, [fiber mode] P_fiber / n),
+//   P_ply = 2 R / |ply_twist| (infinite for 0), P_fiber = 2 R_ply / alpha.
+// fibers == nullptr: neural mode.
+double sampleStep(double yarnRadius, int plies, double plyTwist, const PlyParams* fibers,
+                  int pointsPerTwist = 32);
+
+}  // namespace weft::render

@@ -93,5 +93,6 @@ void addPlyCommand(CLI::App& app);
 void addGatherCommand(CLI::App& app);
 void addFitCommand(CLI::App& app);
 void addYarnCommands(CLI::App& app);
+void addRenderCommand(CLI::App& app);
 
 }  // namespace weft::cmd

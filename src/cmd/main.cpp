@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
     weft::cmd::addGatherCommand(app);
     weft::cmd::addFitCommand(app);
     weft::cmd::addYarnCommands(app);
+    weft::cmd::addRenderCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -1,0 +1,119 @@
+// weft render: a cloth scene to an image, in neural or fiber mode (docs/render.md).
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "weft/core/error.h"
+#include "weft/core/file.h"
+#include "weft/core/image.h"
+#include "weft/render/lights.h"
+#include "weft/render/renderer.h"
+#include "weft/render/scene.h"
+#include "weft/render/scene_file.h"
+
+namespace weft::cmd {
+
+namespace {
+
+struct RenderCmdOptions {
+    std::string scene, mode = "neural", out;
+    int spp = 0, threads = 0;
+    double seconds = 0, exposure = 0;
+    uint64_t seed = 0;
+    CLI::Option *sppOpt = nullptr, *timeOpt = nullptr, *seedOpt = nullptr;
+    bool noNee = false, quiet = false;
+};
+
+// IMAGE.exr -> IMAGE (the stem the PNG and JSON share).
+std::string outputStem(const std::string& out) {
+    const std::string ext = ".exr";
+    if (out.size() <= ext.size() || out.compare(out.size() - ext.size(), ext.size(), ext) != 0)
+        throw InputError("--out " + out + ": expected a path ending in .exr (the PNG and JSON "
+                         "are written beside it)");
+    return out.substr(0, out.size() - ext.size());
+}
+
+void runRender(const RenderCmdOptions& o) {
+    const std::string stem = outputStem(o.out);
+    if (!std::isfinite(o.exposure) || std::abs(o.exposure) > 64)
+        throw InputError("--exposure " + std::to_string(o.exposure) +
+                         " is out of range: allowed [-64, 64] stops");
+    const render::RenderMode mode = render::parseRenderMode(o.mode);
+    const render::SceneDesc desc = render::loadScene(o.scene);
+
+    render::RenderOptions options;
+    if (o.sppOpt->count() && o.timeOpt->count())
+        throw InputError("--spp and --time are exclusive: give one budget");
+    options.spp = o.timeOpt->count() ? 0 : (o.sppOpt->count() ? o.spp : desc.render.spp);
+    options.seconds = o.timeOpt->count() ? o.seconds : 0;
+    if (o.sppOpt->count() && o.spp < 1)
+        throw InputError("--spp " + std::to_string(o.spp) + " is out of range: allowed [1, 1048576]");
+    if (o.timeOpt->count() && !(o.seconds > 0))
+        throw InputError("--time " + std::to_string(o.seconds) + " is out of range: allowed > 0 seconds");
+    options.threads = o.threads;
+    options.seed = o.seedOpt->count() ? o.seed : desc.render.seed;
+    options.maxDepth = desc.render.maxDepth;
+    options.nextEventEstimation = !o.noNee;
+    options.quiet = o.quiet;
+    options.validate();
+
+    const std::string hash = render::sceneHash(desc);
+    const render::Scene scene(desc, mode, o.quiet);
+    const render::RenderResult result = render::render(scene, options);
+
+    render::writeExr(o.out, result.image);
+    writePng(stem + ".png", result.image, o.exposure);
+    nlohmann::json stats = render::toJson(result.stats);
+    stats["scene_file"] = o.scene;
+    stats["scene_hash"] = hash;
+    stats["next_event_estimation"] = !o.noNee;
+    stats["max_depth"] = options.maxDepth;
+    stats["exposure"] = o.exposure;
+    stats["version"] = WEFT_VERSION;
+    stats["outputs"] = {{"exr", o.out}, {"png", stem + ".png"}, {"json", stem + ".json"}};
+    writeFileAtomic(stem + ".json", stats.dump(2) + "\n");
+    if (result.stats.nonFiniteSamples > 0)
+        std::fprintf(stderr, "weft: warning: %lld samples were NaN or infinite and were dropped\n",
+                     static_cast<long long>(result.stats.nonFiniteSamples));
+    std::printf("%s\n", nlohmann::json({{"exr", o.out},
+                                        {"png", stem + ".png"},
+                                        {"json", stem + ".json"},
+                                        {"mode", result.stats.mode},
+                                        {"spp", result.stats.spp},
+                                        {"seconds", result.stats.seconds}})
+                            .dump()
+                            .c_str());
+}
+
+}  // namespace
+
+void addRenderCommand(CLI::App& app) {
+    auto o = std::make_shared<RenderCmdOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "render", "Render a cloth scene (docs/render.md, docs/scene-format.md) to IMAGE.exr, "
+                  "IMAGE.png and IMAGE.json (statistics).");
+    cmd->add_option("scene", o->scene, "Scene file (JSON)")->required();
+    cmd->add_option("--mode", o->mode,
+                    "neural: plies as curves with the yarn BSDF; fiber: every fiber drawn "
+                    "(ground truth)")
+        ->capture_default_str();
+    o->sppOpt = cmd->add_option("--spp", o->spp, "Samples per pixel (default: the scene's render.spp)");
+    o->timeOpt = cmd->add_option("--time", o->seconds,
+                                 "Render progressive passes for this many seconds instead of --spp");
+    cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
+    o->seedOpt = cmd->add_option("--seed", o->seed, "Random seed (default: the scene's render.seed)");
+    cmd->add_option("--exposure", o->exposure, "PNG exposure in stops (the EXR stays linear)")
+        ->capture_default_str();
+    cmd->add_flag("--no-nee", o->noNee,
+                  "Turn off next-event estimation (BSDF sampling only; for checking estimators)");
+    cmd->add_flag("--quiet", o->quiet, "No progress output");
+    cmd->add_option("--out", o->out, "Output IMAGE.exr (IMAGE.png and IMAGE.json beside it)")
+        ->required();
+    cmd->callback([o] { runRender(*o); });
+}
+
+}  // namespace weft::cmd

@@ -1,0 +1,153 @@
+#include "weft/render/path_tracer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace weft::render {
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+double powerHeuristic(double a, double b) {
+    const double a2 = a * a, b2 = b * b;
+    return a2 + b2 > 0 ? a2 / (a2 + b2) : 0.0;
+}
+
+// The BSDF at one hit, in its shading frame, whichever the mode.
+class ShadingPoint {
+public:
+    ShadingPoint(const Scene& scene, const TubeHit& hit) {
+        if (scene.mode() == RenderMode::Neural) {
+            yarn_ = &scene.yarnBsdf(hit.material);
+            // DESIGN.md 2: local coordinates (w . t, w . b, w . n) with b = t x n.
+            frame_ = Frame(hit.tangent, cross(hit.tangent, hit.normal), hit.normal);
+        } else {
+            fiber_ = &scene.fiberBcsdf(hit.material);
+            frame_ = Frame::fromX(hit.tangent);
+        }
+    }
+    Vec3 toLocal(const Vec3& w) const { return frame_.toLocal(w); }
+    Vec3 toWorld(const Vec3& w) const { return normalize(frame_.fromLocal(w)); }
+    Rgb eval(const Vec3& wi, const Vec3& wo) const {
+        return yarn_ ? yarn_->eval(wi, wo) : fiber_->eval(wi, wo);
+    }
+    double pdf(const Vec3& wi, const Vec3& wo) const {
+        return yarn_ ? yarn_->pdf(wi, wo) : fiber_->pdf(wi, wo);
+    }
+    BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) const {
+        return yarn_ ? yarn_->sample(wi, u, rng) : fiber_->sample(wi, u, rng);
+    }
+
+private:
+    const YarnBsdf* yarn_ = nullptr;
+    const FiberBcsdf* fiber_ = nullptr;
+    Frame frame_;
+};
+
+// Nearest finite light hit by the ray before tMax: its index and distance.
+int nearestFiniteLight(const Scene& scene, const Vec3& org, const Vec3& dir, double tMax,
+                       double* distance) {
+    int found = -1;
+    const auto& lights = scene.lights();
+    for (size_t i = 0; i < lights.size(); ++i) {
+        if (lights[i]->isInfinite()) continue;
+        const double t = lights[i]->intersect(org, dir, tMax);
+        if (t > 0 && t < tMax) tMax = t, found = static_cast<int>(i), *distance = t;
+    }
+    return found;
+}
+
+}  // namespace
+
+Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Rng& rng,
+                 const PathTracerOptions& options, PathCounters& counters) {
+    const auto& lights = scene.lights();
+    const double lightPick = lights.empty() ? 0.0 : 1.0 / static_cast<double>(lights.size());
+    const bool nee = options.nextEventEstimation && !lights.empty();
+
+    Rgb radiance(0.0), throughput(1.0);
+    Vec3 org = orgIn, dir = dirIn;
+    TubeId origin;
+    // Density with which the last BSDF sample chose `dir`; 0 after the camera or a delta lobe.
+    double lastPdf = 0;
+    bool countEmissionFully = true;
+    ++counters.paths;
+
+    for (int depth = 0;; ++depth) {
+        TubeHit hit;
+        ++counters.rays;
+        const bool hitTube = scene.accel().intersect(org, dir, kInfinity, origin, &hit);
+        double lightDistance = 0;
+        const int light =
+            nearestFiniteLight(scene, org, dir, hitTube ? hit.t : kInfinity, &lightDistance);
+
+        // Emission seen by this ray: a sphere light in front of the tube, or
+        // every infinite light if it escapes.
+        auto addEmission = [&](const Light& l, const Rgb& le) {
+            double weight = 1.0;
+            if (nee && !countEmissionFully)
+                weight = powerHeuristic(lastPdf, lightPick * l.pdf(org, dir));
+            radiance += throughput * le * weight;
+        };
+        if (light >= 0) {
+            addEmission(*lights[light], lights[light]->radiance(dir));
+            break;
+        }
+        if (!hitTube) {
+            for (const auto& l : lights)
+                if (l->isInfinite()) addEmission(*l, l->radiance(dir));
+            break;
+        }
+        if (depth >= options.maxDepth) break;
+
+        const ShadingPoint bsdf(scene, hit);
+        const Vec3 wi = bsdf.toLocal(-dir);
+
+        if (nee) {
+            const int pick = std::min(static_cast<int>(rng.uniform() * lights.size()),
+                                      static_cast<int>(lights.size()) - 1);
+            const Light& l = *lights[pick];
+            const LightSample ls = l.sample(hit.point, {rng.uniform(), rng.uniform()});
+            if (ls.valid() && !ls.radiance.isBlack()) {
+                const Vec3 woLocal = bsdf.toLocal(ls.wi);
+                const Rgb f = bsdf.eval(wi, woLocal);
+                if (!f.isBlack()) {
+                    // Shadow ray up to just before the light's surface.
+                    const double tMax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1 - 1e-6);
+                    ++counters.rays;
+                    bool blocked = scene.accel().occluded(hit.point, ls.wi, tMax, hit.id);
+                    for (size_t i = 0; !blocked && i < lights.size(); ++i)
+                        if (static_cast<int>(i) != pick && !lights[i]->isInfinite())
+                            blocked = lights[i]->intersect(hit.point, ls.wi, tMax) > 0;
+                    if (!blocked) {
+                        const double lightPdf = lightPick * ls.pdf;
+                        const double weight = powerHeuristic(lightPdf, bsdf.pdf(wi, woLocal));
+                        radiance += throughput * f * ls.radiance * (weight / lightPdf);
+                    }
+                }
+            }
+        }
+
+        const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
+        const BsdfSample s = bsdf.sample(wi, u, rng);
+        if (!s.valid() || s.weight.isBlack()) break;
+        throughput *= s.weight;
+        if (!throughput.isFinite()) break;
+        lastPdf = s.pdf;
+        countEmissionFully = s.isDelta;
+        org = hit.point;
+        dir = bsdf.toWorld(s.wo);
+        origin = hit.id;
+
+        if (depth + 1 >= options.rouletteDepth) {
+            const double survive = std::min(1.0, throughput.maxComponent());
+            if (rng.uniform() >= survive) break;
+            throughput = throughput / survive;
+        }
+    }
+    return radiance;
+}
+
+}  // namespace weft::render

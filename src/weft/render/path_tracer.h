@@ -1,0 +1,51 @@
+// weft/render/path_tracer.h — unidirectional path tracing for cloth (issue 7, DESIGN.md 8).
+//
+// radiance() estimates the radiance arriving at `org` from direction -dir:
+//   - at every tube hit, next-event estimation: one light picked uniformly,
+//     one direction from its sample(), a shadow ray (blocked by tubes and by
+//     the other finite lights), weighted against BSDF sampling by the power
+//     heuristic (Veach 1997; pbrt-v4 PathIntegrator);
+//   - then one BSDF sample continues the path. Rays that escape see every
+//     infinite light, rays that hit a sphere light see it; both weighted by
+//     the power heuristic against the light's NEE density (uniform light
+//     pick times Light::pdf), or fully after a delta (T lobe) or camera
+//     vertex. With NEE off, emission is always counted fully (pure BSDF
+//     sampling: the same expectation, used by the consistency test);
+//   - the yarn BSDF's T lobe (a delta, wo = -wi) continues straight through
+//     the ply it hit: the continuation ray leaves that ply (tube_accel.h drops
+//     its interior);
+//   - Russian roulette from `rouletteDepth` scattering events on, with
+//     survival probability min(1, max channel of the path throughput) (an
+//     unbiased estimator: survivors are divided by it);
+//   - at most `maxDepth` scattering events (the scene's render.max_depth).
+// Shading frames: neural mode, the yarn frame of DESIGN.md 2 (t = segment
+// tangent, n = outward tube normal, b = t x n); fiber mode, the fiber frame
+// with the tangent as +x (FiberBcsdf).
+// All random numbers come from the caller's Rng, so a path is a function of
+// (scene, ray, generator state).
+#pragma once
+
+#include <cstdint>
+
+#include "weft/core/rgb.h"
+#include "weft/core/rng.h"
+#include "weft/core/vec.h"
+#include "weft/render/scene.h"
+
+namespace weft::render {
+
+struct PathTracerOptions {
+    int maxDepth = 100;
+    bool nextEventEstimation = true;
+    int rouletteDepth = 3;
+};
+
+struct PathCounters {
+    uint64_t rays = 0;  // closest-hit and shadow queries
+    uint64_t paths = 0;
+};
+
+Rgb pathRadiance(const Scene& scene, const Vec3& org, const Vec3& dir, Rng& rng,
+                 const PathTracerOptions& options, PathCounters& counters);
+
+}  // namespace weft::render

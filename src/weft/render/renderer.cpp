@@ -1,0 +1,175 @@
+#include "weft/render/renderer.h"
+
+#include <sys/resource.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "weft/core/error.h"
+#include "weft/core/progress.h"
+
+namespace weft::render {
+
+namespace {
+
+constexpr int kTile = 16;
+
+// The generator of sample `sample` of pixel `pixel`: independent of passes and threads.
+Rng sampleRng(uint64_t pixel, int64_t sample, uint64_t seed) {
+    return Rng(pixel, mixBits(seed ^ mixBits(static_cast<uint64_t>(sample) + 0x9e3779b97f4a7c15ULL)));
+}
+
+}  // namespace
+
+void RenderOptions::validate() const {
+    if ((spp > 0) == (seconds > 0))
+        throw InputError("give exactly one budget: --spp N (N >= 1) or --time SECONDS (> 0)");
+    if (spp < 0 || spp > (1 << 20))
+        throw InputError("--spp " + std::to_string(spp) + " is out of range: allowed [1, 1048576]");
+    if (!std::isfinite(seconds) || seconds < 0 || seconds > 1e6)
+        throw InputError("--time " + std::to_string(seconds) +
+                         " is out of range: allowed (0, 1e6] seconds");
+    if (threads < 0 || threads > 1024)
+        throw InputError("--threads " + std::to_string(threads) +
+                         " is out of range: allowed [0, 1024] (0: all cores)");
+    if (maxDepth < 1 || maxDepth > 10000)
+        throw InputError("max_depth " + std::to_string(maxDepth) +
+                         " is out of range: allowed [1, 10000]");
+}
+
+int64_t peakResidentBytes() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return static_cast<int64_t>(usage.ru_maxrss) * 1024;  // Linux reports KiB
+}
+
+RenderResult render(const Scene& scene, const RenderOptions& options) {
+    options.validate();
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    const Camera& camera = scene.camera();
+    const int width = scene.width(), height = scene.height();
+    const int tilesX = (width + kTile - 1) / kTile, tilesY = (height + kTile - 1) / kTile;
+    const int tiles = tilesX * tilesY;
+    std::vector<double> sum(static_cast<size_t>(width) * height * 3, 0.0);
+    std::atomic<uint64_t> rays{0}, nonFinite{0};
+
+    PathTracerOptions tracer;
+    tracer.maxDepth = options.maxDepth;
+    tracer.nextEventEstimation = options.nextEventEstimation;
+
+    const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+    tbb::task_arena arena(threads);
+    const bool timed = options.spp == 0;
+    Progress progress(std::string("render ") + renderModeName(scene.mode()),
+                      timed ? 0 : static_cast<uint64_t>(tiles), options.quiet);
+
+    // Samples [first, last) of every pixel.
+    auto pass = [&](int64_t first, int64_t last) {
+        arena.execute([&] {
+            tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
+                PathCounters counters;
+                uint64_t dropped = 0;
+                for (int tile = r.begin(); tile < r.end(); ++tile) {
+                    const int x0 = (tile % tilesX) * kTile, y0 = (tile / tilesX) * kTile;
+                    for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
+                        for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
+                            const uint64_t pixel = static_cast<uint64_t>(y) * width + x;
+                            double* acc = &sum[3 * pixel];
+                            for (int64_t s = first; s < last; ++s) {
+                                Rng rng = sampleRng(pixel, s, options.seed);
+                                Vec3 org, dir;
+                                camera.ray(x + rng.uniform(), y + rng.uniform(), &org, &dir);
+                                const Rgb L = pathRadiance(scene, org, dir, rng, tracer, counters);
+                                if (!L.isFinite()) {
+                                    ++dropped;
+                                    continue;
+                                }
+                                acc[0] += L.r, acc[1] += L.g, acc[2] += L.b;
+                            }
+                        }
+                    }
+                    progress.add();
+                }
+                rays.fetch_add(counters.rays, std::memory_order_relaxed);
+                nonFinite.fetch_add(dropped, std::memory_order_relaxed);
+            });
+        });
+    };
+
+    int64_t done = 0;
+    int passes = 0;
+    if (!timed) {
+        pass(0, options.spp);
+        done = options.spp, passes = 1;
+    } else {
+        int64_t next = 1;
+        while (true) {
+            pass(done, done + next);
+            done += next, ++passes;
+            const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+            progress.setStatus(std::to_string(done) + " spp");
+            const double perSample = elapsed / static_cast<double>(done);
+            const double left = options.seconds - elapsed;
+            next = std::min<int64_t>(done, static_cast<int64_t>(std::floor(left / perSample)));
+            if (next < 1) break;
+        }
+    }
+    progress.finish();
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+
+    RenderResult result;
+    result.image = Image(width, height);
+    const double inv = 1.0 / static_cast<double>(done);
+    for (size_t i = 0; i < result.image.pixels.size(); ++i)
+        result.image.pixels[i] = static_cast<float>(sum[i] * inv);
+
+    RenderStats& st = result.stats;
+    st.mode = renderModeName(scene.mode());
+    st.width = width, st.height = height;
+    st.spp = done, st.passes = passes;
+    st.seconds = seconds;
+    st.secondsPerSpp = seconds / static_cast<double>(done);
+    st.rays = rays.load();
+    st.raysPerSecond = seconds > 0 ? static_cast<double>(st.rays) / seconds : 0;
+    st.threads = threads;
+    st.seed = options.seed;
+    st.peakResidentBytes = peakResidentBytes();
+    st.scene = scene.stats();
+    st.nonFiniteSamples = static_cast<int64_t>(nonFinite.load());
+    return result;
+}
+
+nlohmann::json toJson(const RenderStats& s) {
+    return {
+        {"mode", s.mode},
+        {"width", s.width},
+        {"height", s.height},
+        {"spp", s.spp},
+        {"passes", s.passes},
+        {"seconds", s.seconds},
+        {"seconds_per_spp", s.secondsPerSpp},
+        {"rays", s.rays},
+        {"rays_per_second", s.raysPerSecond},
+        {"threads", s.threads},
+        {"seed", s.seed},
+        {"peak_resident_bytes", s.peakResidentBytes},
+        {"non_finite_samples", s.nonFiniteSamples},
+        {"scene",
+         {{"curves", s.scene.curves},
+          {"curve_points", s.scene.curvePoints},
+          {"tubes", s.scene.tubes},
+          {"segments", s.scene.segments},
+          {"geometry_bvh_bytes", s.scene.embreeBytes},
+          {"geometry_bvh_peak_bytes", s.scene.embreePeakBytes},
+          {"build_seconds", s.scene.seconds}}},
+    };
+}
+
+}  // namespace weft::render

@@ -1,0 +1,69 @@
+// weft/render/renderer.h — the image loop of `weft render` (issue 7, DESIGN.md 8).
+//
+// render() traces `spp` paths per pixel (pathRadiance, path_tracer.h) at
+// uniformly random film positions inside the pixel (a box filter) and
+// averages them. Budgets: a fixed number of samples per pixel, or a time
+// budget: progressive passes (1 sample per pixel, then as many as the
+// measured time per sample says fit in what is left, at most doubling) until
+// the time is spent; at least one pass.
+//
+// Determinism: sample s of pixel p draws from Rng(stream p, seed mixed with
+// s), so the image depends only on (scene, mode, seed, spp), not on the
+// number of threads or on how samples were split into passes. Tiles of 16 x
+// 16 pixels are scheduled with TBB (an arena of `threads` workers).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "weft/core/image.h"
+#include "weft/render/path_tracer.h"
+#include "weft/render/scene.h"
+
+namespace weft::render {
+
+struct RenderOptions {
+    int spp = 0;             // > 0: this many samples per pixel
+    double seconds = 0;      // > 0 (and spp == 0): progressive passes for this long
+    int threads = 0;         // 0: all cores
+    uint64_t seed = 0;
+    int maxDepth = 100;
+    bool nextEventEstimation = true;
+    bool quiet = false;      // no progress output
+
+    // InputError naming the flag and its range (exactly one budget, threads
+    // in [0, 1024], maxDepth in [1, 10000]).
+    void validate() const;
+};
+
+struct RenderStats {
+    std::string mode;
+    int width = 0, height = 0;
+    int64_t spp = 0;           // samples per pixel traced
+    int passes = 0;
+    double seconds = 0;        // rendering, without the scene build
+    double secondsPerSpp = 0;
+    uint64_t rays = 0;         // closest-hit and shadow queries
+    double raysPerSecond = 0;
+    int threads = 0;
+    uint64_t seed = 0;
+    int64_t peakResidentBytes = 0;  // of the whole process (getrusage)
+    SceneBuildStats scene;
+    int64_t nonFiniteSamples = 0;  // samples dropped as NaN/Inf (reported; should stay 0)
+};
+
+struct RenderResult {
+    Image image;  // linear RGB, the mean of the samples
+    RenderStats stats;
+};
+
+RenderResult render(const Scene& scene, const RenderOptions& options);
+
+// Peak resident set size of this process in bytes.
+int64_t peakResidentBytes();
+
+nlohmann::json toJson(const RenderStats& stats);
+
+}  // namespace weft::render

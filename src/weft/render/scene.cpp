@@ -1,0 +1,137 @@
+#include "weft/render/scene.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include "weft/core/error.h"
+#include "weft/core/math.h"
+#include "weft/core/progress.h"
+#include "weft/core/rng.h"
+#include "weft/fit/yarn_model.h"
+#include "weft/render/curves.h"
+#include "weft/render/yarn_geometry.h"
+
+namespace weft::render {
+
+const char* renderModeName(RenderMode mode) {
+    return mode == RenderMode::Neural ? "neural" : "fiber";
+}
+
+RenderMode parseRenderMode(const std::string& name) {
+    if (name == "neural") return RenderMode::Neural;
+    if (name == "fiber") return RenderMode::Fiber;
+    throw InputError("--mode " + name + " is not a render mode: allowed neural, fiber");
+}
+
+Camera::Camera(const CameraDesc& desc, int width, int height)
+    : origin_(desc.from), width_(width), height_(height) {
+    forward_ = normalize(desc.to - desc.from);
+    right_ = normalize(cross(forward_, desc.up));
+    up_ = cross(right_, forward_);
+    // fov_deg spans the shorter side (pbrt's perspective camera).
+    const double half = std::tan(0.5 * radians(desc.fovDeg));
+    const double aspect = static_cast<double>(width) / height;
+    halfWidth_ = aspect >= 1 ? half * aspect : half;
+    halfHeight_ = aspect >= 1 ? half : half / aspect;
+}
+
+void Camera::ray(double px, double py, Vec3* org, Vec3* dir) const {
+    const double x = (2.0 * px / width_ - 1.0) * halfWidth_;
+    const double y = (1.0 - 2.0 * py / height_) * halfHeight_;
+    *org = origin_;
+    *dir = normalize(forward_ + right_ * x + up_ * y);
+}
+
+namespace {
+
+std::unique_ptr<Light> makeLight(const LightDesc& desc) {
+    switch (desc.type) {
+        case LightDesc::Type::Sky:
+            return std::make_unique<EnvironmentLight>(skyLight(desc.scale));
+        case LightDesc::Type::Envmap:
+            return std::make_unique<EnvironmentLight>(
+                EnvironmentLight::load(desc.file, desc.scale, desc.rotateDeg));
+        case LightDesc::Type::Sphere:
+            return std::make_unique<SphereLight>(desc.center, desc.radius, desc.radiance);
+        case LightDesc::Type::Constant:
+            return std::make_unique<ConstantLight>(desc.radiance);
+    }
+    throw std::logic_error("unknown light type");
+}
+
+// The largest radius a yarn curve is drawn with (for the sampling step).
+double largestRadius(const Curve& curve, const YarnDesc& yarn) {
+    if (yarn.radius) return *yarn.radius;
+    if (curve.radii.empty()) return 0;  // frameCurve reports the missing radii
+    return yarn.scale * static_cast<double>(*std::max_element(curve.radii.begin(), curve.radii.end()));
+}
+
+}  // namespace
+
+Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet)
+    : mode_(mode), camera_(desc.camera, desc.film.width, desc.film.height),
+      width_(desc.film.width), height_(desc.film.height),
+      accel_(std::make_unique<TubeAccel>()) {
+    const auto start = std::chrono::steady_clock::now();
+    for (const LightDesc& light : desc.lights) lights_.push_back(makeLight(light));
+    if (lights_.empty()) lights_.push_back(std::make_unique<EnvironmentLight>(skyLight()));
+
+    // One material per distinct model file.
+    std::map<std::string, int> materialOf;
+    std::vector<PlyParams> plyOf;
+    std::vector<CurveSet> curveSets;
+    std::vector<int> yarnMaterial;
+    for (const YarnDesc& yarn : desc.yarns) {
+        curveSets.push_back(readCurves(yarn.curves));
+        stats_.curves += static_cast<int64_t>(curveSets.back().curves.size());
+        stats_.curvePoints += static_cast<int64_t>(curveSets.back().pointCount());
+        auto [it, inserted] = materialOf.try_emplace(yarn.model, static_cast<int>(plyOf.size()));
+        if (inserted) {
+            const YarnModel model = loadYarnModel(yarn.model);
+            plyOf.push_back(model.ply);
+            if (mode == RenderMode::Neural)
+                yarnBsdfs_.push_back(std::make_unique<YarnBsdf>(model, yarn.model));
+            else
+                fiberBcsdfs_.push_back(std::make_unique<FiberBcsdf>(model.fiber));
+        }
+        yarnMaterial.push_back(it->second);
+    }
+
+    Progress progress("build " + std::string(renderModeName(mode)) + " geometry",
+                      static_cast<uint64_t>(stats_.curves), quiet);
+    for (size_t y = 0; y < desc.yarns.size(); ++y) {
+        const YarnDesc& yarn = desc.yarns[y];
+        const int material = yarnMaterial[y];
+        const PlyParams& fibers = plyOf[material];
+        const std::vector<Curve>& curves = curveSets[y].curves;
+        for (size_t c = 0; c < curves.size(); ++c) {
+            const double radius = largestRadius(curves[c], yarn);
+            const double step = sampleStep(radius > 0 ? radius : 1.0, yarn.plies, yarn.plyTwist,
+                                           mode == RenderMode::Fiber ? &fibers : nullptr);
+            const FramedCurve centre =
+                frameCurve(curves[c], yarn.scale, yarn.radius, step, yarn.curves, c);
+            const std::vector<FramedCurve> plies = plyCurves(centre, yarn.plies, yarn.plyTwist);
+            for (size_t j = 0; j < plies.size(); ++j) {
+                if (mode == RenderMode::Neural) {
+                    accel_->addGeometry({toTube(plies[j])}, material);
+                } else {
+                    // Seeded by where the ply is, not by the render seed.
+                    const uint64_t seed = mixBits(mixBits(mixBits(y + 1) ^ (c + 1)) ^ (j + 1));
+                    accel_->addGeometry(fiberTubes(plies[j], fibers, seed), material);
+                }
+            }
+            progress.add();
+        }
+    }
+    accel_->commit();
+    progress.finish();
+    stats_.tubes = accel_->tubeCount();
+    stats_.segments = accel_->segmentCount();
+    stats_.embreeBytes = accel_->embreeBytes();
+    stats_.embreePeakBytes = accel_->embreePeakBytes();
+    stats_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace weft::render

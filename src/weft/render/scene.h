@@ -1,0 +1,89 @@
+// weft/render/scene.h — a scene file turned into what the path tracer needs (issue 7).
+//
+// Scene builds, from a SceneDesc (scene_file.h) and a mode:
+//   - the camera: a pinhole at `from` looking at `to`, `up` projected to the
+//     image's vertical, fov_deg the full angle of the shorter image side
+//     (pbrt's perspective camera); pixel (x, y) covers [x, x+1) x [y, y+1)
+//     with y = 0 at the top;
+//   - the lights (lights.h; none given: the procedural sky);
+//   - the geometry (tube_accel.h) from each yarn's curves (yarn_geometry.h):
+//       neural mode: one tube per ply, shaded with the YarnBsdf of the
+//         yarn's model (DESIGN.md 7);
+//       fiber mode: the plies filled with the model's fibers (N, rho, alpha
+//         from its "ply" block; generatePly seeded per ply by the yarn,
+//         curve and ply index, so the fibers do not change with the render
+//         seed), shaded with the model's FiberBcsdf;
+//   - the materials, one per distinct model file.
+// Fiber geometry is generated ply by ply and handed to Embree at once, so the
+// peak memory is Embree's copy plus one ply's fibers.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "weft/fiber/fiber_bcsdf.h"
+#include "weft/render/lights.h"
+#include "weft/render/scene_file.h"
+#include "weft/render/tube_accel.h"
+#include "weft/yarn/yarn_bsdf.h"
+
+namespace weft::render {
+
+enum class RenderMode { Neural, Fiber };
+const char* renderModeName(RenderMode mode);
+// "neural" or "fiber"; InputError otherwise.
+RenderMode parseRenderMode(const std::string& name);
+
+class Camera {
+public:
+    Camera() = default;
+    Camera(const CameraDesc& desc, int width, int height);
+    // Primary ray through film position (px, py), px in [0, width), py in [0, height).
+    void ray(double px, double py, Vec3* org, Vec3* dir) const;
+
+private:
+    Vec3 origin_, forward_, right_, up_;
+    double halfWidth_ = 0, halfHeight_ = 0;  // of the image plane at distance 1
+    int width_ = 1, height_ = 1;
+};
+
+struct SceneBuildStats {
+    int64_t curves = 0;          // yarn curves read
+    int64_t curvePoints = 0;     // their control points
+    int64_t tubes = 0;           // plies (neural) or fibers (fiber)
+    int64_t segments = 0;        // round linear curve segments handed to Embree
+    int64_t embreeBytes = 0;     // geometry + BVH after the build (memory monitor)
+    int64_t embreePeakBytes = 0;  // largest Embree allocation during the build
+    double seconds = 0;          // building time, model loading included
+};
+
+class Scene {
+public:
+    Scene(const SceneDesc& desc, RenderMode mode, bool quiet = true);
+
+    RenderMode mode() const { return mode_; }
+    const Camera& camera() const { return camera_; }
+    int width() const { return width_; }
+    int height() const { return height_; }
+    const TubeAccel& accel() const { return *accel_; }
+    const std::vector<std::unique_ptr<Light>>& lights() const { return lights_; }
+    const SceneBuildStats& stats() const { return stats_; }
+
+    // Material of a hit (TubeHit::material), by mode.
+    const YarnBsdf& yarnBsdf(int material) const { return *yarnBsdfs_[material]; }
+    const FiberBcsdf& fiberBcsdf(int material) const { return *fiberBcsdfs_[material]; }
+
+private:
+    RenderMode mode_;
+    Camera camera_;
+    int width_, height_;
+    std::unique_ptr<TubeAccel> accel_;
+    std::vector<std::unique_ptr<Light>> lights_;
+    std::vector<std::unique_ptr<YarnBsdf>> yarnBsdfs_;
+    std::vector<std::unique_ptr<FiberBcsdf>> fiberBcsdfs_;
+    SceneBuildStats stats_;
+};
+
+}  // namespace weft::render

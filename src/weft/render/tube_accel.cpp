@@ -1,0 +1,204 @@
+#include "weft/render/tube_accel.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace weft::render {
+
+namespace {
+
+// RTCIntersectContext extended with the tube the ray leaves (Embree's
+// documented way to pass data to filter functions: the context comes first).
+struct OriginContext {
+    RTCIntersectContext context;
+    TubeId origin;
+    float selfHitDistance;
+    const std::vector<TubeAccel::GeometryInfo>* geometries;
+};
+
+void dropOriginTubeHits(const RTCFilterFunctionNArguments* args) {
+    const auto* ctx = reinterpret_cast<const OriginContext*>(args->context);
+    const unsigned geometry = RTCHitN_geomID(args->hit, args->N, 0);
+    if (geometry != ctx->origin.geometry) return;
+    const unsigned tube = (*ctx->geometries)[geometry].tubeOf(RTCHitN_primID(args->hit, args->N, 0));
+    if (tube != ctx->origin.tube) return;
+    const float t = RTCRayN_tfar(args->ray, args->N, 0);
+    const float leaving = RTCRayN_dir_x(args->ray, args->N, 0) * RTCHitN_Ng_x(args->hit, args->N, 0) +
+                          RTCRayN_dir_y(args->ray, args->N, 0) * RTCHitN_Ng_y(args->hit, args->N, 0) +
+                          RTCRayN_dir_z(args->ray, args->N, 0) * RTCHitN_Ng_z(args->hit, args->N, 0);
+    if (t < ctx->selfHitDistance || leaving > 0.0f) args->valid[0] = 0;
+}
+
+OriginContext makeContext(const TubeId& origin,
+                          const std::vector<TubeAccel::GeometryInfo>& geometries) {
+    OriginContext ctx;
+    rtcInitIntersectContext(&ctx.context);
+    ctx.origin = origin;
+    ctx.geometries = &geometries;
+    ctx.selfHitDistance = 0.0f;
+    if (origin.valid()) {
+        ctx.context.filter = &dropOriginTubeHits;
+        ctx.selfHitDistance = static_cast<float>(
+            TubeAccel::kSelfHitDistance * geometries[origin.geometry].tubeRadius[origin.tube]);
+    } else {
+        ctx.context.filter = nullptr;
+    }
+    return ctx;
+}
+
+void setRay(RTCRay& ray, const Vec3& org, const Vec3& dir, double tMax) {
+    ray.org_x = static_cast<float>(org.x);
+    ray.org_y = static_cast<float>(org.y);
+    ray.org_z = static_cast<float>(org.z);
+    ray.dir_x = static_cast<float>(dir.x);
+    ray.dir_y = static_cast<float>(dir.y);
+    ray.dir_z = static_cast<float>(dir.z);
+    ray.tnear = 0.0f;
+    ray.tfar = static_cast<float>(std::min(tMax, 1e30));
+    ray.time = 0.0f;
+    ray.mask = 0xFFFFFFFFu;
+    ray.id = 0;
+    ray.flags = 0;
+}
+
+}  // namespace
+
+uint32_t TubeAccel::GeometryInfo::tubeOf(uint32_t segment) const {
+    const auto it = std::upper_bound(tubeFirstSegment.begin(), tubeFirstSegment.end(), segment);
+    return static_cast<uint32_t>(it - tubeFirstSegment.begin()) - 1;
+}
+
+TubeAccel::TubeAccel() {
+    scene_ = rtcNewScene(device_.get());
+    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+    rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+    device_.check("creating the scene");
+}
+
+TubeAccel::~TubeAccel() {
+    if (scene_) rtcReleaseScene(scene_);
+}
+
+uint32_t TubeAccel::addGeometry(const std::vector<Tube>& tubes, int material) {
+    if (committed_) throw std::logic_error("TubeAccel::addGeometry after commit");
+    GeometryInfo info;
+    info.material = material;
+    // Vertex layout per tube: an open tube's points as they are; a closed
+    // tube's points framed by its last point before and its first two after,
+    // so that every segment, the closing one included, has both neighbours
+    // one vertex away (RTC_CURVE_FLAG_NEIGHBOR_*: Embree then cuts the joint
+    // spheres away inside the tube, which transmitted rays cross).
+    size_t vertexCount = 0, segmentCount = 0;
+    for (const Tube& tube : tubes) {
+        if (tube.points.size() < 2 || tube.radii.size() != tube.points.size())
+            throw std::logic_error("TubeAccel: a tube needs >= 2 points and one radius per point");
+        vertexCount += tube.points.size() + (tube.closed ? 3 : 0);
+        segmentCount += tube.segmentCount();
+    }
+    if (segmentCount == 0) return kNoTube;
+    if (vertexCount > std::numeric_limits<uint32_t>::max() / 2)
+        throw std::runtime_error("TubeAccel: too many curve vertices in one geometry");
+
+    RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE);
+    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), vertexCount));
+    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, sizeof(unsigned), segmentCount));
+    auto* flags = static_cast<unsigned char*>(
+        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_FLAGS, 0, RTC_FORMAT_UCHAR, 1, segmentCount));
+    device_.check("allocating curve geometry");
+
+    size_t v = 0, s = 0;
+    auto putVertex = [&](const Tube& tube, size_t i) {
+        const Vec3& p = tube.points[i];
+        vertices[4 * v + 0] = static_cast<float>(p.x);
+        vertices[4 * v + 1] = static_cast<float>(p.y);
+        vertices[4 * v + 2] = static_cast<float>(p.z);
+        vertices[4 * v + 3] = tube.radii[i];
+        ++v;
+    };
+    for (const Tube& tube : tubes) {
+        const size_t n = tube.points.size();
+        info.tubeFirstSegment.push_back(static_cast<uint32_t>(s));
+        info.tubeRadius.push_back(*std::max_element(tube.radii.begin(), tube.radii.end()));
+        const size_t segments = tube.segmentCount();
+        if (tube.closed) putVertex(tube, n - 1);
+        const size_t first = v;
+        for (size_t i = 0; i < n; ++i) putVertex(tube, i);
+        if (tube.closed) putVertex(tube, 0), putVertex(tube, 1);
+        for (size_t k = 0; k < segments; ++k, ++s) {
+            indices[s] = static_cast<unsigned>(first + k);
+            const bool left = tube.closed || k > 0;
+            const bool right = tube.closed || k + 1 < segments;
+            flags[s] = static_cast<unsigned char>((left ? RTC_CURVE_FLAG_NEIGHBOR_LEFT : 0) |
+                                                  (right ? RTC_CURVE_FLAG_NEIGHBOR_RIGHT : 0));
+        }
+    }
+    rtcCommitGeometry(geom);
+    const unsigned id = rtcAttachGeometry(scene_, geom);
+    rtcReleaseGeometry(geom);
+    device_.check("adding curve geometry");
+    if (id != geometries_.size()) throw std::runtime_error("unexpected Embree geometry id");
+    tubes_ += static_cast<int64_t>(tubes.size());
+    segments_ += static_cast<int64_t>(segmentCount);
+    geometries_.push_back(std::move(info));
+    return id;
+}
+
+void TubeAccel::commit() {
+    rtcCommitScene(scene_);
+    device_.check("building the BVH");
+    committed_ = true;
+}
+
+bool TubeAccel::intersect(const Vec3& org, const Vec3& dir, double tMax, const TubeId& origin,
+                          TubeHit* hit) const {
+    OriginContext ctx = makeContext(origin, geometries_);
+    RTCRayHit rh;
+    setRay(rh.ray, org, dir, tMax);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene_, &ctx.context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+
+    const GeometryInfo& info = geometries_[rh.hit.geomID];
+    hit->t = rh.ray.tfar;
+    hit->point = org + dir * hit->t;
+    hit->id = {rh.hit.geomID, info.tubeOf(rh.hit.primID)};
+    hit->material = info.material;
+    // Tangent: the segment direction (the index buffer gives its first vertex).
+    RTCGeometry geom = rtcGetGeometry(scene_, rh.hit.geomID);
+    const auto* vertices = static_cast<const float*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_VERTEX, 0));
+    const auto* indices = static_cast<const unsigned*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_INDEX, 0));
+    const float* v0 = vertices + 4 * static_cast<size_t>(indices[rh.hit.primID]);
+    const float* v1 = v0 + 4;
+    const Vec3 axis{v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]};
+    hit->tangent = normalize(axis);
+    // Normal: Embree's geometric normal without its component along the
+    // tangent (on a cone of varying radius, or on a joint sphere, it has one).
+    Vec3 n{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
+    n = n - hit->tangent * dot(n, hit->tangent);
+    const double len = length(n);
+    if (len > 1e-12 * (std::abs(rh.hit.Ng_x) + std::abs(rh.hit.Ng_y) + std::abs(rh.hit.Ng_z)) && len > 0) {
+        hit->normal = n / len;
+    } else {
+        // Hit exactly on a joint sphere's pole: any normal orthogonal to the tangent.
+        Vec3 b;
+        coordinateSystem(hit->tangent, &hit->normal, &b);
+    }
+    return true;
+}
+
+bool TubeAccel::occluded(const Vec3& org, const Vec3& dir, double tMax, const TubeId& origin) const {
+    OriginContext ctx = makeContext(origin, geometries_);
+    RTCRay ray;
+    setRay(ray, org, dir, tMax);
+    rtcOccluded1(scene_, &ctx.context, &ray);
+    // Embree sets tfar to -inf when the ray is occluded.
+    return ray.tfar < 0.0f;
+}
+
+}  // namespace weft::render

@@ -1,0 +1,97 @@
+// weft/render/tube_accel.h — ray queries against the tubes of a cloth scene (Embree 3).
+//
+// Every ply (neural mode) or every ply's bundle of fibers (fiber mode) is one
+// Embree geometry of round linear curves (cones joined by spheres, with the
+// neighbour flags so that joints are hit once); each tube of a geometry is a
+// run of consecutive segments. A hit reports the tube it is on and the
+// shading geometry: the segment direction as tangent and Embree's geometric
+// normal, made orthogonal to it, as the outward normal.
+//
+// Self-intersection (DESIGN.md 7): a ray that leaves a tube (reflected,
+// transmitted, or a shadow ray) carries that tube as its origin, and an
+// intersection filter drops, on that one tube only,
+//   - hits closer than kSelfHitDistance times the tube radius (the surface the
+//     ray starts on, whichever way it goes), and
+//   - hits where the ray leaves the tube (dir . Ng > 0): a ray entering the
+//     tube passes through its interior, whose light transport the yarn model
+//     (M, T) or the far-field fiber model already accounts for.
+// A later entry into the same tube (a knit loop coming back) is a real hit.
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "weft/core/embree.h"
+#include "weft/core/vec.h"
+#include "weft/render/yarn_geometry.h"
+
+namespace weft::render {
+
+inline constexpr uint32_t kNoTube = 0xFFFFFFFFu;
+
+// The tube a ray starts on (geometry id and tube within it), or none.
+struct TubeId {
+    uint32_t geometry = kNoTube;
+    uint32_t tube = kNoTube;
+    bool valid() const { return geometry != kNoTube; }
+    bool operator==(const TubeId&) const = default;
+};
+
+struct TubeHit {
+    double t = 0;
+    Vec3 point;    // org + t dir
+    Vec3 tangent;  // unit segment direction
+    Vec3 normal;   // unit, orthogonal to tangent, pointing out of the tube
+    TubeId id;
+    int material = -1;  // as given to addGeometry
+};
+
+class TubeAccel {
+public:
+    // Fraction of the tube radius below which hits on the origin tube are dropped.
+    static constexpr double kSelfHitDistance = 1e-2;
+
+    TubeAccel();
+    ~TubeAccel();
+    TubeAccel(const TubeAccel&) = delete;
+    TubeAccel& operator=(const TubeAccel&) = delete;
+
+    // Adds one geometry holding `tubes` (copied into Embree's buffers; the
+    // caller may free them), shaded with `material`. Returns its geometry id.
+    uint32_t addGeometry(const std::vector<Tube>& tubes, int material);
+    // Builds the BVH; call once after the last addGeometry.
+    void commit();
+
+    // Nearest hit in (0, tMax) of the ray (org, unit dir) leaving `origin`.
+    bool intersect(const Vec3& org, const Vec3& dir, double tMax, const TubeId& origin,
+                   TubeHit* hit) const;
+    // Whether anything blocks the ray in (0, tMax).
+    bool occluded(const Vec3& org, const Vec3& dir, double tMax, const TubeId& origin) const;
+
+    int64_t tubeCount() const { return tubes_; }
+    int64_t segmentCount() const { return segments_; }
+    size_t geometryCount() const { return geometries_.size(); }
+    // Bytes Embree holds (geometry buffers + BVH), from its memory monitor.
+    int64_t embreeBytes() const { return device_.allocatedBytes(); }
+    int64_t embreePeakBytes() const { return device_.peakBytes(); }
+
+    // Per-geometry facts the intersection filter needs (public for the filter).
+    struct GeometryInfo {
+        int material = -1;
+        std::vector<uint32_t> tubeFirstSegment;  // ascending; segment -> tube by binary search
+        std::vector<float> tubeRadius;           // largest radius of each tube
+        uint32_t tubeOf(uint32_t segment) const;
+    };
+
+private:
+    EmbreeDevice device_;
+    RTCScene scene_ = nullptr;
+    std::vector<GeometryInfo> geometries_;
+    int64_t tubes_ = 0, segments_ = 0;
+    bool committed_ = false;
+};
+
+}  // namespace weft::render

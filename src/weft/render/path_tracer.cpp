@@ -15,35 +15,44 @@ double powerHeuristic(double a, double b) {
     return a2 + b2 > 0 ? a2 / (a2 + b2) : 0.0;
 }
 
-// The BSDF at one hit, in its shading frame, whichever the mode.
+// The BSDF at one hit for the incident direction of the path, in its shading
+// frame, whichever the mode; world directions in and out.
 class ShadingPoint {
 public:
-    ShadingPoint(const Scene& scene, const TubeHit& hit) {
+    ShadingPoint(const Scene& scene, const TubeHit& hit, const Vec3& wiWorld) {
         if (scene.mode() == RenderMode::Neural) {
-            yarn_ = &scene.yarnBsdf(hit.material);
             // DESIGN.md 2: local coordinates (w . t, w . b, w . n) with b = t x n.
             frame_ = Frame(hit.tangent, cross(hit.tangent, hit.normal), hit.normal);
+            wi_ = frame_.toLocal(wiWorld);
+            yarn_ = scene.yarnBsdf(hit.material).slice(wi_);
+            isYarn_ = true;
         } else {
             fiber_ = &scene.fiberBcsdf(hit.material);
             frame_ = Frame::fromX(hit.tangent);
+            wi_ = frame_.toLocal(wiWorld);
         }
     }
-    Vec3 toLocal(const Vec3& w) const { return frame_.toLocal(w); }
-    Vec3 toWorld(const Vec3& w) const { return normalize(frame_.fromLocal(w)); }
-    Rgb eval(const Vec3& wi, const Vec3& wo) const {
-        return yarn_ ? yarn_->eval(wi, wo) : fiber_->eval(wi, wo);
+    Rgb eval(const Vec3& wo) const {
+        const Vec3 o = frame_.toLocal(wo);
+        return isYarn_ ? yarn_.eval(o) : fiber_->eval(wi_, o);
     }
-    double pdf(const Vec3& wi, const Vec3& wo) const {
-        return yarn_ ? yarn_->pdf(wi, wo) : fiber_->pdf(wi, wo);
+    double pdf(const Vec3& wo) const {
+        const Vec3 o = frame_.toLocal(wo);
+        return isYarn_ ? yarn_.pdf(o) : fiber_->pdf(wi_, o);
     }
-    BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) const {
-        return yarn_ ? yarn_->sample(wi, u, rng) : fiber_->sample(wi, u, rng);
+    // A sample with wo in world space.
+    BsdfSample sample(const BsdfSampleInput& u, Rng& rng) const {
+        BsdfSample s = isYarn_ ? yarn_.sample(u, rng) : fiber_->sample(wi_, u, rng);
+        s.wo = normalize(frame_.fromLocal(s.wo));
+        return s;
     }
 
 private:
-    const YarnBsdf* yarn_ = nullptr;
-    const FiberBcsdf* fiber_ = nullptr;
     Frame frame_;
+    Vec3 wi_;
+    bool isYarn_ = false;
+    YarnBsdf::Slice yarn_;
+    const FiberBcsdf* fiber_ = nullptr;
 };
 
 // Nearest finite light hit by the ray before tMax: its index and distance.
@@ -102,8 +111,7 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Rng& 
         }
         if (depth >= options.maxDepth) break;
 
-        const ShadingPoint bsdf(scene, hit);
-        const Vec3 wi = bsdf.toLocal(-dir);
+        const ShadingPoint bsdf(scene, hit, -dir);
 
         if (nee) {
             const int pick = std::min(static_cast<int>(rng.uniform() * lights.size()),
@@ -111,8 +119,7 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Rng& 
             const Light& l = *lights[pick];
             const LightSample ls = l.sample(hit.point, {rng.uniform(), rng.uniform()});
             if (ls.valid() && !ls.radiance.isBlack()) {
-                const Vec3 woLocal = bsdf.toLocal(ls.wi);
-                const Rgb f = bsdf.eval(wi, woLocal);
+                const Rgb f = bsdf.eval(ls.wi);
                 if (!f.isBlack()) {
                     // Shadow ray up to just before the light's surface.
                     const double tMax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1 - 1e-6);
@@ -123,7 +130,7 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Rng& 
                             blocked = lights[i]->intersect(hit.point, ls.wi, tMax) > 0;
                     if (!blocked) {
                         const double lightPdf = lightPick * ls.pdf;
-                        const double weight = powerHeuristic(lightPdf, bsdf.pdf(wi, woLocal));
+                        const double weight = powerHeuristic(lightPdf, bsdf.pdf(ls.wi));
                         radiance += throughput * f * ls.radiance * (weight / lightPdf);
                     }
                 }
@@ -131,14 +138,14 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Rng& 
         }
 
         const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
-        const BsdfSample s = bsdf.sample(wi, u, rng);
+        const BsdfSample s = bsdf.sample(u, rng);
         if (!s.valid() || s.weight.isBlack()) break;
         throughput *= s.weight;
         if (!throughput.isFinite()) break;
         lastPdf = s.pdf;
         countEmissionFully = s.isDelta;
         org = hit.point;
-        dir = bsdf.toWorld(s.wo);
+        dir = s.wo;
         origin = hit.id;
 
         if (depth + 1 >= options.rouletteDepth) {

@@ -301,13 +301,7 @@ void YarnBsdf::evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rg
     }
 }
 
-Rgb YarnBsdf::eval(const Vec3& wi, const Vec3& wo) const {
-    const bool flip = wi.z < 0;
-    const Vec3 i = flip ? mirrored(wi) : wi, o = flip ? mirrored(wo) : wo;
-    Rgb value;
-    evalAndPdf(i, o, incident(i, transmissionUpper(i)), &value, nullptr);
-    return value;
-}
+Rgb YarnBsdf::eval(const Vec3& wi, const Vec3& wo) const { return slice(wi).eval(wo); }
 
 double YarnBsdf::pdf(const Vec3& wi, const Vec3& wo) const {
     const bool flip = wi.z < 0;
@@ -336,34 +330,61 @@ BsdfSample YarnBsdf::sample(const Vec3& wi, const BsdfSampleInput& u) const {
 }
 
 BsdfSample YarnBsdf::sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) const {
-    const bool flip = wi.z < 0;
-    const Vec3 i = flip ? mirrored(wi) : wi;
-    const double pT = transmissionUpper(i);
+    return slice(wi).sample(u, rng);
+}
+
+YarnBsdf::Slice YarnBsdf::slice(const Vec3& wi) const {
+    Slice s;
+    s.bsdf_ = this;
+    s.flip_ = wi.z < 0;
+    s.wi_ = wi;
+    s.upper_ = s.flip_ ? mirrored(wi) : wi;
+    s.in_ = incident(s.upper_, transmissionUpper(s.upper_));
+    return s;
+}
+
+Rgb YarnBsdf::Slice::eval(const Vec3& wo) const {
+    Rgb value;
+    bsdf_->evalAndPdf(upper_, flip_ ? mirrored(wo) : wo, in_, &value,
+                      nullptr);
+    return value;
+}
+
+double YarnBsdf::Slice::pdf(const Vec3& wo) const {
+    double density;
+    bsdf_->evalAndPdf(upper_, flip_ ? mirrored(wo) : wo, in_, nullptr,
+                      &density);
+    return density;
+}
+
+BsdfSample YarnBsdf::Slice::sample(const BsdfSampleInput& u, Rng& rng) const {
+    const double pT = in_.pT;
     BsdfSample s;
     if (u[0] < pT) {
         // S_T = P(T|wi) delta(wo + wi), chosen with probability p_T = P(T|wi).
-        s.wo = -wi;
+        s.wo = -wi_;
         s.weight = Rgb(1.0);
         s.pdf = 0;
         s.lobe = kLobeT;
         s.isDelta = true;
         return s;
     }
-    const double pR = (1.0 - pT) * kappaR_, pM = (1.0 - pT) * (1.0 - kappaR_);
+    const double kappaR = bsdf_->kappaR_;
+    const double pR = (1.0 - pT) * kappaR, pM = (1.0 - pT) * (1.0 - kappaR);
     Vec3 o;
     if (u[0] < pT + pR || !(pM > 0)) {
         s.lobe = kLobeR;
-        o = lobes_.sampleR(i, u[1], u[2]);
+        o = bsdf_->lobes_.sampleR(upper_, u[1], u[2]);
     } else {
         s.lobe = kLobeM;
         // The rest of u[0], rescaled to [0, 1), picks the cone or the uniform part of pdf_M.
         const double uLobe = std::clamp((u[0] - pT - pR) / pM, 0.0, 0x1.fffffffffffffp-1);
-        o = lobes_.sampleM(i, uLobe, u[1], u[2], rng);
+        o = bsdf_->lobes_.sampleM(upper_, uLobe, u[1], u[2], rng);
     }
     Rgb value;
-    evalAndPdf(i, o, incident(i, pT), &value, &s.pdf);
+    bsdf_->evalAndPdf(upper_, o, in_, &value, &s.pdf);
     if (!(s.pdf > 0)) return BsdfSample{};
-    s.wo = flip ? mirrored(o) : o;
+    s.wo = flip_ ? mirrored(o) : o;
     s.weight = value / s.pdf;
     return s;
 }

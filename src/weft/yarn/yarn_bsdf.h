@@ -104,6 +104,35 @@ class YarnBsdf {
     // P(T | wi) from the T network.
     double transmission(const Vec3& wi) const;
 
+  private:
+    // What eval and pdf need of wi (in the upper hemisphere): P(T), the
+    // calibration of R, and the calibration times the energy guard of M.
+    struct Incident {
+        double pT;
+        Rgb rScale, mScale;
+    };
+
+  public:
+    // The BSDF with wi fixed (a slice): what depends on wi alone (P(T), the
+    // calibration, the energy guard) is computed once, so a path tracer that
+    // calls eval, pdf and sample at one vertex pays for it once. Its results
+    // equal eval(wi, .), pdf(wi, .) and sample(wi, ., rng).
+    class Slice {
+      public:
+        Rgb eval(const Vec3& wo) const;
+        double pdf(const Vec3& wo) const;
+        BsdfSample sample(const BsdfSampleInput& u, Rng& rng) const;
+        double transmission() const { return in_.pT; }
+
+      private:
+        friend class YarnBsdf;
+        const YarnBsdf* bsdf_ = nullptr;
+        bool flip_ = false;
+        Vec3 wi_, upper_;  // wi as given, and mirrored into the upper hemisphere
+        Incident in_;
+    };
+    Slice slice(const Vec3& wi) const;
+
     // The parts of eval for one pair, and the lobe probabilities of sample().
     struct Components {
         double pT = 0;  // P(T | wi)
@@ -139,12 +168,6 @@ class YarnBsdf {
     static double guardFiberAngle(int index);  // -pi/2 + pi index / 23
 
   private:
-    // What eval and pdf need of wi (in the upper hemisphere): P(T), the
-    // calibration of R, and the calibration times the energy guard of M.
-    struct Incident {
-        double pT;
-        Rgb rScale, mScale;
-    };
     Incident incident(const Vec3& wi, double pT) const;
     // eval and pdf for wi in the upper hemisphere: the one place where both are computed.
     void evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rgb* value,

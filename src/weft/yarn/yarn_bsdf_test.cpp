@@ -238,6 +238,28 @@ TEST(YarnBsdf, SampleIsDeterministicInItsInput) {
     }
 }
 
+TEST(YarnBsdf, SliceEqualsTheTwoDirectionCalls) {
+    // The slice computes what depends on wi once; its eval, pdf and sample
+    // must be those of the BSDF, above and below the surface.
+    const YarnBsdf& bsdf = testBsdf("fleece-small");
+    Rng rng(4, 4);
+    for (const Vec3& wi : {yarnDirection(30, 40), yarnDirection(85, -120), yarnDirection(130, 10)}) {
+        const YarnBsdf::Slice slice = bsdf.slice(wi);
+        EXPECT_DOUBLE_EQ(slice.transmission(), bsdf.transmission(wi));
+        for (int k = 0; k < 50; ++k) {
+            const Vec3 wo = yarnDirection(180 * rng.uniform(), 360 * rng.uniform() - 180);
+            EXPECT_EQ(slice.eval(wo), bsdf.eval(wi, wo));
+            EXPECT_DOUBLE_EQ(slice.pdf(wo), bsdf.pdf(wi, wo));
+            const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
+            Rng a(k, 1), b(k, 1);
+            const BsdfSample s = slice.sample(u, a), t = bsdf.sample(wi, u, b);
+            EXPECT_EQ(s.wo, t.wo);
+            EXPECT_EQ(s.weight, t.weight);
+            EXPECT_EQ(s.lobe, t.lobe);
+        }
+    }
+}
+
 // The renderer's fast evaluation (energy guard off) agrees with the fit's
 // maps (Mlp::forward, RLobe), which `weft fit` and `weft yarn check` report.
 // A hand-set energy calibration: S_R times 1/2 and S_M times 2 exp(0.3 x).

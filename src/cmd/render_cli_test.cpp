@@ -1,0 +1,91 @@
+// End-to-end tests of `weft render`: outputs, statistics, budgets and input errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_test_util.h"
+#include "weft/core/file.h"
+#include "weft/render/lights.h"
+
+namespace weft {
+namespace {
+
+using testing::expectUserError;
+using testing::RunResult;
+
+const std::string kFleece = std::string(WEFT_SOURCE_DIR) + "/tests/data/fleece-small.json";
+
+class RenderCliTest : public testing::CliTestBase {
+protected:
+    void SetUp() override {
+        CliTestBase::SetUp();
+        writeFileAtomic(path("yarn.txt"), "-0.2 0 0\n0 0.01 0\n0.2 0 0\n");
+        writeScene("scene.json", "");
+    }
+    void writeScene(const std::string& name, const std::string& extraYarnKey) {
+        writeFileAtomic(path(name), R"({
+            "camera": {"from": [0, 0, 1], "to": [0, 0, 0], "fov_deg": 8},
+            "film": {"width": 16, "height": 12},
+            "render": {"spp": 2, "seed": 1},
+            "yarns": [{"curves": "yarn.txt", "radius": 0.03, "plies": 3, "ply_twist": 0.3,
+                       "model": ")" + kFleece + "\"" + extraYarnKey + R"(}]
+        })");
+    }
+};
+
+TEST_F(RenderCliTest, WritesExrPngAndStatistics) {
+    for (const std::string mode : {"neural", "fiber"}) {
+        const RunResult r = run("render scene.json --mode " + mode + " --spp 2 --threads 2 --out " +
+                                mode + ".exr");
+        ASSERT_EQ(r.status, 0) << r.err;
+        const Image image = render::readImage(path(mode + ".exr"));
+        EXPECT_EQ(image.width, 16);
+        EXPECT_EQ(image.height, 12);
+        for (float v : image.pixels) ASSERT_TRUE(std::isfinite(v));
+        EXPECT_TRUE(std::filesystem::exists(path(mode + ".png")));
+        const nlohmann::json stats = nlohmann::json::parse(readFile(path(mode + ".json")));
+        EXPECT_EQ(stats.at("mode"), mode);
+        EXPECT_EQ(stats.at("spp"), 2);
+        EXPECT_GT(stats.at("rays_per_second").get<double>(), 0.0);
+        EXPECT_GT(stats.at("peak_resident_bytes").get<int64_t>(), 0);
+        EXPECT_GT(stats.at("scene").at("geometry_bvh_bytes").get<int64_t>(), 0);
+        EXPECT_EQ(stats.at("scene").at("curves"), 1);
+        EXPECT_EQ(stats.at("scene_hash").get<std::string>().size(), 16u);
+        EXPECT_EQ(stats.at("non_finite_samples"), 0);
+    }
+    // Same seed, same image (files byte for byte), whatever the thread count.
+    ASSERT_EQ(run("render scene.json --spp 2 --threads 1 --out again.exr").status, 0);
+    EXPECT_EQ(render::readImage(path("again.exr")).pixels,
+              render::readImage(path("neural.exr")).pixels);
+}
+
+TEST_F(RenderCliTest, TimeBudgetAndSceneDefaults) {
+    RunResult r = run("render scene.json --time 0.5 --quiet --out timed.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json stats = nlohmann::json::parse(readFile(path("timed.json")));
+    EXPECT_GE(stats.at("spp").get<int>(), 1);
+    // Without a budget flag the scene's render.spp (2) is used.
+    r = run("render scene.json --quiet --out default.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("default.json"))).at("spp"), 2);
+}
+
+TEST_F(RenderCliTest, BadInputIsNamed) {
+    expectUserError(run("render scene.json --spp 2 --time 1 --out a.exr"), {"--spp", "--time"});
+    expectUserError(run("render scene.json --spp 0 --out a.exr"), {"--spp"});
+    expectUserError(run("render scene.json --spp 1 --mode fibre --out a.exr"), {"fibre", "neural"});
+    expectUserError(run("render scene.json --spp 1 --out a.png"), {"a.png", ".exr"});
+    expectUserError(run("render missing.json --spp 1 --out a.exr"), {"missing.json"});
+    expectUserError(run("render scene.json --spp 1 --threads -2 --out a.exr"), {"--threads"});
+    writeScene("bad.json", R"(, "plys": 3)");
+    expectUserError(run("render bad.json --spp 1 --out a.exr"), {"bad.json", "plys"});
+    writeFileAtomic(path("yarn.txt"), "0 0 0\n1 nan 0\n");
+    expectUserError(run("render scene.json --spp 1 --out a.exr"), {"yarn.txt", "2"});
+    EXPECT_FALSE(std::filesystem::exists(path("a.exr")));
+}
+
+}  // namespace
+}  // namespace weft

@@ -1,0 +1,291 @@
+// Tests of the path tracer and the image loop against independent truth:
+// a white furnace, the agreement of two estimators, the camera against a
+// known environment map, determinism, and finite images in both modes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "weft/core/file.h"
+#include "weft/core/math.h"
+#include "weft/core/rng.h"
+#include "weft/core/test_util.h"
+#include "weft/render/lights.h"
+#include "weft/render/path_tracer.h"
+#include "weft/render/renderer.h"
+#include "weft/render/scene.h"
+#include "weft/render/scene_file.h"
+
+namespace weft::render {
+namespace {
+
+using weft::testing::scaled;
+
+const std::string kFleece = std::string(WEFT_SOURCE_DIR) + "/tests/data/fleece-small.json";
+
+class RenderTest : public weft::testing::TempDirTest {
+protected:
+    // A gently bent open yarn along x (text curve, no radii: the scene gives one).
+    std::string writeYarnCurve() {
+        std::string text;
+        for (int i = 0; i <= 8; ++i) {
+            const double x = -0.25 + 0.5 * i / 8.0;
+            text += std::to_string(x) + " " + std::to_string(0.02 * std::sin(6 * x)) + " 0\n";
+        }
+        // A closed loop behind it, to exercise closed curves.
+        text += "\n# closed\n";
+        for (int i = 0; i < 12; ++i) {
+            const double a = kTwoPi * i / 12;
+            text += std::to_string(0.12 * std::cos(a)) + " " + std::to_string(0.12 * std::sin(a)) +
+                    " -0.1\n";
+        }
+        const std::string p = path("yarn.txt");
+        writeFileAtomic(p, text);
+        return p;
+    }
+    // fleece-small.json with lossless fibers (c_tt = 1: albedo F + (1 - F) = 1).
+    std::string writeLosslessModel() {
+        nlohmann::json model = nlohmann::json::parse(readFile(kFleece));
+        model["fiber"]["c_tt"] = {1.0, 1.0, 1.0};
+        const std::string p = path("lossless.json");
+        writeFileAtomic(p, model.dump());
+        return p;
+    }
+    SceneDesc scene(const std::string& model, const std::string& lights, int width = 12,
+                    int height = 12) {
+        writeYarnCurve();
+        const std::string text = R"({
+            "camera": {"from": [0, 0, 1], "to": [0, 0, 0], "up": [0, 1, 0], "fov_deg": 5},
+            "film": {"width": )" + std::to_string(width) + R"(, "height": )" + std::to_string(height) + R"(},
+            "render": {"spp": 4, "max_depth": 1000, "seed": 3},
+            "lights": )" + lights + R"(,
+            "yarns": [{"curves": "yarn.txt", "radius": 0.03, "plies": 3, "ply_twist": 0.3,
+                       "model": ")" + model + R"("}]
+        })";
+        return parseSceneText(text, path("scene.json"), dir_.string());
+    }
+};
+
+struct Estimate {
+    double mean = 0, standardError = 0;
+};
+
+// Mean and standard error of the channel-averaged radiance along one ray.
+Estimate estimate(const Scene& scene, const Vec3& org, const Vec3& dir, int samples, bool nee,
+                  uint64_t stream) {
+    PathTracerOptions options;
+    options.maxDepth = 1000;
+    options.nextEventEstimation = nee;
+    PathCounters counters;
+    double sum = 0, sum2 = 0;
+    for (int i = 0; i < samples; ++i) {
+        Rng rng(stream * 1000003 + i, nee ? 11 : 12);
+        const double v = pathRadiance(scene, org, dir, rng, options, counters).average();
+        sum += v, sum2 += v * v;
+    }
+    Estimate e;
+    e.mean = sum / samples;
+    e.standardError = std::sqrt(std::max(0.0, sum2 / samples - e.mean * e.mean) / samples);
+    return e;
+}
+
+// Rays from the camera through a grid of film positions that hit the yarn.
+std::vector<std::pair<Vec3, Vec3>> raysOnYarn(const Scene& scene, int wanted) {
+    std::vector<std::pair<Vec3, Vec3>> rays;
+    for (int k = 0; k < 400 && static_cast<int>(rays.size()) < wanted; ++k) {
+        Vec3 org, dir;
+        scene.camera().ray((k % 20 + 0.5) * scene.width() / 20.0,
+                           (k / 20 + 0.5) * scene.height() / 20.0, &org, &dir);
+        TubeHit hit;
+        if (scene.accel().intersect(org, dir, std::numeric_limits<double>::infinity(), {}, &hit))
+            rays.push_back({org, dir});
+    }
+    return rays;
+}
+
+TEST_F(RenderTest, WhiteFurnaceOfLosslessFibers) {
+    // Fiber mode, fibers with albedo exactly 1, under a constant environment of
+    // radiance 1: every path's expectation is 1 (energy is conserved at every
+    // scattering), with next-event estimation on and off.
+    const SceneDesc desc = scene(writeLosslessModel(), R"([{"type": "constant", "radiance": [1, 1, 1]}])");
+    const Scene s(desc, RenderMode::Fiber);
+    const auto rays = raysOnYarn(s, 6);
+    ASSERT_EQ(rays.size(), 6u);
+    for (const bool nee : {true, false}) {
+        for (size_t r = 0; r < rays.size(); ++r) {
+            const Estimate e = estimate(s, rays[r].first, rays[r].second,
+                                        static_cast<int>(scaled(4000)), nee, r);
+            EXPECT_NEAR(e.mean, 1.0, 5 * e.standardError + 1e-3)
+                << "ray " << r << (nee ? " with" : " without") << " NEE, se " << e.standardError;
+        }
+    }
+    // The whole image through the image loop: every pixel near 1.
+    RenderOptions options;
+    options.spp = weft::testing::sampleScale() < 1 ? 16 : 64;
+    options.maxDepth = 1000;
+    options.quiet = true;
+    const RenderResult result = render(s, options);
+    double mean = 0;
+    for (float v : result.image.pixels) {
+        ASSERT_TRUE(std::isfinite(v));
+        EXPECT_NEAR(v, 1.0, 0.35);
+        mean += v;
+    }
+    mean /= static_cast<double>(result.image.pixels.size());
+    EXPECT_NEAR(mean, 1.0, 0.02);
+}
+
+TEST_F(RenderTest, NextEventEstimationAgreesWithBsdfSamplingOnly) {
+    // A sphere light and a dim constant light: NEE + MIS and pure BSDF
+    // sampling estimate the same expectation along the same rays (neural
+    // mode: T, R and M lobes; fiber mode: the fiber BCSDF).
+    const std::string lights = R"([{"type": "sphere", "center": [0.3, 0.4, 0.5], "radius": 0.25,
+                                     "radiance": [4, 3, 2]},
+                                    {"type": "constant", "radiance": [0.2, 0.25, 0.3]}])";
+    for (const RenderMode mode : {RenderMode::Neural, RenderMode::Fiber}) {
+        const Scene s(scene(kFleece, lights), mode);
+        const auto rays = raysOnYarn(s, 5);
+        ASSERT_EQ(rays.size(), 5u);
+        const int samples = static_cast<int>(scaled(mode == RenderMode::Neural ? 20000 : 6000));
+        for (size_t r = 0; r < rays.size(); ++r) {
+            const Estimate a = estimate(s, rays[r].first, rays[r].second, samples, true, r);
+            const Estimate b = estimate(s, rays[r].first, rays[r].second, samples, false, r);
+            const double se = std::sqrt(a.standardError * a.standardError +
+                                        b.standardError * b.standardError);
+            EXPECT_NEAR(a.mean, b.mean, 4.5 * se + 1e-4)
+                << renderModeName(mode) << " ray " << r << ": NEE " << a.mean << " +- "
+                << a.standardError << ", BSDF only " << b.mean << " +- " << b.standardError;
+            // NEE + MIS should not be noisier than BSDF sampling alone here.
+            EXPECT_LT(a.standardError, 1.5 * b.standardError) << renderModeName(mode) << " ray " << r;
+            EXPECT_GT(a.mean, 0.0);
+        }
+    }
+}
+
+// The lat-long texel of a direction (lights.h convention), written out independently.
+int latLongTexel(const Vec3& d, int width, int height) {
+    double u = std::atan2(d.x, -d.z) / kTwoPi;
+    u -= std::floor(u);
+    const double v = std::acos(std::clamp(d.y, -1.0, 1.0)) / kPi;
+    const int x = std::min(width - 1, static_cast<int>(u * width));
+    const int y = std::min(height - 1, static_cast<int>(v * height));
+    return y * width + x;
+}
+
+TEST_F(RenderTest, CameraSeesTheEnvironmentMapAlongEachPixelsRay) {
+    // An empty scene under an 8 x 4 map whose texels all differ: a pixel whose
+    // whole footprint lies in one texel must have exactly that texel's value.
+    Image map(8, 4);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 8; ++x) map.set(x, y, Rgb(x + 1.0, y + 1.0, 10.0 * (x + 8 * y) + 1));
+    writeExr(path("map.exr"), map);
+    const int width = 48, height = 32;
+    const Vec3 from{0.0, 0.0, 0.0}, to{1.0, 0.4, -0.6}, up{0.0, 1.0, 0.0};
+    const double fovDeg = 100;
+    const std::string text = R"({
+        "camera": {"from": [0, 0, 0], "to": [1, 0.4, -0.6], "up": [0, 1, 0], "fov_deg": 100},
+        "film": {"width": 48, "height": 32},
+        "lights": [{"type": "envmap", "file": "map.exr"}]
+    })";
+    const Scene s(parseSceneText(text, path("scene.json"), dir_.string()), RenderMode::Neural);
+    RenderOptions options;
+    options.spp = 4;
+    options.quiet = true;
+    const Image image = render(s, options).image;
+
+    // The pinhole camera, written out: fov spans the shorter (vertical) side.
+    const Vec3 forward = normalize(to - from);
+    const Vec3 right = normalize(cross(forward, up));
+    const Vec3 camUp = cross(right, forward);
+    const double halfH = std::tan(radians(fovDeg) / 2), halfW = halfH * width / height;
+    auto rayAt = [&](double px, double py) {
+        return normalize(forward + right * ((2 * px / width - 1) * halfW) +
+                         camUp * ((1 - 2 * py / height) * halfH));
+    };
+    int checked = 0;
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            const int texel = latLongTexel(rayAt(x, y), 8, 4);
+            bool inside = true;
+            for (const auto& [dx, dy] : {std::pair{1, 0}, {0, 1}, {1, 1}})
+                inside = inside && latLongTexel(rayAt(x + dx, y + dy), 8, 4) == texel;
+            if (!inside) continue;
+            const Rgb expected = map.get(texel % 8, texel / 8);
+            const Rgb got = image.get(x, y);
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(got[c], expected[c], 1e-4 * expected[c]) << "pixel " << x << ", " << y;
+            ++checked;
+        }
+    }
+    EXPECT_GT(checked, width * height / 2);
+}
+
+TEST_F(RenderTest, ImagesAreFiniteAndDoNotDependOnTheThreadCount) {
+    const std::string lights = R"([{"type": "sky"},
+                                    {"type": "sphere", "center": [0.5, 0.5, 0.5], "radius": 0.1,
+                                     "radiance": [20, 20, 20]}])";
+    for (const RenderMode mode : {RenderMode::Neural, RenderMode::Fiber}) {
+        const Scene s(scene(kFleece, lights, 10, 8), mode);
+        RenderOptions options;
+        options.spp = 3;
+        options.seed = 5;
+        options.quiet = true;
+        options.threads = 1;
+        const RenderResult one = render(s, options);
+        options.threads = 2;
+        const RenderResult two = render(s, options);
+        EXPECT_EQ(one.image.pixels, two.image.pixels) << renderModeName(mode);
+        EXPECT_EQ(one.stats.nonFiniteSamples, 0);
+        double total = 0;
+        for (float v : one.image.pixels) {
+            ASSERT_TRUE(std::isfinite(v)) << renderModeName(mode);
+            ASSERT_GE(v, 0.0f);
+            total += v;
+        }
+        EXPECT_GT(total, 0.0);
+        EXPECT_EQ(one.stats.spp, 3);
+        EXPECT_GT(one.stats.rays, 0u);
+        EXPECT_EQ(one.stats.scene.curves, 2);
+        // Neural: 3 plies per curve; fiber: 300 fibers per ply.
+        EXPECT_EQ(one.stats.scene.tubes, mode == RenderMode::Neural ? 6 : 1800);
+        EXPECT_GT(one.stats.scene.embreeBytes, 0);
+        // A different seed gives a different image.
+        options.seed = 6;
+        EXPECT_NE(render(s, options).image.pixels, one.image.pixels);
+    }
+}
+
+TEST_F(RenderTest, TimeBudgetRendersAtLeastOnePass) {
+    const Scene s(scene(kFleece, "[]", 6, 6), RenderMode::Neural);
+    RenderOptions options;
+    options.seconds = 0.3;
+    options.quiet = true;
+    const RenderResult r = render(s, options);
+    EXPECT_GE(r.stats.spp, 1);
+    EXPECT_GE(r.stats.passes, 1);
+    for (float v : r.image.pixels) ASSERT_TRUE(std::isfinite(v));
+}
+
+TEST(RenderOptions, BudgetsAndRangesAreValidated) {
+    using weft::testing::expectInputError;
+    RenderOptions o;
+    expectInputError([&] { o.validate(); }, {"--spp", "--time"});
+    o.spp = 4;
+    o.seconds = 2;
+    expectInputError([&] { o.validate(); }, {"exactly one"});
+    o.seconds = 0;
+    o.threads = -1;
+    expectInputError([&] { o.validate(); }, {"--threads", "[0, 1024]"});
+    o.threads = 0;
+    o.maxDepth = 0;
+    expectInputError([&] { o.validate(); }, {"max_depth", "[1, 10000]"});
+    o.maxDepth = 5;
+    EXPECT_NO_THROW(o.validate());
+}
+
+}  // namespace
+}  // namespace weft::render

@@ -13,7 +13,8 @@
 //                     piecewise constant (nearest texel), so sampling and
 //                     lookup agree.
 //   The procedural sky (skyLight()) is an EnvironmentLight over an image
-//                     computed from a documented analytic formula (docs/scene-format.md).
+//                     computed from a documented analytic formula (docs/scene-format.md,
+//                     "Procedural sky"; see skyRadiance below).
 //   SphereLight       a sphere of uniform emitted radiance; sampled uniformly
 //                     in the cone of directions it subtends (pbrt-v3
 //                     Sphere::Sample(ref)), pdf 1 / (2 pi (1 - cos theta_max));
@@ -25,7 +26,10 @@
 //   v = acos(d.y) / pi                          row:    y = v * height (row 0 at the top, +y)
 // so texel (x, y) covers phi in [2 pi x / W, 2 pi (x + 1) / W), theta in
 // [pi y / H, pi (y + 1) / H). rotate_deg turns the map about +y: the
-// direction d sees the unrotated map at R_y(-rotate_deg) d.
+// direction d sees the unrotated map at R_y(-rotate_deg) d, where
+//   R_y(a) (x, y, z) = (x cos a + z sin a, y, -x sin a + z cos a)
+// (right-handed: a = 90 degrees turns +z into +x, so rotate_deg = 90 shows
+// the centre column of the image, unrotated at +z, at +x).
 //
 // All directions are world-space unit vectors; LightSample::wi points from
 // the shading point towards the light.
@@ -91,8 +95,9 @@ class EnvironmentLight final : public Light {
 public:
     // image: linear RGB, width >= 1, height >= 1, every value finite and >= 0
     // (InputError naming `source` and the first bad texel otherwise); scale
-    // finite and >= 0; rotateDeg finite. A black image is allowed (it emits
-    // nothing and sample() returns no samples).
+    // finite and >= 0; rotateDeg finite. A black image (or scale 0) is
+    // allowed: it emits nothing, sample() returns no samples (pdf 0) and
+    // pdf() is 0 everywhere.
     EnvironmentLight(Image image, double scale, double rotateDeg, const std::string& source);
     // Reads an OpenEXR (.exr) or Radiance (.hdr) file; InputError naming the
     // file for a missing, unreadable or unsupported file.
@@ -107,8 +112,14 @@ public:
     const Image& image() const { return image_; }
 
 private:
+    // Index (y * width + x) of the texel seen in direction d; *sinTheta (if
+    // not null) gets sin theta of d.
+    size_t texelOf(const Vec3& d, double* sinTheta) const;
+
     Image image_;
     double scale_ = 1, rotateRad_ = 0;
+    double cosRot_ = 1, sinRot_ = 0;
+    bool hasSamples_ = false;  // false for a black image or scale 0
     // Piecewise-constant 2D distribution over the texels: conditional CDFs per
     // row and a marginal CDF over rows (pbrt's Distribution2D).
     std::vector<double> rowCdf_;   // height + 1 entries
@@ -116,12 +127,31 @@ private:
     std::vector<double> cellPdf_;  // height * width: density over [0,1]^2
 };
 
-// The procedural sky of docs/scene-format.md, times scale, as an environment
-// light (the scene default when no light is given).
+// The procedural sky (docs/scene-format.md, "Procedural sky"): radiance of
+// order 1 arriving from the unit direction d, +y up, smooth except for a
+// crease at the horizon (continuous there). With y = clamp(d.y, -1, 1):
+//   base = Z + (H - Z) (1 - y)^3   for y >= 0  (zenith Z to horizon H)
+//        = G + (H - G) (1 + y)^8   for y < 0   (horizon haze to the ground G)
+//   L(d) = base + C ((1 + d . s) / 2)^32      (a broad sun-less glow)
+// Z = (0.25, 0.45, 0.90) bluish zenith, H = (1.00, 0.97, 0.92) whitish
+// horizon, G = (0.20, 0.20, 0.20) dim neutral ground, C = (0.80, 0.70, 0.50)
+// warm glow about s = (0, sin 30deg, cos 30deg), 30 degrees above +z (the
+// centre column of the lat-long image).
+Rgb skyRadiance(const Vec3& d);
+// The sky as a lat-long image: every texel is skyRadiance at its centre
+// direction (the lat-long convention above). InputError unless width,
+// height >= 1 (and at most 2^28 texels).
+Image skyImage(int width, int height);
+// skyImage(width, height) times scale, unrotated, as an environment light
+// (the scene default when no light is given); InputError for a bad scale.
 EnvironmentLight skyLight(double scale = 1.0, int width = 256, int height = 128);
 
 class SphereLight final : public Light {
 public:
+    // intersect() ignores hits at t <= kIntersectEpsilon (|org - center| +
+    // radius), so that a ray leaving the sphere's surface does not hit it again.
+    static constexpr double kIntersectEpsilon = 1e-9;
+
     // InputError unless center is finite, radius finite and > 0, radiance finite and >= 0.
     SphereLight(const Vec3& center, double radius, const Rgb& radiance);
     bool isInfinite() const override { return false; }
@@ -140,8 +170,12 @@ private:
 };
 
 // Reads a linear RGB image: OpenEXR (.exr, RGB or RGBA channels, any pixel
-// type; alpha ignored; a Y-only file is grey) or Radiance RGBE (.hdr); the
-// extension picks the reader (case-insensitive). InputError naming the file.
+// type; alpha ignored; a Y-only file is grey; a missing one of R, G, B reads
+// as 0; the data window is the image; luminance/chroma and subsampled files
+// are refused) or Radiance RGBE (.hdr); the extension picks the reader
+// (case-insensitive). Values are returned as stored (no validation).
+// InputError naming the file for a missing, unreadable, truncated or corrupt
+// file, an unknown extension, or more than 2^28 texels.
 Image readImage(const std::string& path);
 // Writes linear RGB as an OpenEXR file with 32-bit float R, G, B channels,
 // atomically (temp file + rename).

@@ -1,0 +1,539 @@
+#include "weft/render/lights.h"
+
+#include <OpenEXR/IexBaseExc.h>
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStdIO.h>
+#include <stb/stb_image.h>
+
+#include <algorithm>
+#include <cctype>
+#include <climits>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#include "weft/core/error.h"
+#include "weft/core/file.h"
+#include "weft/core/math.h"
+
+namespace weft::render {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// The largest u below 1, so that a sample u = 1 - ulp stays in the last cell.
+constexpr double kOneMinusEpsilon = 0x1.fffffffffffffp-1;
+// Images larger than this (2^28 texels, 3 GiB of floats) are refused as
+// corrupt rather than allocated.
+constexpr int64_t kMaxImagePixels = int64_t(1) << 28;
+
+template <typename T>
+std::string format(const T& value) {
+    std::ostringstream s;
+    s << value;
+    return s.str();
+}
+
+bool finiteNonNegative(const Rgb& c) { return c.isFinite() && c.r >= 0 && c.g >= 0 && c.b >= 0; }
+
+// Rec. 709 luminance: the weight of a texel in the sampling distribution.
+double luminance(const Rgb& c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; }
+
+// The cell of t in [0, 1] on a grid of n cells; NaN and out-of-range values clamp.
+int cellIndex(double t, int n) {
+    if (!(t > 0)) return 0;
+    if (t >= 1) return n - 1;
+    return std::min(static_cast<int>(t * n), n - 1);
+}
+
+// R_y(angle) d for the (cos, sin) of the angle: +z turns towards +x.
+Vec3 rotateY(const Vec3& d, double cosA, double sinA) {
+    return {cosA * d.x + sinA * d.z, d.y, -sinA * d.x + cosA * d.z};
+}
+
+// Largest i in [0, n - 1] with cdf[i] <= u (pbrt's FindInterval): cells of zero
+// probability have cdf[i] == cdf[i + 1] and are never returned for u < 1.
+int findInterval(const double* cdf, int n, double u) {
+    const double* it = std::upper_bound(cdf, cdf + n + 1, u);
+    return std::clamp(static_cast<int>(it - cdf) - 1, 0, n - 1);
+}
+
+// Samples a piecewise-constant 1D distribution over [0, 1) given by its CDF
+// (n + 1 entries, cdf[n] = 1): the continuous position in [0, 1) and its cell.
+double sampleContinuous(const double* cdf, int n, double u, int* cell) {
+    const int i = findInterval(cdf, n, u);
+    const double width = cdf[i + 1] - cdf[i];
+    const double frac = width > 0 ? std::clamp((u - cdf[i]) / width, 0.0, kOneMinusEpsilon) : 0.0;
+    *cell = i;
+    return (i + frac) / n;
+}
+
+std::string lowercaseExtension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
+}
+
+[[noreturn]] void failRead(const std::string& path, const std::string& reason) {
+    throw InputError("cannot read image '" + path + "': " + reason);
+}
+
+void checkPixelCount(const std::string& path, int64_t width, int64_t height) {
+    if (width < 1 || height < 1 || width > kMaxImagePixels / height)
+        failRead(path, "size " + std::to_string(width) + " x " + std::to_string(height) +
+                           " is empty or larger than " + std::to_string(kMaxImagePixels) +
+                           " texels (corrupt header?)");
+}
+
+Image readExr(const std::string& path, const std::string& bytes) {
+    try {
+        Imf::StdISStream stream;
+        stream.str(bytes);
+        Imf::InputFile file(stream);
+        const Imath::Box2i dataWindow = file.header().dataWindow();
+        const int64_t width = int64_t(dataWindow.max.x) - dataWindow.min.x + 1;
+        const int64_t height = int64_t(dataWindow.max.y) - dataWindow.min.y + 1;
+        checkPixelCount(path, width, height);
+
+        const Imf::ChannelList& channels = file.header().channels();
+        const bool hasRgb =
+            channels.findChannel("R") || channels.findChannel("G") || channels.findChannel("B");
+        const bool hasY = channels.findChannel("Y") != nullptr;
+        if (!hasRgb && !hasY) failRead(path, "no R, G, B or Y channel");
+        if (!hasRgb && (channels.findChannel("RY") || channels.findChannel("BY")))
+            failRead(path, "luminance/chroma (Y, RY, BY) files are not supported; save as RGB");
+        const std::vector<const char*> names =
+            hasRgb ? std::vector<const char*>{"R", "G", "B"} : std::vector<const char*>{"Y"};
+        for (const char* name : names) {
+            const Imf::Channel* c = channels.findChannel(name);
+            if (c && (c->xSampling != 1 || c->ySampling != 1))
+                failRead(path, std::string("channel ") + name + " is subsampled (unsupported)");
+        }
+
+        Image image(static_cast<int>(width), static_cast<int>(height));
+        const size_t xStride = 3 * sizeof(float), yStride = xStride * image.width;
+        Imf::FrameBuffer frameBuffer;
+        // Missing R, G or B channels read as 0 (the slice's fill value); any
+        // pixel type converts to float.
+        for (size_t c = 0; c < names.size(); ++c)
+            frameBuffer.insert(names[c], Imf::Slice::Make(Imf::FLOAT, &image.pixels[c], dataWindow,
+                                                          xStride, yStride));
+        file.setFrameBuffer(frameBuffer);
+        file.readPixels(dataWindow.min.y, dataWindow.max.y);
+        if (!hasRgb)
+            for (size_t i = 0; i < image.pixels.size(); i += 3)
+                image.pixels[i + 1] = image.pixels[i + 2] = image.pixels[i];
+        return image;
+    } catch (const Iex::BaseExc& e) {
+        // Corrupt, truncated or non-EXR data: OpenEXR reports it by exception.
+        failRead(path, std::string("not a readable OpenEXR file (") + e.what() + ")");
+    }
+}
+
+// stb_image reads through these callbacks from memory and they note a read
+// past the end: stb's HDR decoder fills missing bytes with zeros instead of
+// failing, so this is how a truncated file is told from a complete one. (A
+// file cut inside its last texel, whose missing bytes stb asks for in one
+// short read, escapes this; the size check in readHdr catches it for files
+// narrower than 8 texels, which are never run-length encoded.)
+struct HdrReader {
+    const std::string* bytes;
+    size_t pos = 0;
+    bool pastEnd = false;
+
+    static int read(void* user, char* data, int size) {
+        auto* r = static_cast<HdrReader*>(user);
+        if (size <= 0) return 0;
+        const size_t n = std::min(static_cast<size_t>(size), r->bytes->size() - r->pos);
+        if (n == 0) r->pastEnd = true;
+        std::memcpy(data, r->bytes->data() + r->pos, n);
+        r->pos += n;
+        return static_cast<int>(n);
+    }
+    static void skip(void* user, int n) {
+        auto* r = static_cast<HdrReader*>(user);
+        const int64_t pos = std::clamp<int64_t>(int64_t(r->pos) + n, 0, r->bytes->size());
+        r->pos = static_cast<size_t>(pos);
+    }
+    static int eof(void* user) {
+        const auto* r = static_cast<HdrReader*>(user);
+        return r->pos >= r->bytes->size();
+    }
+};
+
+// Walks the run-length encoded scanlines of a Radiance file the way stb's
+// decoder does, from the first texel byte at `pos`, and returns why the data
+// is unusable ("" when stb can be given it). The stb of Debian 12 (2022-09)
+// loops forever on a record of length 0, which upstream rejects since
+// stb_image 2.28; such a record, or data cut short, is refused here first.
+// Where stb stops by itself (a flat scanline, from which on the rest of the
+// image is flat, or a record overrunning the scanline) the walk stops too.
+std::string checkRleScanlines(const std::string& bytes, size_t pos, int width, int height) {
+    if (width < 8 || width >= 32768) return "";  // flat texels only: stb's loop ends
+    const std::string truncated = "truncated: the file ends before its last scanline";
+    const auto byte = [&](size_t i) { return static_cast<unsigned char>(bytes[i]); };
+    for (int y = 0; y < height; ++y) {
+        if (pos + 4 > bytes.size()) return truncated;
+        if (byte(pos) != 2 || byte(pos + 1) != 2 || (byte(pos + 2) & 0x80)) return "";
+        if ((byte(pos + 2) << 8 | byte(pos + 3)) != width) return "";
+        pos += 4;
+        for (int channel = 0; channel < 4; ++channel) {
+            for (int filled = 0; filled < width;) {
+                if (pos >= bytes.size()) return truncated;
+                int count = byte(pos++);
+                if (count > 128) {
+                    count -= 128;  // a run: count copies of the next byte
+                    pos += 1;
+                } else if (count == 0) {
+                    return "corrupt run-length data (a record of length 0)";
+                } else {
+                    pos += count;  // count literal bytes
+                }
+                if (count > width - filled) return "";
+                filled += count;
+            }
+        }
+    }
+    return pos > bytes.size() ? truncated : "";
+}
+
+Image readHdr(const std::string& path, const std::string& bytes) {
+    if (bytes.size() > static_cast<size_t>(INT_MAX)) failRead(path, "file larger than 2 GiB");
+    const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
+    const int size = static_cast<int>(bytes.size());
+    if (!stbi_is_hdr_from_memory(data, size))
+        failRead(path, "not a Radiance RGBE file (no #?RADIANCE or #?RGBE header)");
+    int width = 0, height = 0, channels = 0;
+    if (!stbi_info_from_memory(data, size, &width, &height, &channels))
+        failRead(path, std::string("bad Radiance header (") + stbi_failure_reason() + ")");
+    checkPixelCount(path, width, height);
+    // A scanline takes 4 bytes per texel, or, run-length encoded (widths 8 to
+    // 32767), at least 4 header bytes and 2 bytes per run of up to 127 values
+    // of each of its 4 channels: a header claiming more texels than the file
+    // can hold is refused before stb allocates them.
+    const int64_t rowBytes =
+        width < 8 || width > 32767 ? 4 * int64_t(width) : 4 + 8 * ((int64_t(width) + 126) / 127);
+    // The texels follow the resolution line, the line after the blank line
+    // that ends the header.
+    const size_t blank = bytes.find("\n\n");
+    const size_t dataStart = blank == std::string::npos ? 0 : bytes.find('\n', blank + 2) + 1;
+    const int64_t dataBytes = size - static_cast<int64_t>(std::min(dataStart, bytes.size()));
+    if (int64_t(height) * rowBytes > dataBytes)
+        failRead(path, "truncated: " + std::to_string(width) + " x " + std::to_string(height) +
+                           " texels need more than the file's " + std::to_string(dataBytes) +
+                           " bytes of texel data");
+    const std::string rleProblem = checkRleScanlines(bytes, dataStart, width, height);
+    if (!rleProblem.empty()) failRead(path, rleProblem);
+
+    HdrReader reader{&bytes};
+    const stbi_io_callbacks callbacks{&HdrReader::read, &HdrReader::skip, &HdrReader::eof};
+    float* pixels = stbi_loadf_from_callbacks(&callbacks, &reader, &width, &height, &channels, 3);
+    if (!pixels) failRead(path, std::string("bad Radiance data (") + stbi_failure_reason() + ")");
+    std::unique_ptr<float, void (*)(void*)> owner(pixels, &stbi_image_free);
+    if (reader.pastEnd) failRead(path, "truncated: the file ends before its last scanline");
+    Image image(width, height);
+    std::copy(pixels, pixels + image.pixels.size(), image.pixels.begin());
+    return image;
+}
+
+void checkImage(const Image& image, const std::string& what) {
+    if (image.width < 1 || image.height < 1 ||
+        image.pixels.size() != 3 * static_cast<size_t>(image.width) * image.height)
+        throw InputError(what + ": image of " + std::to_string(image.width) + " x " +
+                         std::to_string(image.height) + " texels with " +
+                         std::to_string(image.pixels.size()) +
+                         " values; expected width, height >= 1 and 3 values per texel");
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// ConstantLight
+
+ConstantLight::ConstantLight(const Rgb& radiance) : radiance_(radiance) {
+    if (!finiteNonNegative(radiance))
+        throw InputError("constant light: radiance " + format(radiance) +
+                         " must be finite and >= 0 in every channel");
+}
+
+LightSample ConstantLight::sample(const Vec3&, const std::array<double, 2>& u) const {
+    // Uniform on the sphere (pbrt's UniformSampleSphere).
+    const double z = 1.0 - 2.0 * u[0];
+    const double r = safeSqrt(1.0 - z * z), phi = kTwoPi * u[1];
+    return {{r * std::cos(phi), r * std::sin(phi), z}, radiance_, 0.25 * kInvPi, kInf};
+}
+
+double ConstantLight::pdf(const Vec3&, const Vec3&) const { return 0.25 * kInvPi; }
+
+Rgb ConstantLight::radiance(const Vec3&) const { return radiance_; }
+
+// ---------------------------------------------------------------------------
+// EnvironmentLight
+
+EnvironmentLight::EnvironmentLight(Image image, double scale, double rotateDeg,
+                                   const std::string& source)
+    : image_(std::move(image)), scale_(scale), rotateRad_(radians(rotateDeg)) {
+    const std::string what = "envmap '" + source + "'";
+    checkImage(image_, what);
+    if (!(std::isfinite(scale) && scale >= 0))
+        throw InputError(what + ": scale = " + format(scale) + " must be finite and >= 0");
+    if (!std::isfinite(rotateDeg))
+        throw InputError(what + ": rotate_deg = " + format(rotateDeg) + " must be finite");
+    const int w = image_.width, h = image_.height;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const double v = image_.pixels[3 * (size_t(y) * w + x) + c];
+                if (!(std::isfinite(v) && v >= 0))
+                    throw InputError(what + ": texel (x " + std::to_string(x) + ", y " +
+                                     std::to_string(y) + ") channel " + "RGB"[c] + " = " +
+                                     format(v) + " must be finite and >= 0");
+            }
+    cosRot_ = std::cos(rotateRad_);
+    sinRot_ = std::sin(rotateRad_);
+
+    // pbrt-v3's InfiniteAreaLight: texel weight = luminance * sin(theta of the
+    // row centre), so that the density in solid angle (divided by sin theta)
+    // follows the luminance. Unnormalised cumulative sums first, divided
+    // afterwards, so that cells of zero weight keep exactly equal CDF values.
+    rowCdf_.assign(h + 1, 0.0);
+    cellCdf_.assign(size_t(h) * (w + 1), 0.0);
+    cellPdf_.assign(size_t(h) * w, 0.0);
+    std::vector<double> rowWeight(h, 0.0);
+    for (int y = 0; y < h; ++y) {
+        const double sinTheta = std::sin(kPi * (y + 0.5) / h);
+        double* cdf = &cellCdf_[size_t(y) * (w + 1)];
+        for (int x = 0; x < w; ++x) {
+            const double f = luminance(image_.get(x, y)) * sinTheta;
+            cellPdf_[size_t(y) * w + x] = f;
+            cdf[x + 1] = cdf[x] + f;
+        }
+        rowWeight[y] = cdf[w];
+        if (cdf[w] > 0)
+            for (int x = 1; x <= w; ++x) cdf[x] /= rowWeight[y];
+        rowCdf_[y + 1] = rowCdf_[y] + rowWeight[y];
+    }
+    const double total = rowCdf_[h];
+    if (!(total > 0) || scale_ == 0) {
+        // Nothing to emit: no samples, pdf 0 everywhere.
+        cellPdf_.assign(cellPdf_.size(), 0.0);
+        return;
+    }
+    for (int y = 1; y <= h; ++y) rowCdf_[y] /= total;
+    // Density over [0, 1]^2: f / (mean of f) = f * w * h / total.
+    const double norm = double(w) * h / total;
+    for (double& f : cellPdf_) f *= norm;
+    hasSamples_ = true;
+}
+
+EnvironmentLight EnvironmentLight::load(const std::string& path, double scale, double rotateDeg) {
+    return EnvironmentLight(readImage(path), scale, rotateDeg, path);
+}
+
+size_t EnvironmentLight::texelOf(const Vec3& d, double* sinTheta) const {
+    // Into the frame of the unrotated map: R_y(-rotate) d.
+    const Vec3 m = rotateY(d, cosRot_, -sinRot_);
+    double u = std::atan2(m.x, -m.z) * (0.5 * kInvPi);
+    if (u < 0) u += 1.0;
+    const double v = safeAcos(m.y) * kInvPi;
+    if (sinTheta) *sinTheta = std::sqrt(m.x * m.x + m.z * m.z);
+    return size_t(cellIndex(v, image_.height)) * image_.width + cellIndex(u, image_.width);
+}
+
+LightSample EnvironmentLight::sample(const Vec3& p, const std::array<double, 2>& u) const {
+    if (!hasSamples_) return {};
+    const int w = image_.width, h = image_.height;
+    const double u0 = std::clamp(u[0], 0.0, kOneMinusEpsilon);
+    const double u1 = std::clamp(u[1], 0.0, kOneMinusEpsilon);
+    // The row from the marginal, then the column from that row's conditional
+    // (pbrt's Distribution2D::SampleContinuous).
+    int row = 0, column = 0;
+    const double v = sampleContinuous(rowCdf_.data(), h, u1, &row);
+    const double uu = sampleContinuous(&cellCdf_[size_t(row) * (w + 1)], w, u0, &column);
+    const double theta = kPi * v, phi = kTwoPi * uu;
+    const double sinTheta = std::sin(theta);
+    const Vec3 m{sinTheta * std::sin(phi), std::cos(theta), -sinTheta * std::cos(phi)};
+    LightSample s;
+    s.wi = rotateY(m, cosRot_, sinRot_);
+    // Density and radiance from wi itself, so that they agree with pdf() and
+    // radiance() even where rounding puts wi on a neighbouring texel.
+    s.pdf = pdf(p, s.wi);
+    if (!(s.pdf > 0)) return {};
+    s.radiance = radiance(s.wi);
+    s.distance = kInf;
+    return s;
+}
+
+double EnvironmentLight::pdf(const Vec3&, const Vec3& wi) const {
+    if (!hasSamples_) return 0;
+    double sinTheta = 0;
+    const size_t texel = texelOf(wi, &sinTheta);
+    if (!(sinTheta > 0)) return 0;
+    // d omega = 2 pi^2 sin(theta) du dv for u = phi / (2 pi), v = theta / pi.
+    return cellPdf_[texel] / (2.0 * kPi * kPi * sinTheta);
+}
+
+Rgb EnvironmentLight::radiance(const Vec3& d) const {
+    const size_t texel = texelOf(d, nullptr);
+    const float* px = &image_.pixels[3 * texel];
+    return Rgb(px[0], px[1], px[2]) * scale_;
+}
+
+// ---------------------------------------------------------------------------
+// The procedural sky
+
+Rgb skyRadiance(const Vec3& d) {
+    constexpr Rgb kZenith{0.25, 0.45, 0.90}, kHorizon{1.00, 0.97, 0.92}, kGround{0.20, 0.20, 0.20};
+    constexpr Rgb kGlow{0.80, 0.70, 0.50};
+    const Vec3 glowDir{0.0, 0.5, 0.8660254037844386};  // 30 degrees above +z
+    const double y = std::clamp(d.y, -1.0, 1.0);
+    const Rgb base = y >= 0 ? kZenith + (kHorizon - kZenith) * std::pow(1.0 - y, 3)
+                            : kGround + (kHorizon - kGround) * std::pow(1.0 + y, 8);
+    const double c = std::clamp(0.5 * (1.0 + dot(d, glowDir)), 0.0, 1.0);
+    return base + kGlow * std::pow(c, 32);
+}
+
+Image skyImage(int width, int height) {
+    if (width < 1 || height < 1 || int64_t(width) * height > kMaxImagePixels)
+        throw InputError("procedural sky: image size " + std::to_string(width) + " x " +
+                         std::to_string(height) + " must be at least 1 x 1 and at most " +
+                         std::to_string(kMaxImagePixels) + " texels");
+    Image image(width, height);
+    for (int y = 0; y < height; ++y) {
+        const double theta = kPi * (y + 0.5) / height;
+        for (int x = 0; x < width; ++x) {
+            const double phi = kTwoPi * (x + 0.5) / width;
+            const Vec3 d{std::sin(theta) * std::sin(phi), std::cos(theta),
+                         -std::sin(theta) * std::cos(phi)};
+            image.set(x, y, skyRadiance(d));
+        }
+    }
+    return image;
+}
+
+EnvironmentLight skyLight(double scale, int width, int height) {
+    return EnvironmentLight(skyImage(width, height), scale, 0.0, "procedural sky");
+}
+
+// ---------------------------------------------------------------------------
+// SphereLight
+
+SphereLight::SphereLight(const Vec3& center, double radius, const Rgb& radiance)
+    : center_(center), radius_(radius), radiance_(radiance) {
+    if (!isFinite(center))
+        throw InputError("sphere light: center " + format(center) + " must be finite");
+    if (!(std::isfinite(radius) && radius > 0))
+        throw InputError("sphere light: radius = " + format(radius) + " must be finite and > 0");
+    if (!finiteNonNegative(radiance))
+        throw InputError("sphere light: radiance " + format(radiance) +
+                         " must be finite and >= 0 in every channel");
+}
+
+LightSample SphereLight::sample(const Vec3& p, const std::array<double, 2>& u) const {
+    const Vec3 toCenter = center_ - p;
+    const double dc2 = dot(toCenter, toCenter), r2 = radius_ * radius_;
+    if (!(dc2 > r2)) return {};  // inside or on the sphere (or p is NaN)
+    const double dc = std::sqrt(dc2);
+    // pbrt-v3 Sphere::Sample(ref, u): uniform in the cone of half-angle
+    // theta_max, sin^2 theta_max = r^2 / dc^2. 1 - cos theta is sampled
+    // directly to keep the precision of small, distant spheres.
+    const double sin2Max = r2 / dc2;
+    const double oneMinusCosMax = sin2Max / (1.0 + safeSqrt(1.0 - sin2Max));
+    const double t = std::clamp(u[0], 0.0, 1.0) * oneMinusCosMax;
+    const double cosTheta = 1.0 - t, sinTheta = safeSqrt(t * (2.0 - t));
+    const double phi = kTwoPi * u[1];
+    const Frame frame = Frame::fromZ(toCenter / dc);
+    LightSample s;
+    s.wi = frame.fromLocal({sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta});
+    // Nearer root of |p + t wi - c|^2 = r^2 in the cancellation-free form
+    // (dc^2 - r^2) / (b + sqrt(disc)), b = dc cos theta.
+    const double b = dc * cosTheta;
+    s.distance = (dc - radius_) * (dc + radius_) / (b + safeSqrt(r2 - dc2 * t * (2.0 - t)));
+    s.radiance = radiance_;
+    s.pdf = 1.0 / (kTwoPi * oneMinusCosMax);
+    return s;
+}
+
+double SphereLight::pdf(const Vec3& p, const Vec3& wi) const {
+    const Vec3 toCenter = center_ - p;
+    const double dc2 = dot(toCenter, toCenter), r2 = radius_ * radius_;
+    if (!(dc2 > r2)) return 0;
+    // wi is in the cone iff the ray p + t wi (t > 0) meets the sphere: the
+    // same test as intersect()'s discriminant.
+    const double b = dot(toCenter, wi);
+    if (!(b > 0)) return 0;
+    const Vec3 perp = toCenter - wi * b;
+    if (dot(perp, perp) > r2) return 0;
+    const double sin2Max = r2 / dc2;
+    return 1.0 / (kTwoPi * sin2Max / (1.0 + safeSqrt(1.0 - sin2Max)));
+}
+
+Rgb SphereLight::radiance(const Vec3&) const { return radiance_; }
+
+double SphereLight::intersect(const Vec3& org, const Vec3& dir, double tMax) const {
+    // Roots of t^2 + 2 hb t + c = 0 computed without cancellation (Haines et
+    // al., "Precision Improvements for Ray/Sphere Intersection", Ray Tracing
+    // Gems ch. 7): the discriminant from the closest-approach vector.
+    const Vec3 f = org - center_;
+    const double hb = dot(f, dir);
+    const Vec3 closest = f - dir * hb;
+    const double r2 = radius_ * radius_;
+    const double disc = r2 - dot(closest, closest);
+    if (!(disc >= 0)) return -1.0;
+    const double c = dot(f, f) - r2;
+    const double q = -(hb + std::copysign(std::sqrt(disc), hb));
+    if (q == 0) return -1.0;  // grazing at the origin
+    const double t0 = std::min(q, c / q), t1 = std::max(q, c / q);
+    const double tMin = kIntersectEpsilon * (std::sqrt(dot(f, f)) + radius_);
+    if (t0 > tMin && t0 < tMax) return t0;
+    if (t1 > tMin && t1 < tMax) return t1;
+    return -1.0;
+}
+
+// ---------------------------------------------------------------------------
+// Image files
+
+Image readImage(const std::string& path) {
+    const std::string ext = lowercaseExtension(path);
+    if (ext != ".exr" && ext != ".hdr")
+        failRead(path, "unsupported extension '" + ext + "' (expected .exr or .hdr)");
+    const std::string bytes = readFile(path);
+    return ext == ".exr" ? readExr(path, bytes) : readHdr(path, bytes);
+}
+
+void writeExr(const std::string& path, const Image& image) {
+    checkImage(image, "cannot write OpenEXR image '" + path + "'");
+    std::string bytes;
+    try {
+        Imf::Header header(image.width, image.height);
+        header.compression() = Imf::ZIP_COMPRESSION;  // lossless
+        const char* names[3] = {"R", "G", "B"};
+        for (const char* name : names) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+        Imf::FrameBuffer frameBuffer;
+        const size_t xStride = 3 * sizeof(float), yStride = xStride * image.width;
+        for (int c = 0; c < 3; ++c)
+            frameBuffer.insert(names[c], Imf::Slice::Make(Imf::FLOAT, &image.pixels[c],
+                                                          header.dataWindow(), xStride, yStride));
+        // Encoded in memory, then written through writeFileAtomic (temp file
+        // + rename): a reader never sees a half-written file.
+        Imf::StdOSStream stream;
+        {
+            Imf::OutputFile file(stream, header);
+            file.setFrameBuffer(frameBuffer);
+            file.writePixels(image.height);
+        }  // the destructor completes the line offset table
+        bytes = stream.str();
+    } catch (const Iex::BaseExc& e) {
+        throw InputError("cannot write OpenEXR image '" + path + "': " + e.what());
+    }
+    writeFileAtomic(path, bytes);
+}
+
+}  // namespace weft::render

@@ -13,11 +13,12 @@
 //                  "ply_twist": 0.3, "model": "fleece.json"} ]
 //   }
 // Parsing validates everything once: a missing required key, an unknown key,
-// a wrong type, a value out of range or a NaN is an InputError that names the
-// scene file and the JSON path of the key (e.g. `scene.json: yarns[1].plies =
-// 0 is out of range: allowed [1, 16]`). Relative file paths ("curves",
-// "model", "file") are resolved against the folder of the scene file and
-// stored absolute-or-as-joined; files are not opened here.
+// a key repeated in one object, a wrong type, a value out of range or a NaN
+// is an InputError that names the scene file and the JSON path of the key
+// (e.g. `scene.json: yarns[1].plies = 0 is out of range: allowed [1, 16]`).
+// Relative file paths ("curves", "model", "file") are resolved against the
+// folder of the scene file and stored absolute-or-as-joined; files are not
+// opened here (their extensions are checked).
 #pragma once
 
 #include <cstdint>
@@ -81,14 +82,16 @@ struct SceneDesc {
     std::vector<YarnDesc> yarns;    // may be empty (an environment-only scene)
 };
 
-// Parses and validates a scene; `pathForErrors` names it in messages and
-// relative paths resolve against `baseDir`.
+// Parses and validates a scene; `pathForErrors` names it in messages ("scene"
+// when empty) and relative paths resolve against `baseDir`.
 SceneDesc parseScene(const nlohmann::json& json, const std::string& pathForErrors,
                      const std::string& baseDir);
-// The same on JSON text (a syntax error names the line and column).
+// The same on JSON text (a syntax error names the line and column; nesting
+// deeper than 64 arrays and objects is rejected before parsing).
 SceneDesc parseSceneText(std::string_view text, const std::string& pathForErrors,
                          const std::string& baseDir);
-// Reads the file and parses it; relative paths resolve against its folder.
+// Reads the file and parses it; relative paths resolve against its folder,
+// made absolute (so the resolved paths do not depend on the working directory).
 SceneDesc loadScene(const std::string& path);
 
 // The scene as JSON with every key written (defaults included) and paths as

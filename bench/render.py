@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
-"""bench/render.py: the same close-up yarn scene in neural and fiber mode, one run.
+"""bench/render.py: the same scenes in neural and fiber mode, one run.
 
 Writes a small close-up scene (one 3-ply yarn segment filling the frame, lit
-by the procedural sky and two sphere lights), renders it with `weft render`
+by the procedural sky and two sphere lights) and a real knit swatch (when
+../shared/data is there), renders each with `weft render`
 in both modes at the same samples per pixel, each in its own process (so
 that peak resident memory is per mode), and writes a table of the measured
 values and the ratios fiber / neural to bench/results/render.md (and .json).
@@ -46,6 +47,33 @@ def closeup_scene(folder, model, size):
     return path
 
 
+def knit_scene(folder, model, size):
+    # The real stockinette swatch of ../shared/data (yarn radius 1 in the file),
+    # scaled to a yarn radius of 0.01, seen from the front at a slant.
+    bcc = os.path.join(ROOT, "..", "shared", "data", "knit-stockinette-tiny.bcc")
+    if not os.path.exists(bcc):
+        return None
+    s = 0.01
+    centre, extent = [0.2498, 0.1562, 0.0], 0.568  # of the file's points times s
+    scene = {
+        "camera": {"from": [centre[0], centre[1] + 0.3 * extent, centre[2] + 1.6 * extent],
+                   "to": centre, "up": [0, 1, 0], "fov_deg": 40},
+        "film": {"width": size, "height": size},
+        "render": {"spp": 16, "max_depth": 100, "seed": 0},
+        "lights": [
+            {"type": "sky"},
+            {"type": "sphere", "center": [centre[0] + extent, centre[1] + extent, extent],
+             "radius": 0.2 * extent, "radiance": [10, 10, 10]},
+        ],
+        "yarns": [{"curves": os.path.abspath(bcc), "scale": s, "radius": 0.01, "plies": 3,
+                   "ply_twist": 0.3, "model": os.path.abspath(model)}],
+    }
+    path = os.path.join(folder, "knit.json")
+    with open(path, "w") as f:
+        json.dump(scene, f, indent=2)
+    return path
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--weft", default=os.path.join(ROOT, "build", "release", "weft"))
@@ -55,18 +83,6 @@ def main():
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("--out", default=os.path.join(ROOT, "bench", "results", "render.md"))
     a = p.parse_args()
-
-    with tempfile.TemporaryDirectory(prefix="weft-bench-render-") as tmp:
-        scene = closeup_scene(tmp, a.model, a.size)
-        stats = {}
-        for mode in ("neural", "fiber"):
-            out = os.path.join(tmp, mode + ".exr")
-            cmd = [a.weft, "render", scene, "--mode", mode, "--spp", str(a.spp),
-                   "--threads", str(a.threads), "--out", out]
-            print("bench/render:", " ".join(cmd), file=sys.stderr)
-            subprocess.run(cmd, check=True)
-            with open(os.path.join(tmp, mode + ".json")) as f:
-                stats[mode] = json.load(f)
 
     rows = [
         ("segments handed to Embree", lambda s: s["scene"]["segments"], "%d"),
@@ -78,30 +94,51 @@ def main():
         ("rays per second", lambda s: s["rays_per_second"], "%.4g"),
         ("rays per sample", lambda s: s["rays"] / (s["spp"] * s["width"] * s["height"]), "%.2f"),
     ]
-    n, f = stats["neural"], stats["fiber"]
-    lines = [
-        "# Render: fiber mode vs neural mode, one run",
-        "",
-        "Close-up of one 3-ply yarn (`bench/render.py`), %dx%d, %d spp, %d threads, model `%s`."
-        % (a.size, a.size, a.spp, n["threads"], os.path.relpath(a.model, ROOT)),
-        "",
-        "| quantity | neural | fiber | fiber / neural |",
-        "| --- | --- | --- | --- |",
-    ]
-    table = {}
-    for name, get, fmt in rows:
-        vn, vf = get(n), get(f)
-        ratio = vf / vn if vn else float("nan")
-        table[name] = {"neural": vn, "fiber": vf, "ratio": ratio}
-        lines.append("| %s | %s | %s | %.3g |" % (name, fmt % vn, fmt % vf, ratio))
-    lines.append("")
+    lines = ["# Render: fiber mode vs neural mode, one run", ""]
+    results = {"settings": vars(a), "scenes": {}}
+    with tempfile.TemporaryDirectory(prefix="weft-bench-render-") as tmp:
+        scenes = [("close-up of one 3-ply yarn", closeup_scene(tmp, a.model, a.size)),
+                  ("knit swatch, ../shared/data/knit-stockinette-tiny.bcc (22 curves)",
+                   knit_scene(tmp, a.model, a.size))]
+        for title, scene in scenes:
+            if scene is None:
+                continue
+            stem = os.path.splitext(os.path.basename(scene))[0]
+            stats = {}
+            for mode in ("neural", "fiber"):
+                out = os.path.join(tmp, "%s-%s.exr" % (stem, mode))
+                cmd = [a.weft, "render", scene, "--mode", mode, "--spp", str(a.spp),
+                       "--threads", str(a.threads), "--quiet", "--out", out]
+                print("bench/render:", " ".join(cmd), file=sys.stderr)
+                subprocess.run(cmd, check=True)
+                with open(os.path.splitext(out)[0] + ".json") as f:
+                    stats[mode] = json.load(f)
+            n, f = stats["neural"], stats["fiber"]
+            lines += [
+                "## %s" % title,
+                "",
+                "%dx%d, %d spp, %d threads, model `%s`."
+                % (a.size, a.size, a.spp, n["threads"], os.path.relpath(a.model, ROOT)),
+                "",
+                "| quantity | neural | fiber | fiber / neural |",
+                "| --- | --- | --- | --- |",
+            ]
+            table = {}
+            for name, get, fmt in rows:
+                vn, vf = get(n), get(f)
+                ratio = vf / vn if vn else float("nan")
+                table[name] = {"neural": vn, "fiber": vf, "ratio": ratio}
+                lines.append("| %s | %s | %s | %.3g |" % (name, fmt % vn, fmt % vf, ratio))
+            lines.append("")
+            results["scenes"][stem] = {"title": title, "table": table, "neural": n, "fiber": f}
+
     os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
     with open(a.out + ".tmp", "w") as fo:
         fo.write("\n".join(lines))
     os.replace(a.out + ".tmp", a.out)
     json_out = os.path.splitext(a.out)[0] + ".json"
     with open(json_out + ".tmp", "w") as fo:
-        json.dump({"settings": vars(a), "table": table, "neural": n, "fiber": f}, fo, indent=2)
+        json.dump(results, fo, indent=2)
     os.replace(json_out + ".tmp", json_out)
     print("\n".join(lines))
 

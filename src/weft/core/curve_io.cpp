@@ -1,3 +1,4 @@
+#include "weft/core/text_parse.h"
 #include "weft/core/curve_io.h"
 
 #include <bit>
@@ -48,52 +49,6 @@ std::string printable(std::string_view s) {
         }
     }
     return out;
-}
-
-std::string_view trim(std::string_view s) {
-    const char* ws = " \t\r\n\f\v";
-    const size_t b = s.find_first_not_of(ws);
-    if (b == std::string_view::npos) return {};
-    return s.substr(b, s.find_last_not_of(ws) - b + 1);
-}
-
-std::vector<std::string_view> splitWhitespace(std::string_view s) {
-    std::vector<std::string_view> tokens;
-    size_t i = 0;
-    while (i < s.size()) {
-        while (i < s.size() && (s[i] == ' ' || s[i] == '\t' || s[i] == '\r')) ++i;
-        const size_t start = i;
-        while (i < s.size() && s[i] != ' ' && s[i] != '\t' && s[i] != '\r') ++i;
-        if (i > start) tokens.push_back(s.substr(start, i - start));
-    }
-    return tokens;
-}
-
-// Parses the whole token as a double ("+1", "1e-3", "nan", "inf" included).
-bool parseDouble(std::string_view tok, double* v) {
-    if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
-    if (tok.empty()) return false;
-    const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), *v);
-    return ec == std::errc() && end == tok.data() + tok.size();
-}
-
-bool parseInt(std::string_view tok, long long* v) {
-    if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
-    if (tok.empty()) return false;
-    const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), *v);
-    return ec == std::errc() && end == tok.data() + tok.size();
-}
-
-// Calls f(lineNumber, line) for every line of text (1-based, without '\n').
-template <typename F>
-void forEachLine(std::string_view text, F&& f) {
-    size_t lineNo = 0, pos = 0;
-    while (pos < text.size()) {
-        size_t end = text.find('\n', pos);
-        if (end == std::string_view::npos) end = text.size();
-        f(++lineNo, text.substr(pos, end - pos));
-        pos = end + 1;
-    }
 }
 
 }  // namespace
@@ -250,7 +205,7 @@ CurveSet parseCurveText(std::string_view text, const std::string& path) {
         const std::vector<std::string_view> tok = splitWhitespace(line);
         double v[4];
         bool ok = tok.size() == 3 || tok.size() == 4;
-        for (size_t k = 0; ok && k < tok.size(); ++k) ok = parseDouble(tok[k], &v[k]);
+        for (size_t k = 0; ok && k < tok.size(); ++k) ok = parseNumber(tok[k], &v[k]);
         if (!ok) fail("expected 3 or 4 numbers (x y z [radius]), got '" + printable(line) + "'");
         for (size_t k = 0; k < tok.size(); ++k)
             if (!std::isfinite(v[k]))
@@ -341,7 +296,7 @@ CurveSet readObjCurves(const std::string& path) {
         if (tok[0] == "v") {
             double v[3];
             bool ok = tok.size() >= 4;
-            for (size_t k = 0; ok && k < 3; ++k) ok = parseDouble(tok[k + 1], &v[k]);
+            for (size_t k = 0; ok && k < 3; ++k) ok = parseNumber(tok[k + 1], &v[k]);
             if (!ok) fail("expected 'v x y z', got '" + printable(trim(line)) + "'");
             if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
                 fail("non-finite vertex coordinate in '" + printable(trim(line)) + "'");
@@ -355,7 +310,7 @@ CurveSet readObjCurves(const std::string& path) {
                 // "l v/vt" is allowed; only the vertex index matters here.
                 const std::string_view vtok = tok[k].substr(0, tok[k].find('/'));
                 long long i = 0;
-                if (!parseInt(vtok, &i) || i == 0)
+                if (!parseNumber(vtok, &i) || i == 0)
                     fail("invalid vertex index '" + printable(tok[k]) +
                          "' (expected a non-zero integer, 1-based or negative relative)");
                 if (i < 0) {

@@ -12,6 +12,7 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/json_file.h"
+#include "weft/core/json_message.h"
 #include "weft/fit/yarn_lobes.h"
 
 namespace weft {
@@ -26,47 +27,11 @@ constexpr int kMaxNetworkWidth = 4096;
 constexpr const char* kMaskingForm = "symmetric-quadratic";
 constexpr const char* kCalibrationForm = "log-polynomial-sphere";
 
-// Shortest round-trip decimal form ("0.1", "nan", "inf") for messages.
-std::string formatNumber(double v) {
-    char buffer[64];
-    const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
-    return std::string(buffer, result.ptr);
-}
-
-// "a string", "an array of 3", ... for "got ..." in messages.
-std::string describe(const json& v) {
-    switch (v.type()) {
-        case json::value_t::null:
-            return "null";
-        case json::value_t::boolean:
-            return v.get<bool>() ? "true" : "false";
-        case json::value_t::string:
-            return "the string " + v.dump();
-        case json::value_t::array:
-            return "an array of " + std::to_string(v.size());
-        case json::value_t::object:
-            return "an object";
-        case json::value_t::number_integer:
-        case json::value_t::number_unsigned:
-        case json::value_t::number_float:
-            return formatNumber(v.get<double>());
-        default:
-            return "an unsupported value";
-    }
-}
-
-std::string childPath(const std::string& path, std::string_view key) {
-    return path.empty() ? std::string(key) : path + "." + std::string(key);
-}
-
 // "1 output", "3 outputs".
 std::string plural(int n, const std::string& noun) {
     return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
 }
 
-std::string indexPath(const std::string& path, size_t index) {
-    return path + "[" + std::to_string(index) + "]";
-}
 
 // Validating reader state: every error names the source, then the JSON path.
 class Reader {
@@ -82,7 +47,7 @@ class Reader {
     // An object whose keys are exactly `keys`: unknown keys and missing keys are errors.
     void expectKeys(const json& j, const std::string& path,
                     std::initializer_list<const char*> keys) const {
-        if (!j.is_object()) fail(path, "expected an object, got " + describe(j));
+        if (!j.is_object()) fail(path, "expected an object, got " + describeJson(j));
         std::string allowed;
         for (const char* k : keys) allowed += (allowed.empty() ? "" : ", ") + std::string(k);
         for (const auto& item : j.items()) {
@@ -96,7 +61,7 @@ class Reader {
 
     // A finite number (any JSON number type).
     double number(const json& v, const std::string& path) const {
-        if (!v.is_number()) fail(path, "expected a number, got " + describe(v));
+        if (!v.is_number()) fail(path, "expected a number, got " + describeJson(v));
         const double x = v.get<double>();
         if (!std::isfinite(x)) fail(path, "expected a finite number, got " + formatNumber(x));
         return x;
@@ -135,9 +100,9 @@ std::vector<float> readVector(const Reader& r, const json& v, const std::string&
                               const std::string& why) {
     if (!v.is_array() || v.size() != static_cast<size_t>(expected))
         r.fail(path, "expected " + std::to_string(expected) + " numbers (" + why + "), got " +
-                         describe(v));
+                         describeJson(v));
     std::vector<float> out(expected);
-    for (int k = 0; k < expected; ++k) out[k] = r.floatNumber(v[k], indexPath(path, k));
+    for (int k = 0; k < expected; ++k) out[k] = r.floatNumber(v[k], jsonIndexPath(path, k));
     return out;
 }
 
@@ -146,17 +111,17 @@ std::vector<float> readVector(const Reader& r, const json& v, const std::string&
 Mlp<float> readNetwork(const Reader& r, const json& j, const std::string& name, int inputs,
                        int outputs) {
     r.expectKeys(j, name, {"layers", "output"});
-    const std::string layersPath = childPath(name, "layers");
+    const std::string layersPath = jsonChildPath(name, "layers");
     const json& layers = j.at("layers");
     if (!layers.is_array() || layers.empty())
-        r.fail(layersPath, "expected a non-empty array of layers, got " + describe(layers));
+        r.fail(layersPath, "expected a non-empty array of layers, got " + describeJson(layers));
     if (layers.size() > static_cast<size_t>(kMaxNetworkLayers))
         r.fail(layersPath, "a network has at most " + std::to_string(kMaxNetworkLayers) +
                                " layers, got " + std::to_string(layers.size()));
 
     std::vector<LayerData> data;
     for (size_t l = 0; l < layers.size(); ++l) {
-        const std::string path = indexPath(layersPath, l);
+        const std::string path = jsonIndexPath(layersPath, l);
         const json& layer = layers[l];
         r.expectKeys(layer, path, {"weight", "bias", "prelu"});
         const bool last = l + 1 == layers.size();
@@ -166,10 +131,10 @@ Mlp<float> readNetwork(const Reader& r, const json& j, const std::string& name, 
         const std::string inWhy =
             l == 0 ? name + " has " + plural(inputs, "input")
                    : "layers[" + std::to_string(l - 1) + "] has " + plural(in, "output");
-        const std::string weightPath = childPath(path, "weight");
+        const std::string weightPath = jsonChildPath(path, "weight");
         const json& w = layer.at("weight");
         if (!w.is_array() || w.empty())
-            r.fail(weightPath, "expected a non-empty array of rows, got " + describe(w));
+            r.fail(weightPath, "expected a non-empty array of rows, got " + describeJson(w));
         if (w.size() > static_cast<size_t>(kMaxNetworkWidth))
             r.fail(weightPath, "a layer has at most " + std::to_string(kMaxNetworkWidth) +
                                    " outputs, got " + std::to_string(w.size()) + " rows");
@@ -182,7 +147,7 @@ Mlp<float> readNetwork(const Reader& r, const json& j, const std::string& name, 
         for (size_t row = 0; row < w.size(); ++row)
             if (!w[row].is_array() || w[row].size() != static_cast<size_t>(in))
                 r.fail(weightPath, shape + " (" + inWhy + "), got row " + std::to_string(row) +
-                                       " = " + describe(w[row]));
+                                       " = " + describeJson(w[row]));
         LayerData d;
         d.in = in;
         d.out = out;
@@ -190,21 +155,21 @@ Mlp<float> readNetwork(const Reader& r, const json& j, const std::string& name, 
         for (int row = 0; row < out; ++row)
             for (int col = 0; col < in; ++col)
                 d.weight.push_back(
-                    r.floatNumber(w[row][col], indexPath(indexPath(weightPath, row), col)));
+                    r.floatNumber(w[row][col], jsonIndexPath(jsonIndexPath(weightPath, row), col)));
         const std::string outWhy = "one per row of weight";
-        d.bias = readVector(r, layer.at("bias"), childPath(path, "bias"), out, outWhy);
+        d.bias = readVector(r, layer.at("bias"), jsonChildPath(path, "bias"), out, outWhy);
         const json& prelu = layer.at("prelu");
         d.hasPrelu = !prelu.is_null();
         if (d.hasPrelu)
-            d.prelu = readVector(r, prelu, childPath(path, "prelu"), out, outWhy + ", or null");
+            d.prelu = readVector(r, prelu, jsonChildPath(path, "prelu"), out, outWhy + ", or null");
         data.push_back(std::move(d));
     }
 
     const json& outputName = j.at("output");
-    const std::string outputPath = childPath(name, "output");
+    const std::string outputPath = jsonChildPath(name, "output");
     if (!outputName.is_string())
         r.fail(outputPath,
-               "expected a string (sigmoid, exp or identity), got " + describe(outputName));
+               "expected a string (sigmoid, exp or identity), got " + describeJson(outputName));
     OutputFunction output = OutputFunction::Identity;
     try {
         output = outputFunctionFromString(outputName.get<std::string>());
@@ -268,7 +233,7 @@ PlyParams readPly(const Reader& r, const json& j) {
     PlyParams ply;
     const json& fibers = j.at("fibers");
     if (!fibers.is_number_integer())
-        r.fail("ply.fibers", "expected an integer, got " + describe(fibers));
+        r.fail("ply.fibers", "expected an integer, got " + describeJson(fibers));
     const int64_t n =
         fibers.is_number_unsigned()
             ? static_cast<int64_t>(std::min<uint64_t>(fibers.get<uint64_t>(), uint64_t{1} << 62))
@@ -299,13 +264,13 @@ RLobeParams readRLobe(const Reader& r, const json& j) {
     const json& form = masking.at("form");
     if (!form.is_string() || form.get<std::string>() != kMaskingForm)
         r.fail("r_lobe.masking.form",
-               std::string("expected \"") + kMaskingForm + "\", got " + describe(form));
+               std::string("expected \"") + kMaskingForm + "\", got " + describeJson(form));
     const json& c = masking.at("coefficients");
     const std::string path = "r_lobe.masking.coefficients";
     if (!c.is_array() || c.size() != static_cast<size_t>(kMaskingCoefficients))
         r.fail(path,
-               "expected " + std::to_string(kMaskingCoefficients) + " numbers, got " + describe(c));
-    for (size_t k = 0; k < c.size(); ++k) p.masking.push_back(r.number(c[k], indexPath(path, k)));
+               "expected " + std::to_string(kMaskingCoefficients) + " numbers, got " + describeJson(c));
+    for (size_t k = 0; k < c.size(); ++k) p.masking.push_back(r.number(c[k], jsonIndexPath(path, k)));
     return p;
 }
 
@@ -331,13 +296,13 @@ EnergyCalibration readCalibration(const Reader& r, const json& j) {
     const json& form = j.at("form");
     if (!form.is_string() || form.get<std::string>() != kCalibrationForm)
         r.fail("energy_calibration.form",
-               std::string("expected \"") + kCalibrationForm + "\", got " + describe(form));
+               std::string("expected \"") + kCalibrationForm + "\", got " + describeJson(form));
     const json& degree = j.at("degree");
     if (!degree.is_number_integer() || degree.get<int64_t>() < 0 ||
         degree.get<int64_t>() > EnergyCalibration::kMaxDegree)
         r.fail("energy_calibration.degree",
                "expected an integer in [0, " + std::to_string(EnergyCalibration::kMaxDegree) +
-                   "], got " + describe(degree));
+                   "], got " + describeJson(degree));
     cal.degree = degree.get<int>();
     const size_t terms = static_cast<size_t>(EnergyCalibration::termCount(cal.degree));
     for (const auto& [key, target] : {std::pair{"r", &cal.r}, std::pair{"m", &cal.m}}) {
@@ -345,14 +310,14 @@ EnergyCalibration readCalibration(const Reader& r, const json& j) {
         const json& rows = j.at(key);
         if (!rows.is_array() || rows.size() != 3)
             r.fail(path, "expected 3 rows (R, G, B) of " + std::to_string(terms) +
-                             " numbers, got " + describe(rows));
+                             " numbers, got " + describeJson(rows));
         for (size_t c = 0; c < 3; ++c) {
-            const std::string rowPath = indexPath(path, c);
+            const std::string rowPath = jsonIndexPath(path, c);
             if (!rows[c].is_array() || rows[c].size() != terms)
                 r.fail(rowPath, "expected " + std::to_string(terms) + " numbers ((degree + 1)^2), got " +
-                                    describe(rows[c]));
+                                    describeJson(rows[c]));
             for (size_t k = 0; k < terms; ++k)
-                (*target)[c].push_back(r.number(rows[c][k], indexPath(rowPath, k)));
+                (*target)[c].push_back(r.number(rows[c][k], jsonIndexPath(rowPath, k)));
         }
     }
     return cal;
@@ -453,7 +418,7 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     const Reader r(source);
     if (!j.is_object())
         r.fail("", std::string("expected a JSON object (a ") + kYarnModelFormat + " file), got " +
-                       describe(j));
+                       describeJson(j));
     // Format and version first: a file of another kind or version gets that
     // message rather than a list of unknown keys.
     if (!j.contains("format"))
@@ -462,13 +427,13 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     const json& format = j.at("format");
     if (!format.is_string() || format.get<std::string>() != kYarnModelFormat)
         r.fail("format",
-               std::string("expected \"") + kYarnModelFormat + "\", got " + describe(format));
+               std::string("expected \"") + kYarnModelFormat + "\", got " + describeJson(format));
     if (!j.contains("version")) r.fail("", "missing key \"version\"");
     const json& version = j.at("version");
     if (!version.is_number_integer())
-        r.fail("version", "expected an integer, got " + describe(version));
+        r.fail("version", "expected an integer, got " + describeJson(version));
     if (version.get<int64_t>() != kYarnModelVersion)
-        r.fail("version", "unsupported version " + describe(version) +
+        r.fail("version", "unsupported version " + describeJson(version) +
                               " (supported: " + std::to_string(kYarnModelVersion) + ")");
     // energy_calibration may be absent (files written before it existed): null.
     json keys = json::object();
@@ -488,7 +453,7 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     if (j.contains("energy_calibration"))
         model.calibration = readCalibration(r, j.at("energy_calibration"));
     const json& fit = j.at("fit");
-    if (!fit.is_object()) r.fail("fit", "expected an object, got " + describe(fit));
+    if (!fit.is_object()) r.fail("fit", "expected an object, got " + describeJson(fit));
     model.fit = fit;
     return model;
 }

@@ -1,3 +1,4 @@
+#include "weft/core/text_parse.h"
 #include "weft/render/curves.h"
 
 #include <algorithm>
@@ -65,58 +66,6 @@ std::string hexByte(unsigned char b) {
     char buf[8];
     std::snprintf(buf, sizeof buf, "0x%02x", b);
     return buf;
-}
-
-std::string_view trim(std::string_view s) {
-    const char* ws = " \t\r\f\v";
-    const size_t b = s.find_first_not_of(ws);
-    if (b == std::string_view::npos) return {};
-    return s.substr(b, s.find_last_not_of(ws) - b + 1);
-}
-
-std::vector<std::string_view> splitWhitespace(std::string_view s) {
-    std::vector<std::string_view> tokens;
-    size_t i = 0;
-    const auto isSpace = [](char c) {
-        return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
-    };
-    while (i < s.size()) {
-        while (i < s.size() && isSpace(s[i])) ++i;
-        const size_t start = i;
-        while (i < s.size() && !isSpace(s[i])) ++i;
-        if (i > start) tokens.push_back(s.substr(start, i - start));
-    }
-    return tokens;
-}
-
-// The whole token as a double; "+1" and "1e-3" are accepted, so are "nan" and
-// "inf" (the callers reject them with a clearer message).
-bool parseDouble(std::string_view tok, double* v) {
-    if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
-    if (tok.empty()) return false;
-    const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), *v);
-    return ec == std::errc() && end == tok.data() + tok.size();
-}
-
-bool parseInt(std::string_view tok, int64_t* v) {
-    if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
-    if (tok.empty()) return false;
-    const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), *v);
-    return ec == std::errc() && end == tok.data() + tok.size();
-}
-
-// Calls f(lineNumber, line) for every line (1-based, without "\n" or "\r").
-template <typename F>
-void forEachLine(std::string_view text, F&& f) {
-    size_t lineNo = 0, pos = 0;
-    while (pos < text.size()) {
-        size_t end = text.find('\n', pos);
-        if (end == std::string_view::npos) end = text.size();
-        std::string_view line = text.substr(pos, end - pos);
-        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-        f(++lineNo, line);
-        pos = end + 1;
-    }
 }
 
 std::string lowercase(std::string s) {
@@ -306,7 +255,7 @@ CurveSet parseTextCurves(std::string_view text, const std::string& path) {
         const std::vector<std::string_view> tok = splitWhitespace(line);
         double v[4];
         bool ok = tok.size() == 3 || tok.size() == 4;
-        for (size_t k = 0; ok && k < tok.size(); ++k) ok = parseDouble(tok[k], &v[k]);
+        for (size_t k = 0; ok && k < tok.size(); ++k) ok = parseNumber(tok[k], &v[k]);
         if (!ok)
             fail("expected a point 'x y z' or 'x y z radius' (3 or 4 numbers), got '" +
                  printable(line) + "'");
@@ -374,7 +323,7 @@ CurveSet parseObjCurves(std::string_view text, const std::string& path) {
             bool ok = tok.size() >= 4;
             for (size_t k = 1; ok && k < tok.size(); ++k) {
                 double value;
-                ok = parseDouble(tok[k], &value);
+                ok = parseNumber(tok[k], &value);
                 if (ok && k <= 3) xyz[k - 1] = value;
             }
             if (!ok) fail("expected 'v x y z' with numbers, got '" + printable(line) + "'");
@@ -393,7 +342,7 @@ CurveSet parseObjCurves(std::string_view text, const std::string& path) {
                 // "l v/vt" is allowed; only the vertex index matters here.
                 const std::string_view vertexToken = tok[k].substr(0, tok[k].find('/'));
                 int64_t index = 0;
-                if (!parseInt(vertexToken, &index) || index == 0)
+                if (!parseNumber(vertexToken, &index) || index == 0)
                     fail("invalid vertex index '" + printable(tok[k]) +
                          "' (expected a non-zero integer: 1-based, or negative relative)");
                 if (index < 0) {

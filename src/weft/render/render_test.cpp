@@ -261,6 +261,19 @@ TEST_F(RenderTest, ImagesAreFiniteAndDoNotDependOnTheThreadCount) {
     }
 }
 
+TEST_F(RenderTest, FiberGeometryBeyondTheLimitIsRefusedBeforeItIsBuilt) {
+    // 100 m of yarn of radius 0.1 mm: about 2e12 fiber segments.
+    writeFileAtomic(path("long.txt"), "0 0 0\n100 0 0\n");
+    const std::string text = R"({
+        "camera": {"from": [0, 0, 1], "to": [0, 0, 0]},
+        "yarns": [{"curves": "long.txt", "radius": 0.0001, "plies": 3, "model": ")" +
+                             kFleece + R"("}]
+    })";
+    const SceneDesc desc = parseSceneText(text, path("scene.json"), dir_.string());
+    weft::testing::expectInputError([&] { Scene s(desc, RenderMode::Fiber); },
+                                    {"scene.json", "yarns[0]", "long.txt", "segments"});
+}
+
 TEST_F(RenderTest, TimeBudgetRendersAtLeastOnePass) {
     const Scene s(scene(kFleece, "[]", 6, 6), RenderMode::Neural);
     RenderOptions options;

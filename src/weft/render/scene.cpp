@@ -68,6 +68,15 @@ double largestRadius(const Curve& curve, const YarnDesc& yarn) {
     return yarn.scale * static_cast<double>(*std::max_element(curve.radii.begin(), curve.radii.end()));
 }
 
+[[noreturn]] void tooMuchGeometry(const SceneDesc& desc, size_t yarn, RenderMode mode) {
+    throw InputError((desc.path.empty() ? std::string("scene") : desc.path) + ": yarns[" +
+                     std::to_string(yarn) + "] (" + desc.yarns[yarn].curves + "): the " +
+                     renderModeName(mode) + " geometry would exceed " +
+                     std::to_string(kMaxSceneSegments) +
+                     " curve segments (about 60 bytes each in Embree); use fewer or shorter "
+                     "curves, or a larger radius");
+}
+
 }  // namespace
 
 Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet)
@@ -101,6 +110,7 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet)
 
     Progress progress("build " + std::string(renderModeName(mode)) + " geometry",
                       static_cast<uint64_t>(stats_.curves), quiet);
+    int64_t planned = 0;
     for (size_t y = 0; y < desc.yarns.size(); ++y) {
         const YarnDesc& yarn = desc.yarns[y];
         const int material = yarnMaterial[y];
@@ -110,10 +120,24 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet)
             const double radius = largestRadius(curves[c], yarn);
             const double step = sampleStep(radius > 0 ? radius : 1.0, yarn.plies, yarn.plyTwist,
                                            mode == RenderMode::Fiber ? &fibers : nullptr);
+            // The control polygon's length bounds the samples frameCurve will
+            // make (to within the spline's bulge): refuse before allocating them.
+            double chord = 0;
+            const std::vector<Vec3>& cp = curves[c].points;
+            for (size_t k = 0; k + 1 < cp.size(); ++k) chord += length(cp[k + 1] - cp[k]);
+            if (curves[c].closed && cp.size() > 1) chord += length(cp.front() - cp.back());
+            const double estimate = (chord * yarn.scale / step + 1) * yarn.plies *
+                                    (mode == RenderMode::Neural ? 1 : fibers.fibers);
+            if (static_cast<double>(planned) + estimate > static_cast<double>(kMaxSceneSegments))
+                tooMuchGeometry(desc, y, mode);
             const FramedCurve centre =
                 frameCurve(curves[c], yarn.scale, yarn.radius, step, yarn.curves, c);
             const std::vector<FramedCurve> plies = plyCurves(centre, yarn.plies, yarn.plyTwist);
             for (size_t j = 0; j < plies.size(); ++j) {
+                // Refuse before allocating: a fiber-mode scene costs fibers x samples segments.
+                const int64_t tubes = mode == RenderMode::Neural ? 1 : fibers.fibers;
+                planned += tubes * static_cast<int64_t>(plies[j].size());
+                if (planned > kMaxSceneSegments) tooMuchGeometry(desc, y, mode);
                 if (mode == RenderMode::Neural) {
                     accel_->addGeometry({toTube(plies[j])}, material);
                 } else {

@@ -32,6 +32,10 @@
 namespace weft::render {
 
 enum class RenderMode { Neural, Fiber };
+
+// Largest number of curve segments a scene may hand to Embree (about 60
+// bytes each with the BVH): an InputError naming the yarn beyond it.
+inline constexpr int64_t kMaxSceneSegments = int64_t{200} * 1000 * 1000;
 const char* renderModeName(RenderMode mode);
 // "neural" or "fiber"; InputError otherwise.
 RenderMode parseRenderMode(const std::string& name);

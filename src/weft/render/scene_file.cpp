@@ -14,6 +14,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/json_message.h"
 
 namespace weft::render {
 
@@ -24,8 +25,7 @@ using nlohmann::json;
 // A real scene nests 3 deep (lights[i].center); the limit only keeps hostile
 // input from building deep trees that recursive code (copy, dump) would walk.
 constexpr int kMaxNesting = 64;
-// Strings quoted in messages are cut here: a message should not echo megabytes.
-constexpr size_t kMaxQuoted = 60;
+// A syntax error's detail is cut here: a message should not echo megabytes.
 constexpr size_t kMaxSyntaxDetail = 200;
 
 constexpr int kMaxFilmSide = 16384;
@@ -36,54 +36,6 @@ constexpr double kMaxPlyTwist = 100;
 // up counts as parallel to the view direction below this sine of their angle:
 // the camera frame built from cross(dir, up) would be numerically meaningless.
 constexpr double kMinUpSine = 1e-6;
-
-// Shortest round-trip decimal form ("0.1", "nan", "inf") for messages.
-std::string formatNumber(double v) {
-    char buffer[64];
-    const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
-    return std::string(buffer, result.ptr);
-}
-
-// A string as a JSON literal (escaped, invalid UTF-8 replaced), cut to kMaxQuoted bytes.
-std::string jsonString(std::string_view s) {
-    const bool cut = s.size() > kMaxQuoted;
-    const json literal = std::string(s.substr(0, cut ? kMaxQuoted : s.size()));
-    std::string out = literal.dump(-1, ' ', false, json::error_handler_t::replace);
-    if (cut) out.insert(out.size() - 1, "...");
-    return out;
-}
-
-// "the string \"x\"", "an array of 2", ... for "got ..." in messages.
-std::string describe(const json& v) {
-    switch (v.type()) {
-        case json::value_t::null:
-            return "null";
-        case json::value_t::boolean:
-            return v.get<bool>() ? "true" : "false";
-        case json::value_t::string:
-            return "the string " + jsonString(v.get_ref<const std::string&>());
-        case json::value_t::array:
-            return "an array of " + std::to_string(v.size());
-        case json::value_t::object:
-            return "an object";
-        case json::value_t::number_integer:
-            return std::to_string(v.get<int64_t>());
-        case json::value_t::number_unsigned:
-            return std::to_string(v.get<uint64_t>());
-        case json::value_t::number_float:
-            return formatNumber(v.get<double>());
-        default:
-            return "an unsupported value";
-    }
-}
-
-std::string childPath(const std::string& path, std::string_view key) {
-    return path.empty() ? std::string(key) : path + "." + std::string(key);
-}
-
-std::string indexPath(const std::string& path, size_t index) {
-    return path + "[" + std::to_string(index) + "]";
-}
 
 std::string joinNames(std::initializer_list<const char*> names) {
     std::string out;
@@ -239,8 +191,8 @@ class StrictSax final : public nlohmann::json_sax<json> {
         std::string path;
         for (size_t i = 0; i + 1 < stack_.size(); ++i) {
             const Frame& f = stack_[i];
-            path = f.container->is_array() ? indexPath(path, f.container->size() - 1)
-                                           : childPath(path, f.key);
+            path = f.container->is_array() ? jsonIndexPath(path, f.container->size() - 1)
+                                           : jsonChildPath(path, f.key);
         }
         return path;
     }
@@ -275,8 +227,8 @@ class Reader {
                      std::initializer_list<const char*> allowed,
                      std::initializer_list<const char*> required) const {
         if (!j.is_object()) {
-            if (path.empty()) fail("expected a JSON object at the top level, got " + describe(j));
-            failAt(path, "expected an object, got " + describe(j));
+            if (path.empty()) fail("expected a JSON object at the top level, got " + describeJson(j));
+            failAt(path, "expected an object, got " + describeJson(j));
         }
         const std::string in = path.empty() ? "" : " in " + path;
         for (const auto& item : j.items()) {
@@ -291,7 +243,7 @@ class Reader {
     }
 
     double number(const json& v, const std::string& path) const {
-        if (!v.is_number()) failAt(path, "expected a number, got " + describe(v));
+        if (!v.is_number()) failAt(path, "expected a number, got " + describeJson(v));
         const double x = v.get<double>();
         if (!std::isfinite(x)) failAt(path, "expected a finite number, got " + formatNumber(x));
         return x;
@@ -341,18 +293,18 @@ class Reader {
 
     Vec3 vec3(const json& v, const std::string& path) const {
         if (!v.is_array() || v.size() != 3)
-            failAt(path, "expected an array of 3 numbers, got " + describe(v));
-        return {number(v[0], indexPath(path, 0)), number(v[1], indexPath(path, 1)),
-                number(v[2], indexPath(path, 2))};
+            failAt(path, "expected an array of 3 numbers, got " + describeJson(v));
+        return {number(v[0], jsonIndexPath(path, 0)), number(v[1], jsonIndexPath(path, 1)),
+                number(v[2], jsonIndexPath(path, 2))};
     }
 
     Rgb radiance(const json& v, const std::string& path) const {
         if (!v.is_array() || v.size() != 3)
-            failAt(path, "expected an array of 3 numbers (r, g, b), got " + describe(v));
+            failAt(path, "expected an array of 3 numbers (r, g, b), got " + describeJson(v));
         Rgb c;
         for (int k = 0; k < 3; ++k)
             c[k] = numberIn(
-                v[k], indexPath(path, k), [](double x) { return x >= 0; }, ">= 0");
+                v[k], jsonIndexPath(path, k), [](double x) { return x >= 0; }, ">= 0");
         return c;
     }
 
@@ -360,7 +312,7 @@ class Reader {
     // (lowercase, with the dot) lists the accepted ones, empty: any.
     std::string file(const json& v, const std::string& path,
                      std::initializer_list<const char*> extensions) const {
-        if (!v.is_string()) failAt(path, "expected a file name, got " + describe(v));
+        if (!v.is_string()) failAt(path, "expected a file name, got " + describeJson(v));
         const std::string& name = v.get_ref<const std::string&>();
         if (name.empty()) failAt(path, "expected a file name, got the empty string");
         // The C library would stop at the NUL and open some other file.
@@ -467,14 +419,14 @@ const char* typeName(LightDesc::Type t) {
 }
 
 LightDesc readLight(const Reader& r, const json& j, const std::string& path) {
-    if (!j.is_object()) r.failAt(path, "expected an object, got " + describe(j));
+    if (!j.is_object()) r.failAt(path, "expected an object, got " + describeJson(j));
     const json* type = find(j, "type");
     if (type == nullptr) r.fail("missing required key \"type\" in " + path);
-    const std::string typePath = childPath(path, "type");
+    const std::string typePath = jsonChildPath(path, "type");
     const char* allowedTypes = "sky, envmap, sphere, constant";
     if (!type->is_string())
         r.failAt(typePath,
-                 std::string("expected a string (") + allowedTypes + "), got " + describe(*type));
+                 std::string("expected a string (") + allowedTypes + "), got " + describeJson(*type));
     const std::string& name = type->get_ref<const std::string&>();
     LightDesc l;
     if (name == "sky") {
@@ -483,15 +435,15 @@ LightDesc readLight(const Reader& r, const json& j, const std::string& path) {
     } else if (name == "envmap") {
         l.type = LightDesc::Type::Envmap;
         r.checkObject(j, path, {"type", "file", "scale", "rotate_deg"}, {"file"});
-        l.file = r.file(j.at("file"), childPath(path, "file"), {".exr", ".hdr"});
+        l.file = r.file(j.at("file"), jsonChildPath(path, "file"), {".exr", ".hdr"});
         if (const json* rot = find(j, "rotate_deg"))
-            l.rotateDeg = r.number(*rot, childPath(path, "rotate_deg"));
+            l.rotateDeg = r.number(*rot, jsonChildPath(path, "rotate_deg"));
     } else if (name == "sphere") {
         l.type = LightDesc::Type::Sphere;
         r.checkObject(j, path, {"type", "center", "radius", "radiance"},
                       {"center", "radius", "radiance"});
-        l.center = r.vec3(j.at("center"), childPath(path, "center"));
-        l.radius = r.numberIn(j.at("radius"), childPath(path, "radius"), isPositive, "> 0");
+        l.center = r.vec3(j.at("center"), jsonChildPath(path, "center"));
+        l.radius = r.numberIn(j.at("radius"), jsonChildPath(path, "radius"), isPositive, "> 0");
     } else if (name == "constant") {
         l.type = LightDesc::Type::Constant;
         r.checkObject(j, path, {"type", "radiance"}, {"radiance"});
@@ -500,9 +452,9 @@ LightDesc readLight(const Reader& r, const json& j, const std::string& path) {
                  "unknown light type " + jsonString(name) + " (allowed: " + allowedTypes + ")");
     }
     if (const json* scale = find(j, "scale"))
-        l.scale = r.numberIn(*scale, childPath(path, "scale"), isNonNegative, ">= 0");
+        l.scale = r.numberIn(*scale, jsonChildPath(path, "scale"), isNonNegative, ">= 0");
     if (const json* radiance = find(j, "radiance"))
-        l.radiance = r.radiance(*radiance, childPath(path, "radiance"));
+        l.radiance = r.radiance(*radiance, jsonChildPath(path, "radiance"));
     return l;
 }
 
@@ -510,17 +462,17 @@ YarnDesc readYarn(const Reader& r, const json& j, const std::string& path) {
     r.checkObject(j, path, {"curves", "scale", "radius", "plies", "ply_twist", "model"},
                   {"curves", "model"});
     YarnDesc y;
-    y.curves = r.file(j.at("curves"), childPath(path, "curves"), {".bcc", ".txt", ".obj"});
-    y.model = r.file(j.at("model"), childPath(path, "model"), {});
+    y.curves = r.file(j.at("curves"), jsonChildPath(path, "curves"), {".bcc", ".txt", ".obj"});
+    y.model = r.file(j.at("model"), jsonChildPath(path, "model"), {});
     if (const json* scale = find(j, "scale"))
-        y.scale = r.numberIn(*scale, childPath(path, "scale"), isPositive, "> 0");
+        y.scale = r.numberIn(*scale, jsonChildPath(path, "scale"), isPositive, "> 0");
     if (const json* radius = find(j, "radius"))
-        y.radius = r.numberIn(*radius, childPath(path, "radius"), isPositive, "> 0");
+        y.radius = r.numberIn(*radius, jsonChildPath(path, "radius"), isPositive, "> 0");
     if (const json* plies = find(j, "plies"))
-        y.plies = static_cast<int>(r.integer(*plies, childPath(path, "plies"), 1, kMaxPlies));
+        y.plies = static_cast<int>(r.integer(*plies, jsonChildPath(path, "plies"), 1, kMaxPlies));
     if (const json* twist = find(j, "ply_twist"))
         y.plyTwist = r.numberIn(
-            *twist, childPath(path, "ply_twist"),
+            *twist, jsonChildPath(path, "ply_twist"),
             [](double x) { return std::fabs(x) <= kMaxPlyTwist; }, "[-100, 100]");
     return y;
 }
@@ -557,15 +509,15 @@ SceneDesc parseScene(const json& j, const std::string& pathForErrors, const std:
     if (const json* render = find(j, "render")) s.render = readRender(r, *render);
     if (const json* lights = find(j, "lights")) {
         if (!lights->is_array())
-            r.failAt("lights", "expected an array of lights, got " + describe(*lights));
+            r.failAt("lights", "expected an array of lights, got " + describeJson(*lights));
         for (size_t i = 0; i < lights->size(); ++i)
-            s.lights.push_back(readLight(r, (*lights)[i], indexPath("lights", i)));
+            s.lights.push_back(readLight(r, (*lights)[i], jsonIndexPath("lights", i)));
     }
     if (const json* yarns = find(j, "yarns")) {
         if (!yarns->is_array())
-            r.failAt("yarns", "expected an array of yarns, got " + describe(*yarns));
+            r.failAt("yarns", "expected an array of yarns, got " + describeJson(*yarns));
         for (size_t i = 0; i < yarns->size(); ++i)
-            s.yarns.push_back(readYarn(r, (*yarns)[i], indexPath("yarns", i)));
+            s.yarns.push_back(readYarn(r, (*yarns)[i], jsonIndexPath("yarns", i)));
     }
     return s;
 }
@@ -667,10 +619,10 @@ std::string sceneHash(const SceneDesc& scene) {
     };
     for (size_t i = 0; i < scene.lights.size(); ++i)
         if (scene.lights[i].type == LightDesc::Type::Envmap)
-            digest(j["lights"][i]["file"], indexPath("lights", i) + ".file");
+            digest(j["lights"][i]["file"], jsonIndexPath("lights", i) + ".file");
     for (size_t i = 0; i < scene.yarns.size(); ++i) {
-        digest(j["yarns"][i]["curves"], indexPath("yarns", i) + ".curves");
-        digest(j["yarns"][i]["model"], indexPath("yarns", i) + ".model");
+        digest(j["yarns"][i]["curves"], jsonIndexPath("yarns", i) + ".curves");
+        digest(j["yarns"][i]["model"], jsonIndexPath("yarns", i) + ".model");
     }
     // Object keys dump sorted (std::map), so the text is canonical.
     return hex16(fnv1a("weft scene hash 1\n" + j.dump()));

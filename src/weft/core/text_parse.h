@@ -1,0 +1,61 @@
+// weft/core/text_parse.h — tokenising line-based text inputs (curve files).
+//
+// Shared by the lenient curve readers of core/curve_io.cpp and the strict ones
+// of render/curves.cpp. Whitespace is ' ', '\t', '\r', '\n', '\f', '\v'.
+#pragma once
+
+#include <charconv>
+#include <string_view>
+#include <system_error>
+#include <vector>
+
+namespace weft {
+
+inline bool isTextSpace(char c) {
+    return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v';
+}
+
+inline std::string_view trim(std::string_view s) {
+    size_t b = 0, e = s.size();
+    while (b < e && isTextSpace(s[b])) ++b;
+    while (e > b && isTextSpace(s[e - 1])) --e;
+    return s.substr(b, e - b);
+}
+
+inline std::vector<std::string_view> splitWhitespace(std::string_view s) {
+    std::vector<std::string_view> tokens;
+    size_t i = 0;
+    while (i < s.size()) {
+        while (i < s.size() && isTextSpace(s[i])) ++i;
+        const size_t start = i;
+        while (i < s.size() && !isTextSpace(s[i])) ++i;
+        if (i > start) tokens.push_back(s.substr(start, i - start));
+    }
+    return tokens;
+}
+
+// The whole token as a number; a leading '+' is accepted, and for doubles so
+// are "nan" and "inf" (callers reject them with a clearer message).
+template <typename Number>
+bool parseNumber(std::string_view tok, Number* v) {
+    if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
+    if (tok.empty()) return false;
+    const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), *v);
+    return ec == std::errc() && end == tok.data() + tok.size();
+}
+
+// Calls f(lineNumber, line) for every line (1-based, without "\n" or a final "\r").
+template <typename F>
+void forEachLine(std::string_view text, F&& f) {
+    size_t lineNo = 0, pos = 0;
+    while (pos < text.size()) {
+        size_t end = text.find('\n', pos);
+        if (end == std::string_view::npos) end = text.size();
+        std::string_view line = text.substr(pos, end - pos);
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        f(++lineNo, line);
+        pos = end + 1;
+    }
+}
+
+}  // namespace weft

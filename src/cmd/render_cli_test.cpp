@@ -19,7 +19,7 @@ using testing::RunResult;
 const std::string kFleece = std::string(WEFT_SOURCE_DIR) + "/tests/data/fleece-small.json";
 
 class RenderCliTest : public testing::CliTestBase {
-protected:
+  protected:
     void SetUp() override {
         CliTestBase::SetUp();
         writeFileAtomic(path("yarn.txt"), "-0.2 0 0\n0 0.01 0\n0.2 0 0\n");
@@ -31,15 +31,16 @@ protected:
             "film": {"width": 16, "height": 12},
             "render": {"spp": 2, "seed": 1},
             "yarns": [{"curves": "yarn.txt", "radius": 0.03, "plies": 3, "ply_twist": 0.3,
-                       "model": ")" + kFleece + "\"" + extraYarnKey + R"(}]
+                       "model": ")" + kFleece +
+                                        "\"" + extraYarnKey + R"(}]
         })");
     }
 };
 
 TEST_F(RenderCliTest, WritesExrPngAndStatistics) {
     for (const std::string mode : {"neural", "fiber"}) {
-        const RunResult r = run("render scene.json --mode " + mode + " --spp 2 --threads 2 --out " +
-                                mode + ".exr");
+        const RunResult r =
+            run("render scene.json --mode " + mode + " --spp 2 --threads 2 --out " + mode + ".exr");
         ASSERT_EQ(r.status, 0) << r.err;
         const Image image = render::readImage(path(mode + ".exr"));
         EXPECT_EQ(image.width, 16);

@@ -2,9 +2,8 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "commands.h"
 #include "weft/core/error.h"
@@ -32,7 +31,8 @@ struct RenderCmdOptions {
 std::string outputStem(const std::string& out) {
     const std::string ext = ".exr";
     if (out.size() <= ext.size() || out.compare(out.size() - ext.size(), ext.size(), ext) != 0)
-        throw InputError("--out " + out + ": expected a path ending in .exr (the PNG and JSON "
+        throw InputError("--out " + out +
+                         ": expected a path ending in .exr (the PNG and JSON "
                          "are written beside it)");
     return out.substr(0, out.size() - ext.size());
 }
@@ -51,9 +51,11 @@ void runRender(const RenderCmdOptions& o) {
     options.spp = o.timeOpt->count() ? 0 : (o.sppOpt->count() ? o.spp : desc.render.spp);
     options.seconds = o.timeOpt->count() ? o.seconds : 0;
     if (o.sppOpt->count() && o.spp < 1)
-        throw InputError("--spp " + std::to_string(o.spp) + " is out of range: allowed [1, 1048576]");
+        throw InputError("--spp " + std::to_string(o.spp) +
+                         " is out of range: allowed [1, 1048576]");
     if (o.timeOpt->count() && !(o.seconds > 0))
-        throw InputError("--time " + std::to_string(o.seconds) + " is out of range: allowed > 0 seconds");
+        throw InputError("--time " + std::to_string(o.seconds) +
+                         " is out of range: allowed > 0 seconds");
     options.threads = o.threads;
     options.seed = o.seedOpt->count() ? o.seed : desc.render.seed;
     options.maxDepth = desc.render.maxDepth;
@@ -94,18 +96,22 @@ void runRender(const RenderCmdOptions& o) {
 void addRenderCommand(CLI::App& app) {
     auto o = std::make_shared<RenderCmdOptions>();
     CLI::App* cmd = app.add_subcommand(
-        "render", "Render a cloth scene (docs/render.md, docs/scene-format.md) to IMAGE.exr, "
-                  "IMAGE.png and IMAGE.json (statistics).");
+        "render",
+        "Render a cloth scene (docs/render.md, docs/scene-format.md) to IMAGE.exr, "
+        "IMAGE.png and IMAGE.json (statistics).");
     cmd->add_option("scene", o->scene, "Scene file (JSON)")->required();
     cmd->add_option("--mode", o->mode,
                     "neural: plies as curves with the yarn BSDF; fiber: every fiber drawn "
                     "(ground truth)")
         ->capture_default_str();
-    o->sppOpt = cmd->add_option("--spp", o->spp, "Samples per pixel (default: the scene's render.spp)");
-    o->timeOpt = cmd->add_option("--time", o->seconds,
-                                 "Render progressive passes for this many seconds instead of --spp");
-    cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")->capture_default_str();
-    o->seedOpt = cmd->add_option("--seed", o->seed, "Random seed (default: the scene's render.seed)");
+    o->sppOpt =
+        cmd->add_option("--spp", o->spp, "Samples per pixel (default: the scene's render.spp)");
+    o->timeOpt = cmd->add_option(
+        "--time", o->seconds, "Render progressive passes for this many seconds instead of --spp");
+    cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")
+        ->capture_default_str();
+    o->seedOpt =
+        cmd->add_option("--seed", o->seed, "Random seed (default: the scene's render.seed)");
     cmd->add_option("--exposure", o->exposure, "PNG exposure in stops (the EXR stays linear)")
         ->capture_default_str();
     cmd->add_flag("--no-nee", o->noNee,

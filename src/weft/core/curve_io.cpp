@@ -36,20 +36,6 @@ void storeLE(std::string* out, T v) {
     out->append(buf, sizeof v);
 }
 
-std::string printable(std::string_view s) {
-    std::string out;
-    for (char c : s) {
-        const auto u = static_cast<unsigned char>(c);
-        if (u >= 0x20 && u < 0x7f) {
-            out += c;
-        } else {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\x%02x", u);
-            out += buf;
-        }
-    }
-    return out;
-}
 
 }  // namespace
 

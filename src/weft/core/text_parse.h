@@ -5,6 +5,8 @@
 #pragma once
 
 #include <charconv>
+#include <cstdio>
+#include <string>
 #include <string_view>
 #include <system_error>
 #include <vector>
@@ -42,6 +44,23 @@ bool parseNumber(std::string_view tok, Number* v) {
     if (tok.empty()) return false;
     const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), *v);
     return ec == std::errc() && end == tok.data() + tok.size();
+}
+
+// The bytes of `s` with non-printable ones as \xNN, cut after maxLength, for messages.
+inline std::string printable(std::string_view s, size_t maxLength = 60) {
+    std::string out;
+    for (char c : s.substr(0, maxLength)) {
+        const auto u = static_cast<unsigned char>(c);
+        if (u >= 0x20 && u < 0x7f) {
+            out += c;
+        } else {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\x%02x", u);
+            out += buf;
+        }
+    }
+    if (s.size() > maxLength) out += "...";
+    return out;
 }
 
 // Calls f(lineNumber, line) for every line (1-based, without "\n" or a final "\r").

@@ -1,4 +1,3 @@
-#include "weft/core/text_parse.h"
 #include "weft/render/curves.h"
 
 #include <algorithm>
@@ -13,6 +12,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/text_parse.h"
 
 namespace weft::render {
 
@@ -43,23 +43,6 @@ T loadLittleEndian(const char* p) {
     T v;
     std::memcpy(&v, p, sizeof v);
     return v;
-}
-
-// The bytes of `s` with non-printable ones as \xNN, for messages.
-std::string printable(std::string_view s, size_t maxLength = 60) {
-    std::string out;
-    for (char c : s.substr(0, maxLength)) {
-        const auto u = static_cast<unsigned char>(c);
-        if (u >= 0x20 && u < 0x7f) {
-            out += c;
-        } else {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\x%02x", u);
-            out += buf;
-        }
-    }
-    if (s.size() > maxLength) out += "...";
-    return out;
 }
 
 std::string hexByte(unsigned char b) {

@@ -57,7 +57,7 @@ struct LightSample {
 };
 
 class Light {
-public:
+  public:
     virtual ~Light() = default;
 
     // Infinite lights (constant, envmap, sky) are seen by rays that escape the
@@ -78,7 +78,7 @@ public:
 };
 
 class ConstantLight final : public Light {
-public:
+  public:
     // InputError unless every channel is finite and >= 0.
     explicit ConstantLight(const Rgb& radiance);
     bool isInfinite() const override { return true; }
@@ -87,12 +87,12 @@ public:
     Rgb radiance(const Vec3& d) const override;
     double intersect(const Vec3&, const Vec3&, double) const override { return -1.0; }
 
-private:
+  private:
     Rgb radiance_;
 };
 
 class EnvironmentLight final : public Light {
-public:
+  public:
     // image: linear RGB, width >= 1, height >= 1, every value finite and >= 0
     // (InputError naming `source` and the first bad texel otherwise); scale
     // finite and >= 0; rotateDeg finite. A black image (or scale 0) is
@@ -111,7 +111,7 @@ public:
 
     const Image& image() const { return image_; }
 
-private:
+  private:
     // Index (y * width + x) of the texel seen in direction d; *sinTheta (if
     // not null) gets sin theta of d.
     size_t texelOf(const Vec3& d, double* sinTheta) const;
@@ -147,7 +147,7 @@ Image skyImage(int width, int height);
 EnvironmentLight skyLight(double scale = 1.0, int width = 256, int height = 128);
 
 class SphereLight final : public Light {
-public:
+  public:
     // intersect() ignores hits at t <= kIntersectEpsilon (|org - center| +
     // radius), so that a ray leaving the sphere's surface does not hit it again.
     static constexpr double kIntersectEpsilon = 1e-9;
@@ -163,7 +163,7 @@ public:
     const Vec3& center() const { return center_; }
     double radius() const { return radius_; }
 
-private:
+  private:
     Vec3 center_;
     double radius_;
     Rgb radiance_;

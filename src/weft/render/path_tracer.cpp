@@ -18,7 +18,7 @@ double powerHeuristic(double a, double b) {
 // The BSDF at one hit for the incident direction of the path, in its shading
 // frame, whichever the mode; world directions in and out.
 class ShadingPoint {
-public:
+  public:
     ShadingPoint(const Scene& scene, const TubeHit& hit, const Vec3& wiWorld) {
         if (scene.mode() == RenderMode::Neural) {
             // DESIGN.md 2: local coordinates (w . t, w . b, w . n) with b = t x n.
@@ -47,7 +47,7 @@ public:
         return s;
     }
 
-private:
+  private:
     Frame frame_;
     Vec3 wi_;
     bool isYarn_ = false;
@@ -122,7 +122,8 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Rng& 
                 const Rgb f = bsdf.eval(ls.wi);
                 if (!f.isBlack()) {
                     // Shadow ray up to just before the light's surface.
-                    const double tMax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1 - 1e-6);
+                    const double tMax =
+                        std::isinf(ls.distance) ? kInfinity : ls.distance * (1 - 1e-6);
                     ++counters.rays;
                     bool blocked = scene.accel().occluded(hit.point, ls.wi, tMax, hit.id);
                     for (size_t i = 0; !blocked && i < lights.size(); ++i)

@@ -28,7 +28,7 @@ using weft::testing::scaled;
 const std::string kFleece = std::string(WEFT_SOURCE_DIR) + "/tests/data/fleece-small.json";
 
 class RenderTest : public weft::testing::TempDirTest {
-protected:
+  protected:
     // A gently bent open yarn along x (text curve, no radii: the scene gives one).
     std::string writeYarnCurve() {
         std::string text;
@@ -60,11 +60,15 @@ protected:
         writeYarnCurve();
         const std::string text = R"({
             "camera": {"from": [0, 0, 1], "to": [0, 0, 0], "up": [0, 1, 0], "fov_deg": 5},
-            "film": {"width": )" + std::to_string(width) + R"(, "height": )" + std::to_string(height) + R"(},
+            "film": {"width": )" +
+                                 std::to_string(width) + R"(, "height": )" +
+                                 std::to_string(height) + R"(},
             "render": {"spp": 4, "max_depth": 1000, "seed": 3},
-            "lights": )" + lights + R"(,
+            "lights": )" + lights +
+                                 R"(,
             "yarns": [{"curves": "yarn.txt", "radius": 0.03, "plies": 3, "ply_twist": 0.3,
-                       "model": ")" + model + R"("}]
+                       "model": ")" +
+                                 model + R"("}]
         })";
         return parseSceneText(text, path("scene.json"), dir_.string());
     }
@@ -111,14 +115,15 @@ TEST_F(RenderTest, WhiteFurnaceOfLosslessFibers) {
     // Fiber mode, fibers with albedo exactly 1, under a constant environment of
     // radiance 1: every path's expectation is 1 (energy is conserved at every
     // scattering), with next-event estimation on and off.
-    const SceneDesc desc = scene(writeLosslessModel(), R"([{"type": "constant", "radiance": [1, 1, 1]}])");
+    const SceneDesc desc =
+        scene(writeLosslessModel(), R"([{"type": "constant", "radiance": [1, 1, 1]}])");
     const Scene s(desc, RenderMode::Fiber);
     const auto rays = raysOnYarn(s, 6);
     ASSERT_EQ(rays.size(), 6u);
     for (const bool nee : {true, false}) {
         for (size_t r = 0; r < rays.size(); ++r) {
-            const Estimate e = estimate(s, rays[r].first, rays[r].second,
-                                        static_cast<int>(scaled(4000)), nee, r);
+            const Estimate e =
+                estimate(s, rays[r].first, rays[r].second, static_cast<int>(scaled(4000)), nee, r);
             EXPECT_NEAR(e.mean, 1.0, 5 * e.standardError + 1e-3)
                 << "ray " << r << (nee ? " with" : " without") << " NEE, se " << e.standardError;
         }
@@ -154,13 +159,14 @@ TEST_F(RenderTest, NextEventEstimationAgreesWithBsdfSamplingOnly) {
         for (size_t r = 0; r < rays.size(); ++r) {
             const Estimate a = estimate(s, rays[r].first, rays[r].second, samples, true, r);
             const Estimate b = estimate(s, rays[r].first, rays[r].second, samples, false, r);
-            const double se = std::sqrt(a.standardError * a.standardError +
-                                        b.standardError * b.standardError);
+            const double se =
+                std::sqrt(a.standardError * a.standardError + b.standardError * b.standardError);
             EXPECT_NEAR(a.mean, b.mean, 4.5 * se + 1e-4)
                 << renderModeName(mode) << " ray " << r << ": NEE " << a.mean << " +- "
                 << a.standardError << ", BSDF only " << b.mean << " +- " << b.standardError;
             // NEE + MIS should not be noisier than BSDF sampling alone here.
-            EXPECT_LT(a.standardError, 1.5 * b.standardError) << renderModeName(mode) << " ray " << r;
+            EXPECT_LT(a.standardError, 1.5 * b.standardError)
+                << renderModeName(mode) << " ray " << r;
             EXPECT_GT(a.mean, 0.0);
         }
     }

@@ -22,7 +22,8 @@ constexpr int kTile = 16;
 
 // The generator of sample `sample` of pixel `pixel`: independent of passes and threads.
 Rng sampleRng(uint64_t pixel, int64_t sample, uint64_t seed) {
-    return Rng(pixel, mixBits(seed ^ mixBits(static_cast<uint64_t>(sample) + 0x9e3779b97f4a7c15ULL)));
+    return Rng(pixel,
+               mixBits(seed ^ mixBits(static_cast<uint64_t>(sample) + 0x9e3779b97f4a7c15ULL)));
 }
 
 }  // namespace
@@ -64,7 +65,8 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     tracer.maxDepth = options.maxDepth;
     tracer.nextEventEstimation = options.nextEventEstimation;
 
-    const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+    const int threads =
+        options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
     const bool timed = options.spp == 0;
     Progress progress(std::string("render ") + renderModeName(scene.mode()),
@@ -73,33 +75,35 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     // Samples [first, last) of every pixel.
     auto pass = [&](int64_t first, int64_t last) {
         arena.execute([&] {
-            tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
-                PathCounters counters;
-                uint64_t dropped = 0;
-                for (int tile = r.begin(); tile < r.end(); ++tile) {
-                    const int x0 = (tile % tilesX) * kTile, y0 = (tile / tilesX) * kTile;
-                    for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
-                        for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
-                            const uint64_t pixel = static_cast<uint64_t>(y) * width + x;
-                            double* acc = &sum[3 * pixel];
-                            for (int64_t s = first; s < last; ++s) {
-                                Rng rng = sampleRng(pixel, s, options.seed);
-                                Vec3 org, dir;
-                                camera.ray(x + rng.uniform(), y + rng.uniform(), &org, &dir);
-                                const Rgb L = pathRadiance(scene, org, dir, rng, tracer, counters);
-                                if (!L.isFinite()) {
-                                    ++dropped;
-                                    continue;
+            tbb::parallel_for(
+                tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
+                    PathCounters counters;
+                    uint64_t dropped = 0;
+                    for (int tile = r.begin(); tile < r.end(); ++tile) {
+                        const int x0 = (tile % tilesX) * kTile, y0 = (tile / tilesX) * kTile;
+                        for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
+                            for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
+                                const uint64_t pixel = static_cast<uint64_t>(y) * width + x;
+                                double* acc = &sum[3 * pixel];
+                                for (int64_t s = first; s < last; ++s) {
+                                    Rng rng = sampleRng(pixel, s, options.seed);
+                                    Vec3 org, dir;
+                                    camera.ray(x + rng.uniform(), y + rng.uniform(), &org, &dir);
+                                    const Rgb L =
+                                        pathRadiance(scene, org, dir, rng, tracer, counters);
+                                    if (!L.isFinite()) {
+                                        ++dropped;
+                                        continue;
+                                    }
+                                    acc[0] += L.r, acc[1] += L.g, acc[2] += L.b;
                                 }
-                                acc[0] += L.r, acc[1] += L.g, acc[2] += L.b;
                             }
                         }
+                        progress.add();
                     }
-                    progress.add();
-                }
-                rays.fetch_add(counters.rays, std::memory_order_relaxed);
-                nonFinite.fetch_add(dropped, std::memory_order_relaxed);
-            });
+                    rays.fetch_add(counters.rays, std::memory_order_relaxed);
+                    nonFinite.fetch_add(dropped, std::memory_order_relaxed);
+                });
         });
     };
 

@@ -14,9 +14,8 @@
 #pragma once
 
 #include <cstdint>
-#include <string>
-
 #include <nlohmann/json_fwd.hpp>
+#include <string>
 
 #include "weft/core/image.h"
 #include "weft/render/path_tracer.h"
@@ -25,13 +24,13 @@
 namespace weft::render {
 
 struct RenderOptions {
-    int spp = 0;             // > 0: this many samples per pixel
-    double seconds = 0;      // > 0 (and spp == 0): progressive passes for this long
-    int threads = 0;         // 0: all cores
+    int spp = 0;         // > 0: this many samples per pixel
+    double seconds = 0;  // > 0 (and spp == 0): progressive passes for this long
+    int threads = 0;     // 0: all cores
     uint64_t seed = 0;
     int maxDepth = 100;
     bool nextEventEstimation = true;
-    bool quiet = false;      // no progress output
+    bool quiet = false;  // no progress output
 
     // InputError naming the flag and its range (exactly one budget, threads
     // in [0, 1024], maxDepth in [1, 10000]).
@@ -41,11 +40,11 @@ struct RenderOptions {
 struct RenderStats {
     std::string mode;
     int width = 0, height = 0;
-    int64_t spp = 0;           // samples per pixel traced
+    int64_t spp = 0;  // samples per pixel traced
     int passes = 0;
-    double seconds = 0;        // rendering, without the scene build
+    double seconds = 0;  // rendering, without the scene build
     double secondsPerSpp = 0;
-    uint64_t rays = 0;         // closest-hit and shadow queries
+    uint64_t rays = 0;  // closest-hit and shadow queries
     double raysPerSecond = 0;
     int threads = 0;
     uint64_t seed = 0;

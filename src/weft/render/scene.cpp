@@ -65,7 +65,8 @@ std::unique_ptr<Light> makeLight(const LightDesc& desc) {
 double largestRadius(const Curve& curve, const YarnDesc& yarn) {
     if (yarn.radius) return *yarn.radius;
     if (curve.radii.empty()) return 0;  // frameCurve reports the missing radii
-    return yarn.scale * static_cast<double>(*std::max_element(curve.radii.begin(), curve.radii.end()));
+    return yarn.scale *
+           static_cast<double>(*std::max_element(curve.radii.begin(), curve.radii.end()));
 }
 
 [[noreturn]] void tooMuchGeometry(const SceneDesc& desc, size_t yarn, RenderMode mode) {
@@ -80,8 +81,10 @@ double largestRadius(const Curve& curve, const YarnDesc& yarn) {
 }  // namespace
 
 Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet)
-    : mode_(mode), camera_(desc.camera, desc.film.width, desc.film.height),
-      width_(desc.film.width), height_(desc.film.height),
+    : mode_(mode),
+      camera_(desc.camera, desc.film.width, desc.film.height),
+      width_(desc.film.width),
+      height_(desc.film.height),
       accel_(std::make_unique<TubeAccel>()) {
     const auto start = std::chrono::steady_clock::now();
     for (const LightDesc& light : desc.lights) lights_.push_back(makeLight(light));
@@ -155,7 +158,8 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet)
     stats_.segments = accel_->segmentCount();
     stats_.embreeBytes = accel_->embreeBytes();
     stats_.embreePeakBytes = accel_->embreePeakBytes();
-    stats_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    stats_.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace weft::render

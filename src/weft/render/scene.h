@@ -41,30 +41,30 @@ const char* renderModeName(RenderMode mode);
 RenderMode parseRenderMode(const std::string& name);
 
 class Camera {
-public:
+  public:
     Camera() = default;
     Camera(const CameraDesc& desc, int width, int height);
     // Primary ray through film position (px, py), px in [0, width), py in [0, height).
     void ray(double px, double py, Vec3* org, Vec3* dir) const;
 
-private:
+  private:
     Vec3 origin_, forward_, right_, up_;
     double halfWidth_ = 0, halfHeight_ = 0;  // of the image plane at distance 1
     int width_ = 1, height_ = 1;
 };
 
 struct SceneBuildStats {
-    int64_t curves = 0;          // yarn curves read
-    int64_t curvePoints = 0;     // their control points
-    int64_t tubes = 0;           // plies (neural) or fibers (fiber)
-    int64_t segments = 0;        // round linear curve segments handed to Embree
-    int64_t embreeBytes = 0;     // geometry + BVH after the build (memory monitor)
+    int64_t curves = 0;           // yarn curves read
+    int64_t curvePoints = 0;      // their control points
+    int64_t tubes = 0;            // plies (neural) or fibers (fiber)
+    int64_t segments = 0;         // round linear curve segments handed to Embree
+    int64_t embreeBytes = 0;      // geometry + BVH after the build (memory monitor)
     int64_t embreePeakBytes = 0;  // largest Embree allocation during the build
-    double seconds = 0;          // building time, model loading included
+    double seconds = 0;           // building time, model loading included
 };
 
 class Scene {
-public:
+  public:
     Scene(const SceneDesc& desc, RenderMode mode, bool quiet = true);
 
     RenderMode mode() const { return mode_; }
@@ -79,7 +79,7 @@ public:
     const YarnBsdf& yarnBsdf(int material) const { return *yarnBsdfs_[material]; }
     const FiberBcsdf& fiberBcsdf(int material) const { return *fiberBcsdfs_[material]; }
 
-private:
+  private:
     RenderMode mode_;
     Camera camera_;
     int width_, height_;

@@ -227,7 +227,8 @@ class Reader {
                      std::initializer_list<const char*> allowed,
                      std::initializer_list<const char*> required) const {
         if (!j.is_object()) {
-            if (path.empty()) fail("expected a JSON object at the top level, got " + describeJson(j));
+            if (path.empty())
+                fail("expected a JSON object at the top level, got " + describeJson(j));
             failAt(path, "expected an object, got " + describeJson(j));
         }
         const std::string in = path.empty() ? "" : " in " + path;
@@ -425,8 +426,8 @@ LightDesc readLight(const Reader& r, const json& j, const std::string& path) {
     const std::string typePath = jsonChildPath(path, "type");
     const char* allowedTypes = "sky, envmap, sphere, constant";
     if (!type->is_string())
-        r.failAt(typePath,
-                 std::string("expected a string (") + allowedTypes + "), got " + describeJson(*type));
+        r.failAt(typePath, std::string("expected a string (") + allowedTypes + "), got " +
+                               describeJson(*type));
     const std::string& name = type->get_ref<const std::string&>();
     LightDesc l;
     if (name == "sky") {

@@ -22,12 +22,11 @@
 #pragma once
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "weft/core/rgb.h"
 #include "weft/core/vec.h"
@@ -35,8 +34,8 @@
 namespace weft::render {
 
 struct CameraDesc {
-    Vec3 from, to;     // required; from != to
-    Vec3 up{0, 1, 0};  // not parallel to to - from
+    Vec3 from, to;       // required; from != to
+    Vec3 up{0, 1, 0};    // not parallel to to - from
     double fovDeg = 30;  // full field of view of the shorter image side, in (0, 180)
 };
 

@@ -22,12 +22,14 @@ void dropOriginTubeHits(const RTCFilterFunctionNArguments* args) {
     const auto* ctx = reinterpret_cast<const OriginContext*>(args->context);
     const unsigned geometry = RTCHitN_geomID(args->hit, args->N, 0);
     if (geometry != ctx->origin.geometry) return;
-    const unsigned tube = (*ctx->geometries)[geometry].tubeOf(RTCHitN_primID(args->hit, args->N, 0));
+    const unsigned tube =
+        (*ctx->geometries)[geometry].tubeOf(RTCHitN_primID(args->hit, args->N, 0));
     if (tube != ctx->origin.tube) return;
     const float t = RTCRayN_tfar(args->ray, args->N, 0);
-    const float leaving = RTCRayN_dir_x(args->ray, args->N, 0) * RTCHitN_Ng_x(args->hit, args->N, 0) +
-                          RTCRayN_dir_y(args->ray, args->N, 0) * RTCHitN_Ng_y(args->hit, args->N, 0) +
-                          RTCRayN_dir_z(args->ray, args->N, 0) * RTCHitN_Ng_z(args->hit, args->N, 0);
+    const float leaving =
+        RTCRayN_dir_x(args->ray, args->N, 0) * RTCHitN_Ng_x(args->hit, args->N, 0) +
+        RTCRayN_dir_y(args->ray, args->N, 0) * RTCHitN_Ng_y(args->hit, args->N, 0) +
+        RTCRayN_dir_z(args->ray, args->N, 0) * RTCHitN_Ng_z(args->hit, args->N, 0);
     if (t < ctx->selfHitDistance || leaving > 0.0f) args->valid[0] = 0;
 }
 
@@ -171,8 +173,10 @@ bool TubeAccel::intersect(const Vec3& org, const Vec3& dir, double tMax, const T
     hit->material = info.material;
     // Tangent: the segment direction (the index buffer gives its first vertex).
     RTCGeometry geom = rtcGetGeometry(scene_, rh.hit.geomID);
-    const auto* vertices = static_cast<const float*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_VERTEX, 0));
-    const auto* indices = static_cast<const unsigned*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_INDEX, 0));
+    const auto* vertices =
+        static_cast<const float*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_VERTEX, 0));
+    const auto* indices =
+        static_cast<const unsigned*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_INDEX, 0));
     const float* v0 = vertices + 4 * static_cast<size_t>(indices[rh.hit.primID]);
     const float* v1 = v0 + 4;
     const Vec3 axis{v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]};
@@ -182,7 +186,8 @@ bool TubeAccel::intersect(const Vec3& org, const Vec3& dir, double tMax, const T
     Vec3 n{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
     n = n - hit->tangent * dot(n, hit->tangent);
     const double len = length(n);
-    if (len > 1e-12 * (std::abs(rh.hit.Ng_x) + std::abs(rh.hit.Ng_y) + std::abs(rh.hit.Ng_z)) && len > 0) {
+    if (len > 1e-12 * (std::abs(rh.hit.Ng_x) + std::abs(rh.hit.Ng_y) + std::abs(rh.hit.Ng_z)) &&
+        len > 0) {
         hit->normal = n / len;
     } else {
         // Hit exactly on a joint sphere's pole: any normal orthogonal to the tangent.
@@ -192,7 +197,8 @@ bool TubeAccel::intersect(const Vec3& org, const Vec3& dir, double tMax, const T
     return true;
 }
 
-bool TubeAccel::occluded(const Vec3& org, const Vec3& dir, double tMax, const TubeId& origin) const {
+bool TubeAccel::occluded(const Vec3& org, const Vec3& dir, double tMax,
+                         const TubeId& origin) const {
     OriginContext ctx = makeContext(origin, geometries_);
     RTCRay ray;
     setRay(ray, org, dir, tMax);

@@ -50,7 +50,7 @@ struct TubeHit {
 };
 
 class TubeAccel {
-public:
+  public:
     // Fraction of the tube radius below which hits on the origin tube are dropped.
     static constexpr double kSelfHitDistance = 1e-2;
 
@@ -86,7 +86,7 @@ public:
         uint32_t tubeOf(uint32_t segment) const;
     };
 
-private:
+  private:
     EmbreeDevice device_;
     RTCScene scene_ = nullptr;
     std::vector<GeometryInfo> geometries_;

@@ -145,7 +145,8 @@ TEST(TubeAccel, AClosedLoopIsHitAgainFromAcrossTheLoop) {
 
 TEST(TubeAccel, TubesWithinOneGeometryAreTold) {
     TubeAccel accel;
-    accel.addGeometry({straightTube(0.0, 0.2, 3), straightTube(1.0, 0.2, 5), straightTube(2.0, 0.2, 1)}, 3);
+    accel.addGeometry(
+        {straightTube(0.0, 0.2, 3), straightTube(1.0, 0.2, 5), straightTube(2.0, 0.2, 1)}, 3);
     accel.commit();
     EXPECT_EQ(accel.tubeCount(), 3);
     EXPECT_EQ(accel.segmentCount(), 9);

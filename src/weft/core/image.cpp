@@ -17,6 +17,11 @@ double linearToSrgb(double v) {
     return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
 }
 
+double srgbToLinear(double v) {
+    v = std::clamp(v, 0.0, 1.0);
+    return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+}
+
 std::string encodePng(const Image& image, double exposure) {
     if (image.width <= 0 || image.height <= 0)
         throw InputError("cannot encode an empty image as PNG");

@@ -29,8 +29,10 @@ struct Image {
     }
 };
 
-// The sRGB transfer function of a linear value in [0, 1].
+// The sRGB transfer function of a linear value in [0, 1] (clamped to it).
 double linearToSrgb(double v);
+// Its inverse: the linear value of an sRGB-encoded value in [0, 1] (clamped to it).
+double srgbToLinear(double v);
 
 // PNG bytes of the image (8-bit sRGB, exposure in stops).
 std::string encodePng(const Image& image, double exposure = 0.0);

@@ -283,11 +283,8 @@ void check(bool ok, const std::string& what) {
 }
 
 Rgb srgbToLinear(int r, int g, int b) {
-    auto f = [](int c) {
-        const double v = c / 255.0;
-        return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
-    };
-    return {f(r), f(g), f(b)};
+    return {weft::srgbToLinear(r / 255.0), weft::srgbToLinear(g / 255.0),
+            weft::srgbToLinear(b / 255.0)};
 }
 
 }  // namespace

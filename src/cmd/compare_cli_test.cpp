@@ -1,0 +1,136 @@
+// End-to-end tests of `weft compare`: the JSON line and file, the heatmap PNG,
+// the flags and input errors.
+#include <gtest/gtest.h>
+#include <stb/stb_image.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_test_util.h"
+#include "weft/core/file.h"
+#include "weft/core/image.h"
+#include "weft/render/lights.h"
+
+namespace weft {
+namespace {
+
+using testing::contains;
+using testing::expectUserError;
+using testing::RunResult;
+
+// A smooth gradient, so that SSIM of a shifted copy is well defined.
+Image gradient(int w, int h, double offset) {
+    Image image(w, h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            image.set(x, y, {0.02 * x + offset, 0.03 * y + offset, 0.01 * (x + y) + offset});
+    return image;
+}
+
+class CompareCliTest : public testing::CliTestBase {
+  protected:
+    void SetUp() override {
+        CliTestBase::SetUp();
+        render::writeExr(path("ref.exr"), gradient(16, 12, 0.1));
+        render::writeExr(path("same.exr"), gradient(16, 12, 0.1));
+        render::writeExr(path("off.exr"), gradient(16, 12, 0.3));
+    }
+};
+
+TEST_F(CompareCliTest, JsonFileEqualsStdout) {
+    const RunResult r = run("compare off.exr ref.exr --json result.json --exposure 1");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string file = readFile(path("result.json"));
+    EXPECT_EQ(file, r.out);
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1);
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j.at("a"), "off.exr");
+    EXPECT_EQ(j.at("b"), "ref.exr");
+    EXPECT_EQ(j.at("width"), 16);
+    EXPECT_EQ(j.at("height"), 12);
+    EXPECT_EQ(j.at("ssim_mode"), "luminance");
+    EXPECT_EQ(j.at("exposure").get<double>(), 1.0);
+    // Every channel is off by 0.2 (float rounding aside): RMSE 0.2.
+    EXPECT_NEAR(j.at("rmse").get<double>(), 0.2, 1e-6);
+    EXPECT_GT(j.at("rel_mse").get<double>(), 0.0);
+    const double ssim = j.at("ssim").get<double>();
+    EXPECT_GT(ssim, 0.0);
+    EXPECT_LT(ssim, 1.0);
+
+    const RunResult pc = run("compare off.exr ref.exr --per-channel");
+    ASSERT_EQ(pc.status, 0) << pc.err;
+    const nlohmann::json k = nlohmann::json::parse(pc.out);
+    EXPECT_EQ(k.at("ssim_mode"), "per-channel");
+    EXPECT_EQ(k.at("exposure").get<double>(), 0.0);
+    EXPECT_NE(k.at("ssim").get<double>(), ssim);
+}
+
+TEST_F(CompareCliTest, IdenticalImagesAndTheirHeatmap) {
+    const RunResult r = run("compare same.exr ref.exr --heatmap heat.png");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j.at("ssim").get<double>(), 1.0);
+    EXPECT_EQ(j.at("rmse").get<double>(), 0.0);
+    EXPECT_EQ(j.at("rel_mse").get<double>(), 0.0);
+    int w = 0, h = 0, n = 0;
+    const std::string png = readFile(path("heat.png"));
+    unsigned char* bytes = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(png.data()),
+                                                 static_cast<int>(png.size()), &w, &h, &n, 3);
+    ASSERT_NE(bytes, nullptr);
+    EXPECT_EQ(w, 16);
+    EXPECT_EQ(h, 12);
+    // Every pixel is the colour scale at 1 - SSIM = 0: viridis #440154.
+    for (int i = 0; i < w * h; ++i) {
+        ASSERT_EQ(bytes[3 * i], 0x44) << i;
+        ASSERT_EQ(bytes[3 * i + 1], 0x01) << i;
+        ASSERT_EQ(bytes[3 * i + 2], 0x54) << i;
+    }
+    stbi_image_free(bytes);
+}
+
+TEST_F(CompareCliTest, DifferentImagesHaveABrighterHeatmap) {
+    ASSERT_EQ(run("compare off.exr ref.exr --heatmap heat.png").status, 0);
+    int w = 0, h = 0, n = 0;
+    const std::string png = readFile(path("heat.png"));
+    unsigned char* bytes = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(png.data()),
+                                                 static_cast<int>(png.size()), &w, &h, &n, 3);
+    ASSERT_NE(bytes, nullptr);
+    EXPECT_EQ(w, 16);
+    EXPECT_EQ(h, 12);
+    // 1 - SSIM > 0 moves along viridis towards green: more green than #440154.
+    EXPECT_GT(bytes[1], 0x01);
+    stbi_image_free(bytes);
+}
+
+TEST_F(CompareCliTest, BadInputIsNamed) {
+    render::writeExr(path("small.exr"), gradient(16, 10, 0.1));
+    expectUserError(run("compare small.exr ref.exr --json r.json --heatmap h.png"),
+                    {"small.exr", "16 x 10", "ref.exr", "16 x 12"});
+    render::writeExr(path("tiny.exr"), gradient(8, 8, 0.1));
+    expectUserError(run("compare tiny.exr tiny.exr"), {"tiny.exr", "8 x 8", "11 x 11"});
+    Image nan = gradient(16, 12, 0.1);
+    nan.pixels[3 * (16 * 3 + 5) + 2] = std::numeric_limits<float>::quiet_NaN();
+    render::writeExr(path("nan.exr"), nan);
+    expectUserError(run("compare ref.exr nan.exr"), {"nan.exr", "(5, 3)", "NaN"});
+    expectUserError(run("compare missing.exr ref.exr"), {"missing.exr"});
+    expectUserError(run("compare ref.exr ref.png"), {"ref.png", ".exr"});
+    expectUserError(run("compare off.exr ref.exr --exposure 65"), {"--exposure", "[-64, 64]"});
+    expectUserError(run("compare off.exr ref.exr --json nodir/r.json"), {"nodir/r.json"});
+    EXPECT_EQ(run("compare off.exr").status, 2);  // the reference is required
+    EXPECT_FALSE(std::filesystem::exists(path("r.json")));
+    EXPECT_FALSE(std::filesystem::exists(path("h.png")));
+}
+
+TEST_F(CompareCliTest, Help) {
+    const RunResult r = run("compare --help");
+    EXPECT_EQ(r.status, 0) << r.err;
+    for (const char* flag : {"--heatmap", "--json", "--per-channel", "--exposure"})
+        EXPECT_TRUE(contains(r.out, flag)) << flag << " missing from\n" << r.out;
+}
+
+}  // namespace
+}  // namespace weft

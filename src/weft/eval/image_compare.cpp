@@ -1,0 +1,258 @@
+#include "weft/eval/image_compare.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "weft/core/error.h"
+#include "weft/render/lights.h"
+
+namespace weft::eval {
+
+namespace {
+
+// Luminance weights of linear Rec. 709 / sRGB primaries.
+constexpr double kLumaR = 0.2126, kLumaG = 0.7152, kLumaB = 0.0722;
+
+std::string sizeText(int width, int height) {
+    return std::to_string(width) + " x " + std::to_string(height);
+}
+
+// InputError naming `name` and the first pixel that is NaN or infinite.
+void checkFinite(const Image& image, const std::string& name) {
+    static const char* channels[3] = {"R", "G", "B"};
+    for (size_t i = 0; i < image.pixels.size(); ++i) {
+        if (std::isfinite(image.pixels[i])) continue;
+        const size_t pixel = i / 3;
+        const int x = static_cast<int>(pixel % image.width);
+        const int y = static_cast<int>(pixel / image.width);
+        throw InputError(name + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                         ") channel " + channels[i % 3] + " is " +
+                         (std::isnan(image.pixels[i]) ? "NaN" : "infinite") +
+                         ": images must be finite");
+    }
+}
+
+template <typename Value>
+Plane toneMapped(const Image& image, double exposure, const Value& value) {
+    const double scale = std::exp2(exposure);
+    Plane plane(image.width, image.height);
+    for (size_t i = 0; i < plane.values.size(); ++i) {
+        const float* p = &image.pixels[3 * i];
+        plane.values[i] = linearToSrgb(std::clamp(scale * value(p), 0.0, 1.0));
+    }
+    return plane;
+}
+
+// Valid-mode separable filter of `p` with `w` (odd length): (W - n + 1) x
+// (H - n + 1) values, value (x, y) = sum_ij w[i] w[j] p(x + i, y + j).
+Plane filterValid(const Plane& p, const std::vector<double>& w) {
+    const int n = static_cast<int>(w.size());
+    const int outW = p.width - n + 1, outH = p.height - n + 1;
+    Plane rows(outW, p.height);
+    for (int y = 0; y < p.height; ++y)
+        for (int x = 0; x < outW; ++x) {
+            double sum = 0;
+            for (int i = 0; i < n; ++i) sum += w[i] * p.at(x + i, y);
+            rows.at(x, y) = sum;
+        }
+    Plane out(outW, outH);
+    for (int y = 0; y < outH; ++y)
+        for (int x = 0; x < outW; ++x) {
+            double sum = 0;
+            for (int j = 0; j < n; ++j) sum += w[j] * rows.at(x, y + j);
+            out.at(x, y) = sum;
+        }
+    return out;
+}
+
+Plane product(const Plane& a, const Plane& b) {
+    Plane out(a.width, a.height);
+    for (size_t i = 0; i < out.values.size(); ++i) out.values[i] = a.values[i] * b.values[i];
+    return out;
+}
+
+}  // namespace
+
+const char* ssimModeName(SsimMode mode) {
+    return mode == SsimMode::Luminance ? "luminance" : "per-channel";
+}
+
+Plane toneMappedLuminance(const Image& image, double exposure) {
+    return toneMapped(image, exposure,
+                      [](const float* p) { return kLumaR * p[0] + kLumaG * p[1] + kLumaB * p[2]; });
+}
+
+Plane toneMappedChannel(const Image& image, int channel, double exposure) {
+    if (channel < 0 || channel > 2)
+        throw std::invalid_argument("toneMappedChannel: channel " + std::to_string(channel) +
+                                    " is outside [0, 2]");
+    return toneMapped(image, exposure, [channel](const float* p) { return double(p[channel]); });
+}
+
+std::vector<double> ssimWindowWeights() {
+    std::vector<double> w(kSsimWindow);
+    double sum = 0;
+    for (int i = 0; i < kSsimWindow; ++i) {
+        const double d = i - kSsimRadius;
+        w[i] = std::exp(-d * d / (2 * kSsimSigma * kSsimSigma));
+        sum += w[i];
+    }
+    for (double& v : w) v /= sum;
+    return w;
+}
+
+Plane ssimMap(const Plane& a, const Plane& b) {
+    if (a.width != b.width || a.height != b.height)
+        throw std::invalid_argument("ssimMap: planes of different sizes " +
+                                    sizeText(a.width, a.height) + " and " +
+                                    sizeText(b.width, b.height));
+    if (a.width < kSsimWindow || a.height < kSsimWindow)
+        throw std::invalid_argument("ssimMap: plane " + sizeText(a.width, a.height) +
+                                    " is smaller than the 11 x 11 window");
+    const std::vector<double> w = ssimWindowWeights();
+    const Plane muA = filterValid(a, w), muB = filterValid(b, w);
+    // a*a, b*b and a*b go through the same code, so that identical inputs give
+    // bit-identical moments and an SSIM of exactly 1.
+    const Plane aa = filterValid(product(a, a), w), bb = filterValid(product(b, b), w);
+    const Plane ab = filterValid(product(a, b), w);
+    Plane map(muA.width, muA.height);
+    for (size_t i = 0; i < map.values.size(); ++i) {
+        const double ma = muA.values[i], mb = muB.values[i];
+        const double varA = aa.values[i] - ma * ma, varB = bb.values[i] - mb * mb;
+        const double cov = ab.values[i] - ma * mb;
+        map.values[i] = (2 * ma * mb + kSsimC1) * (2 * cov + kSsimC2) /
+                        ((ma * ma + mb * mb + kSsimC1) * (varA + varB + kSsimC2));
+    }
+    return map;
+}
+
+double mean(const Plane& plane) {
+    if (plane.values.empty()) return 0;
+    double sum = 0;
+    for (double v : plane.values) sum += v;
+    return sum / static_cast<double>(plane.values.size());
+}
+
+double rmse(const Image& a, const Image& b) {
+    if (a.pixels.size() != b.pixels.size() || a.pixels.empty())
+        throw std::invalid_argument("rmse: images of different or zero sizes");
+    double sum = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) {
+        const double d = double(a.pixels[i]) - double(b.pixels[i]);
+        sum += d * d;
+    }
+    return std::sqrt(sum / static_cast<double>(a.pixels.size()));
+}
+
+double relativeMse(const Image& a, const Image& b) {
+    if (a.pixels.size() != b.pixels.size() || a.pixels.empty())
+        throw std::invalid_argument("relativeMse: images of different or zero sizes");
+    double sum = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) {
+        const double ref = b.pixels[i];
+        const double d = double(a.pixels[i]) - ref;
+        sum += d * d / (ref * ref + kRelMseEpsilon);
+    }
+    return sum / static_cast<double>(a.pixels.size());
+}
+
+void CompareOptions::validate() const {
+    if (!std::isfinite(exposure) || std::abs(exposure) > kMaxExposure)
+        throw InputError("--exposure " + std::to_string(exposure) +
+                         " is out of range: allowed [-64, 64] stops");
+}
+
+ImageComparison compareImages(const Image& a, const std::string& aName, const Image& b,
+                              const std::string& bName, const CompareOptions& options) {
+    options.validate();
+    if (a.width != b.width || a.height != b.height)
+        throw InputError("image sizes differ: " + aName + " is " + sizeText(a.width, a.height) +
+                         ", the reference " + bName + " is " + sizeText(b.width, b.height));
+    if (a.width < kSsimWindow || a.height < kSsimWindow)
+        throw InputError(aName + " and " + bName + " are " + sizeText(a.width, a.height) +
+                         ": SSIM needs at least 11 x 11 pixels (its window)");
+    checkFinite(a, aName);
+    checkFinite(b, bName);
+
+    ImageComparison c;
+    c.a = aName, c.b = bName;
+    c.width = a.width, c.height = a.height;
+    c.mode = options.mode;
+    c.exposure = options.exposure;
+    if (options.mode == SsimMode::Luminance) {
+        c.ssimMap = ssimMap(toneMappedLuminance(a, options.exposure),
+                            toneMappedLuminance(b, options.exposure));
+    } else {
+        for (int channel = 0; channel < 3; ++channel) {
+            const Plane m = ssimMap(toneMappedChannel(a, channel, options.exposure),
+                                    toneMappedChannel(b, channel, options.exposure));
+            if (channel == 0) c.ssimMap = Plane(m.width, m.height);
+            for (size_t i = 0; i < m.values.size(); ++i) c.ssimMap.values[i] += m.values[i] / 3;
+        }
+    }
+    c.ssim = mean(c.ssimMap);
+    c.rmse = rmse(a, b);
+    c.relMse = relativeMse(a, b);
+    return c;
+}
+
+ImageComparison compareImageFiles(const std::string& a, const std::string& b,
+                                  const CompareOptions& options) {
+    options.validate();
+    const Image imageA = render::readImage(a);
+    const Image imageB = render::readImage(b);
+    return compareImages(imageA, a, imageB, b, options);
+}
+
+nlohmann::json toJson(const ImageComparison& c) {
+    return {{"a", c.a},
+            {"b", c.b},
+            {"width", c.width},
+            {"height", c.height},
+            {"ssim", c.ssim},
+            {"ssim_mode", ssimModeName(c.mode)},
+            {"rmse", c.rmse},
+            {"rel_mse", c.relMse},
+            {"exposure", c.exposure}};
+}
+
+Rgb heatmapColorSrgb(double t) {
+    // viridis at t = k/8 (viridisLite's viridis(9)), 8-bit sRGB.
+    static constexpr std::array<std::array<int, 3>, 9> kViridis = {{{0x44, 0x01, 0x54},
+                                                                    {0x47, 0x2d, 0x7b},
+                                                                    {0x3b, 0x52, 0x8b},
+                                                                    {0x2c, 0x72, 0x8e},
+                                                                    {0x21, 0x90, 0x8c},
+                                                                    {0x27, 0xad, 0x81},
+                                                                    {0x5d, 0xc8, 0x63},
+                                                                    {0xaa, 0xdc, 0x32},
+                                                                    {0xfd, 0xe7, 0x25}}};
+    const double s = (std::isnan(t) ? 1.0 : std::clamp(t, 0.0, 1.0)) * (kViridis.size() - 1);
+    const int k = std::min(static_cast<int>(s), static_cast<int>(kViridis.size()) - 2);
+    const double f = s - k;
+    double c[3];
+    for (int i = 0; i < 3; ++i) c[i] = ((1 - f) * kViridis[k][i] + f * kViridis[k + 1][i]) / 255.0;
+    return {c[0], c[1], c[2]};
+}
+
+Image ssimHeatmap(const ImageComparison& c) {
+    if (c.ssimMap.width != c.width - 2 * kSsimRadius ||
+        c.ssimMap.height != c.height - 2 * kSsimRadius || c.ssimMap.width < 1 ||
+        c.ssimMap.height < 1)
+        throw std::invalid_argument("ssimHeatmap: the SSIM map does not fit a " +
+                                    sizeText(c.width, c.height) + " image");
+    Image image(c.width, c.height);
+    for (int y = 0; y < c.height; ++y)
+        for (int x = 0; x < c.width; ++x) {
+            const int mx = std::clamp(x, kSsimRadius, c.width - 1 - kSsimRadius) - kSsimRadius;
+            const int my = std::clamp(y, kSsimRadius, c.height - 1 - kSsimRadius) - kSsimRadius;
+            const Rgb srgb = heatmapColorSrgb(1 - c.ssimMap.at(mx, my));
+            image.set(x, y, {srgbToLinear(srgb.r), srgbToLinear(srgb.g), srgbToLinear(srgb.b)});
+        }
+    return image;
+}
+
+}  // namespace weft::eval

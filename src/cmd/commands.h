@@ -94,5 +94,6 @@ void addGatherCommand(CLI::App& app);
 void addFitCommand(CLI::App& app);
 void addYarnCommands(CLI::App& app);
 void addRenderCommand(CLI::App& app);
+void addSceneCommand(CLI::App& app);
 
 }  // namespace weft::cmd

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
     weft::cmd::addFitCommand(app);
     weft::cmd::addYarnCommands(app);
     weft::cmd::addRenderCommand(app);
+    weft::cmd::addSceneCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -95,5 +95,6 @@ void addFitCommand(CLI::App& app);
 void addYarnCommands(CLI::App& app);
 void addRenderCommand(CLI::App& app);
 void addCompareCommand(CLI::App& app);
+void addSceneCommand(CLI::App& app);
 
 }  // namespace weft::cmd

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
     weft::cmd::addYarnCommands(app);
     weft::cmd::addRenderCommand(app);
     weft::cmd::addCompareCommand(app);
+    weft::cmd::addSceneCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

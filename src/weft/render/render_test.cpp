@@ -137,7 +137,8 @@ TEST_F(RenderTest, WhiteFurnaceOfLosslessFibers) {
     double mean = 0;
     for (float v : result.image.pixels) {
         ASSERT_TRUE(std::isfinite(v));
-        EXPECT_NEAR(v, 1.0, 0.35);
+        // About 6 standard deviations of a pixel mean (measured: 0.06 at 64 spp).
+        EXPECT_NEAR(v, 1.0, 0.35 * std::sqrt(64.0 / options.spp));
         mean += v;
     }
     mean /= static_cast<double>(result.image.pixels.size());

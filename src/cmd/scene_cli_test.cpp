@@ -1,0 +1,112 @@
+// End-to-end tests of `weft scene`: the three kinds, a generated scene that
+// `weft render` draws, and flag errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_test_util.h"
+#include "weft/core/file.h"
+#include "weft/core/image.h"
+#include "weft/render/curves.h"
+#include "weft/render/lights.h"
+#include "weft/render/scene_file.h"
+
+namespace weft {
+namespace {
+
+using testing::expectUserError;
+using testing::RunResult;
+
+const std::string kFleece = std::string(WEFT_SOURCE_DIR) + "/tests/data/fleece-small.json";
+
+class SceneCliTest : public testing::CliTestBase {};
+
+TEST_F(SceneCliTest, GeneratedWeaveRenders) {
+    RunResult r = run("scene weave --model " + kFleece +
+                      " --size 2 --width 16 --height 16 --spp 1 --out weave");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json summary = nlohmann::json::parse(r.out);
+    EXPECT_EQ(summary.at("kind"), "weave");
+    EXPECT_EQ(summary.at("yarns"), 4);
+    EXPECT_EQ(summary.at("scene"), "weave/scene.json");
+
+    r = run("render weave/scene.json --mode neural --spp 1 --threads 2 --quiet --out img.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const Image image = render::readImage(path("img.exr"));
+    EXPECT_EQ(image.width, 16);
+    EXPECT_EQ(image.height, 16);
+    for (float v : image.pixels) ASSERT_TRUE(std::isfinite(v) && v >= 0);
+    const nlohmann::json stats = nlohmann::json::parse(readFile(path("img.json")));
+    EXPECT_EQ(stats.at("scene").at("curves"), 4);
+    EXPECT_EQ(stats.at("non_finite_samples"), 0);
+    EXPECT_EQ(stats.at("scene").at("tubes"), 4 * 3);  // neural mode: one tube per ply
+}
+
+TEST_F(SceneCliTest, EveryKindWithDefaults) {
+    for (const std::string kind : {"closeup", "weave", "knit"}) {
+        const RunResult r = run("scene " + kind + " --model " + kFleece + " --out " + kind);
+        ASSERT_EQ(r.status, 0) << r.err;
+        const render::SceneDesc s = render::loadScene(path(kind + "/scene.json"));
+        EXPECT_EQ(s.film.width, 512);
+        EXPECT_EQ(s.film.height, 512);
+        EXPECT_EQ(s.render.spp, 64);
+        ASSERT_EQ(s.yarns.size(), 1u);
+        EXPECT_EQ(*s.yarns[0].radius, 0.01);
+        EXPECT_EQ(s.yarns[0].plies, 3);
+        EXPECT_EQ(s.yarns[0].plyTwist, 0.3);
+        EXPECT_TRUE(std::filesystem::path(s.yarns[0].model).is_absolute());
+        ASSERT_EQ(s.lights.size(), 3u);
+        EXPECT_EQ(s.lights[0].type, render::LightDesc::Type::Sky);
+        const size_t curves = render::readCurves(s.yarns[0].curves).curves.size();
+        EXPECT_EQ(curves, kind == "closeup" ? 1u : (kind == "weave" ? 12u : 6u));
+    }
+    // Flags reach the scene.
+    const RunResult r =
+        run("scene knit --model " + kFleece +
+            " --size 2 --radius 0.5 --plies 2 --ply-twist -1 --width 64 --height 32 --spp 3"
+            " --out k2");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const render::SceneDesc s = render::loadScene(path("k2/scene.json"));
+    EXPECT_EQ(*s.yarns[0].radius, 0.5);
+    EXPECT_EQ(s.yarns[0].plies, 2);
+    EXPECT_EQ(s.yarns[0].plyTwist, -1);
+    EXPECT_EQ(s.film.width, 64);
+    EXPECT_EQ(s.film.height, 32);
+    EXPECT_EQ(s.render.spp, 3);
+    EXPECT_EQ(render::readCurves(s.yarns[0].curves).curves.size(), 2u);
+}
+
+TEST_F(SceneCliTest, BadInputIsNamed) {
+    const std::string m = " --model " + kFleece;
+    expectUserError(run("scene twill" + m + " --out o"), {"twill", "closeup, weave, knit"});
+    expectUserError(run("scene weave" + m + " --size 0 --out o"), {"--size 0", "[1, 100]"});
+    expectUserError(run("scene knit" + m + " --size 101 --out o"), {"--size 101", "[1, 100]"});
+    expectUserError(run("scene closeup" + m + " --size 3 --out o"), {"--size", "weave and knit"});
+    expectUserError(run("scene weave" + m + " --radius 0 --out o"), {"--radius 0", "1e-06"});
+    expectUserError(run("scene weave" + m + " --plies 17 --out o"), {"--plies 17", "[1, 16]"});
+    expectUserError(run("scene weave" + m + " --ply-twist 200 --out o"),
+                    {"--ply-twist 200", "[-100, 100]"});
+    expectUserError(run("scene weave" + m + " --width 0 --out o"), {"--width 0", "[1, 16384]"});
+    expectUserError(run("scene weave" + m + " --height 16385 --out o"), {"--height 16385"});
+    expectUserError(run("scene weave" + m + " --spp 0 --out o"), {"--spp 0", "[1, 1048576]"});
+    expectUserError(run("scene weave --model missing.json --out o"), {"--model", "missing.json"});
+    expectUserError(run("scene weave" + m + " --envmap sky.png --out o"), {"--envmap", "sky.png"});
+    expectUserError(run("scene weave" + m + " --envmap sky.exr --out o"), {"--envmap", "sky.exr"});
+    // CLI11's own errors (a missing flag, not a number) exit with 2 as well.
+    EXPECT_EQ(run("scene weave --out o").status, 2);
+    EXPECT_EQ(run("scene weave" + m + " --size two --out o").status, 2);
+    EXPECT_FALSE(std::filesystem::exists(path("o")));
+
+    // An output directory holding anything but an earlier scene is left alone.
+    std::filesystem::create_directory(path("busy"));
+    writeFileAtomic(path("busy/notes.txt"), "keep me");
+    expectUserError(run("scene weave" + m + " --out busy"), {"busy", "notes.txt"});
+    EXPECT_EQ(readFile(path("busy/notes.txt")), "keep me");
+    EXPECT_EQ(testing::CliTestBase::listing(), (std::vector<std::string>{"busy"}));
+}
+
+}  // namespace
+}  // namespace weft

@@ -1,0 +1,76 @@
+// weft scene: a generated close-up, plain weave or stockinette knit scene for
+// `weft render` (docs/scenes.md).
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "commands.h"
+#include "weft/core/error.h"
+#include "weft/eval/scene_gen.h"
+
+namespace weft::cmd {
+
+namespace {
+
+struct SceneCmdOptions {
+    std::string kind, out;
+    eval::SceneOptions scene;
+    CLI::Option* sizeOpt = nullptr;
+};
+
+void runScene(const SceneCmdOptions& o) {
+    const eval::SceneKind kind = eval::parseSceneKind(o.kind);
+    if (kind == eval::SceneKind::Closeup && o.sizeOpt->count())
+        throw InputError("--size applies to weave and knit only (a close-up is one yarn)");
+    const eval::GeneratedScene generated = eval::generateScene(kind, o.scene);
+    eval::writeScene(generated, o.out);
+    const std::filesystem::path dir(o.out);
+    std::printf("%s\n", nlohmann::json({{"kind", eval::sceneKindName(kind)},
+                                        {"scene", (dir / "scene.json").string()},
+                                        {"curves", (dir / "yarns.txt").string()},
+                                        {"yarns", generated.curves.curves.size()},
+                                        {"points", generated.curves.pointCount()},
+                                        {"radius", o.scene.radius}})
+                            .dump()
+                            .c_str());
+}
+
+}  // namespace
+
+void addSceneCommand(CLI::App& app) {
+    auto o = std::make_shared<SceneCmdOptions>();
+    eval::SceneOptions& s = o->scene;
+    CLI::App* cmd = app.add_subcommand(
+        "scene",
+        "Write a generated scene (docs/scenes.md) for `weft render`: DIR/scene.json and "
+        "DIR/yarns.txt. closeup: one 3-ply yarn across the frame; weave: an N x N plain "
+        "weave; knit: N courses of N stockinette loops.");
+    cmd->add_option("kind", o->kind, "closeup, weave or knit")->required();
+    cmd->add_option("--model", s.model, "MODEL.json written by `weft fit` (must load)")->required();
+    o->sizeOpt = cmd->add_option("--size", s.size,
+                                 "weave: N warp and N weft yarns; knit: N courses of N loops; "
+                                 "[1, 100]")
+                     ->capture_default_str();
+    cmd->add_option("--radius", s.radius, "Yarn radius in scene units, [1e-6, 1000]")
+        ->capture_default_str();
+    cmd->add_option("--plies", s.plies, "Plies per yarn, [1, 16]")->capture_default_str();
+    cmd->add_option("--ply-twist", s.plyTwist,
+                    "Dimensionless ply twist (scene ply_twist), [-100, 100]")
+        ->capture_default_str();
+    cmd->add_option("--width", s.width, "Film width in pixels, [1, 16384]")->capture_default_str();
+    cmd->add_option("--height", s.height, "Film height in pixels, [1, 16384]")
+        ->capture_default_str();
+    cmd->add_option("--spp", s.spp, "Samples per pixel (render.spp), [1, 1048576]")
+        ->capture_default_str();
+    cmd->add_option("--envmap", s.envmap,
+                    "Lat-long .exr or .hdr environment map instead of the procedural sky");
+    cmd->add_option("--out", o->out,
+                    "Output directory (replaced only if it holds nothing but an earlier "
+                    "scene)")
+        ->required();
+    cmd->callback([o] { runScene(*o); });
+}
+
+}  // namespace weft::cmd

@@ -1,0 +1,116 @@
+// weft/eval/scene_gen.h — generated evaluation scenes for `weft render` (issue 8, DESIGN.md 8-9).
+//
+// Three scenes, each one yarn set (one curve file, one fitted model) lit as in
+// the paper's figures: the procedural sky (or an environment map) plus two
+// sphere lights, a warm key light top-right and a cool fill light bottom-left
+// of the view; the camera is framed on the yarns' bounding box (frameBox).
+//   closeup  one gently curved open yarn across the frame (paper Fig. 8).
+//   weave    a plain weave of N warp yarns along x and N weft yarns along y,
+//            sinusoidal in depth z; spacing and crimp amplitude chosen so that
+//            crossing yarns touch with 1% clearance and never intersect
+//            (weaveGeometry; derivation in docs/scenes.md).
+//   knit     a stockinette patch of N courses of N loops each, from Crane's
+//            parametric plain-knit curve (K. Crane, "A Simple Parametric Model
+//            of Plain-Knit Yarns", 2023): gamma(t) = (t + a sin 2t, h cos t,
+//            d cos 2t), courses offset by w along y, scaled to the yarn radius
+//            (knitGeometry; docs/scenes.md).
+// Parameters (SceneOptions, flags of `weft scene`): the model file (must
+// load), N (--size), the yarn radius R, plies, ply twist, film size, spp and
+// an optional environment map. Scene units: the world of docs/scene-format.md
+// (+y up); every patch lies in the xy plane and faces +z, where the camera is.
+#pragma once
+
+#include <string>
+
+#include "weft/core/vec.h"
+#include "weft/render/curves.h"
+#include "weft/render/scene_file.h"
+
+namespace weft::eval {
+
+enum class SceneKind { Closeup, Weave, Knit };
+
+// "closeup", "weave", "knit".
+const char* sceneKindName(SceneKind kind);
+// The inverse; InputError naming `name` and the allowed kinds otherwise.
+SceneKind parseSceneKind(const std::string& name);
+
+// Allowed ranges, checked by SceneOptions::validate (each InputError names the
+// flag and its range).
+inline constexpr int kMaxPatchSize = 100;
+inline constexpr double kMinRadius = 1e-6, kMaxRadius = 1e3;
+
+struct SceneOptions {
+    std::string model;      // --model: MODEL.json from `weft fit`; must exist and load
+    int size = 6;           // --size N: weave N x N yarns, knit N courses x N loops; [1, 100]
+    double radius = 0.01;   // --radius: yarn radius R in scene units; [1e-6, 1e3]
+    int plies = 3;          // --plies: plies per yarn; [1, 16]
+    double plyTwist = 0.3;  // --ply-twist: as the scene file's ply_twist; [-100, 100]
+    int width = 512;        // --width: film width in pixels; [1, 16384]
+    int height = 512;       // --height: film height in pixels; [1, 16384]
+    int spp = 64;           // --spp: the scene's render.spp; [1, 1048576]
+    std::string envmap;     // --envmap: .exr or .hdr lat-long map instead of the sky; "" = sky
+
+    // Range checks, then the model is loaded (loadYarnModel) and the envmap
+    // checked for its extension and readability; InputError naming the flag.
+    void validate() const;
+};
+
+struct GeneratedScene {
+    // yarns[0].curves is "yarns.txt" (relative: the folder writeScene writes);
+    // the model and envmap paths are absolute. path and baseDir are empty.
+    render::SceneDesc scene;
+    render::CurveSet curves;  // the yarn centre lines in scene units: open polylines
+};
+
+// Each validates `options` first.
+GeneratedScene closeupScene(const SceneOptions& options);
+GeneratedScene weaveScene(const SceneOptions& options);
+GeneratedScene knitScene(const SceneOptions& options);
+GeneratedScene generateScene(SceneKind kind, const SceneOptions& options);
+
+// Plain weave: warp j is (x, j d, (-1)^j A cos(pi x / d)), weft i is
+// (i d, y, -(-1)^i A cos(pi y / d)). Crossing centre lines are 2 A apart and
+// that is their minimum distance iff d >= pi sqrt(2) A (docs/scenes.md); we
+// take A = R (1 + kWeaveClearance) and d = pi sqrt(2) A, the densest such weave.
+inline constexpr double kWeaveClearance = 0.01;
+inline constexpr int kWeaveSamplesPerSpacing = 32;
+struct WeaveGeometry {
+    double spacing = 0;    // d: distance between neighbouring parallel yarns
+    double amplitude = 0;  // A: crimp amplitude in z
+};
+WeaveGeometry weaveGeometry(double radius);
+
+// Crane's plain-knit curve in its own units (loop period 2 pi along x), with
+// his parameters a = 3/2, h = 4, d = 1 and row spacing w = h + 1/2, scaled so
+// that his units' yarn radius kKnitUnitRadius becomes R. With 0.75 (Crane
+// draws 0.5) neighbouring courses come within 1.02 (2 R) of each other and the
+// curve itself, between points more than pi R apart along it, within 1.03
+// (2 R): they touch without intersecting (docs/scenes.md).
+inline constexpr double kKnitUnitRadius = 0.75;
+inline constexpr int kKnitSamplesPerLoop = 96;
+struct KnitGeometry {
+    double scale = 0;  // scene units per Crane unit: R / kKnitUnitRadius
+    double roundness = 1.5, height = 4, depth = 1, rowSpacing = 4.5;  // a, h, d, w (Crane units)
+};
+KnitGeometry knitGeometry(double radius);
+// Point of course `row` at parameter t (one loop per 2 pi), in scene units.
+Vec3 knitPoint(const KnitGeometry& g, int row, double t);
+
+// A camera at `box`'s centre minus D * forward, looking at the centre, with
+// up (0, 1, 0): the smallest D for which every corner of the box projects
+// within `fill` (0 < fill <= 1) of the film's half-width and half-height, so
+// the whole box is in view (the view frustum is convex).
+render::CameraDesc frameBox(const render::Bounds3& box, const Vec3& forward, double fovDeg,
+                            int width, int height, double fill);
+
+// Writes DIR/yarns.txt (docs/curves.md text format) and DIR/scene.json
+// (docs/scene-format.md) as one atomic directory (TempDirCommit). An existing
+// DIR is replaced only when it holds nothing but those two files (an earlier
+// scene); otherwise InputError naming DIR and the first other entry.
+void writeScene(const GeneratedScene& generated, const std::string& dir);
+
+// The curves as the text that writeScene writes ("x y z" lines, %.9g).
+std::string curvesText(const render::CurveSet& curves);
+
+}  // namespace weft::eval

@@ -1,0 +1,429 @@
+// Tests of the generated scenes: yarns that touch but never intersect (brute
+// force over every pair of polyline segments), a camera that sees every yarn,
+// files that read back with the renderer's readers, determinism and input checks.
+#include "weft/eval/scene_gen.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "weft/core/file.h"
+#include "weft/core/math.h"
+#include "weft/core/test_util.h"
+#include "weft/render/scene.h"
+
+namespace weft::eval {
+namespace {
+
+using testing::expectInputError;
+
+const std::string kFleece = std::string(WEFT_SOURCE_DIR) + "/tests/data/fleece-small.json";
+
+SceneOptions options(int size = 6) {
+    SceneOptions o;
+    o.model = kFleece;
+    o.size = size;
+    return o;
+}
+
+// Distance between segments [p0, p1] and [q0, q1] (Ericson, Real-Time
+// Collision Detection, 5.1.9: closest points of two segments).
+double segmentDistance(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+    const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+    const double a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
+    double s = 0, t = 0;
+    if (a <= 0 && e <= 0) return length(r);
+    if (a <= 0) {
+        t = std::clamp(f / e, 0.0, 1.0);
+    } else {
+        const double c = dot(d1, r);
+        if (e <= 0) {
+            s = std::clamp(-c / a, 0.0, 1.0);
+        } else {
+            const double b = dot(d1, d2), denom = a * e - b * b;
+            s = denom > 0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+            t = (b * s + f) / e;
+            if (t < 0) {
+                t = 0;
+                s = std::clamp(-c / a, 0.0, 1.0);
+            } else if (t > 1) {
+                t = 1;
+                s = std::clamp((b - c) / a, 0.0, 1.0);
+            }
+        }
+    }
+    return length((p0 + d1 * s) - (q0 + d2 * t));
+}
+
+// Smallest distance between two different polylines (every segment pair).
+double curveDistance(const render::Curve& a, const render::Curve& b) {
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i + 1 < a.points.size(); ++i)
+        for (size_t j = 0; j + 1 < b.points.size(); ++j)
+            best = std::min(
+                best, segmentDistance(a.points[i], a.points[i + 1], b.points[j], b.points[j + 1]));
+    return best;
+}
+
+double minDistanceBetweenCurves(const render::CurveSet& set) {
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < set.curves.size(); ++i)
+        for (size_t j = i + 1; j < set.curves.size(); ++j)
+            best = std::min(best, curveDistance(set.curves[i], set.curves[j]));
+    return best;
+}
+
+// Smallest distance between segments of one curve that are more than `gap`
+// apart along it (a tube of radius R is free of self-intersection when this
+// is >= 2 R for gap = pi R: the chord of an arc of length pi R bent at
+// curvature radius rho >= R is >= 2 R).
+double selfDistance(const render::Curve& c, double gap) {
+    std::vector<double> arc(c.points.size(), 0.0);
+    for (size_t i = 1; i < c.points.size(); ++i)
+        arc[i] = arc[i - 1] + length(c.points[i] - c.points[i - 1]);
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i + 1 < c.points.size(); ++i)
+        for (size_t j = i + 1; j + 1 < c.points.size(); ++j)
+            if (arc[j] - arc[i + 1] > gap)
+                best = std::min(best, segmentDistance(c.points[i], c.points[i + 1], c.points[j],
+                                                      c.points[j + 1]));
+    return best;
+}
+
+double minSelfDistance(const render::CurveSet& set, double gap) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const render::Curve& c : set.curves) best = std::min(best, selfDistance(c, gap));
+    return best;
+}
+
+// Film position of p with the pinhole of render::Camera (scene.h), computed
+// here independently; `depth` is the distance along the view axis.
+struct FilmPoint {
+    double px = 0, py = 0, depth = 0;
+};
+FilmPoint project(const render::CameraDesc& cam, int width, int height, const Vec3& p) {
+    const Vec3 f = normalize(cam.to - cam.from);
+    const Vec3 r = normalize(cross(f, cam.up));
+    const Vec3 u = cross(r, f);
+    const double half = std::tan(0.5 * radians(cam.fovDeg));
+    const double aspect = static_cast<double>(width) / height;
+    const double hw = aspect >= 1 ? half * aspect : half, hh = aspect >= 1 ? half : half / aspect;
+    const Vec3 q = p - cam.from;
+    FilmPoint fp;
+    fp.depth = dot(q, f);
+    fp.px = (dot(q, r) / fp.depth / hw + 1) * 0.5 * width;
+    fp.py = (1 - dot(q, u) / fp.depth / hh) * 0.5 * height;
+    return fp;
+}
+
+// Every curve point, grown by the yarn radius along the image axes, lies on
+// the film; and the renderer's primary ray through its film position points
+// at it (so `project` is the renderer's convention).
+void expectAllInView(const GeneratedScene& g) {
+    const render::SceneDesc& s = g.scene;
+    const render::Camera camera(s.camera, s.film.width, s.film.height);
+    const double radius = *s.yarns[0].radius;
+    const Vec3 f = normalize(s.camera.to - s.camera.from);
+    const Vec3 r = normalize(cross(f, s.camera.up));
+    const Vec3 u = cross(r, f);
+    int checked = 0;
+    for (const render::Curve& c : g.curves.curves) {
+        for (const Vec3& p : c.points) {
+            for (const Vec3& offset : {Vec3{}, r * radius, r * -radius, u * radius, u * -radius}) {
+                const FilmPoint fp = project(s.camera, s.film.width, s.film.height, p + offset);
+                ASSERT_GT(fp.depth, 0);
+                ASSERT_GE(fp.px, 0);
+                ASSERT_LE(fp.px, s.film.width);
+                ASSERT_GE(fp.py, 0);
+                ASSERT_LE(fp.py, s.film.height);
+            }
+            if (checked++ % 17 == 0) {
+                const FilmPoint fp = project(s.camera, s.film.width, s.film.height, p);
+                Vec3 org, dir;
+                camera.ray(fp.px, fp.py, &org, &dir);
+                EXPECT_NEAR(length(dir - normalize(p - org)), 0.0, 1e-9);
+            }
+        }
+    }
+}
+
+TEST(SceneGen, WeaveTouchesWithoutIntersecting) {
+    const SceneOptions o = options(6);
+    const GeneratedScene g = weaveScene(o);
+    ASSERT_EQ(g.curves.curves.size(), 12u);
+    const double twoR = 2 * o.radius;
+    const double between = minDistanceBetweenCurves(g.curves);
+    std::printf("weave: min distance between yarns = %.5f (2R), self = %.4f (2R)\n", between / twoR,
+                minSelfDistance(g.curves, kPi * o.radius) / twoR);
+    EXPECT_GE(between, twoR);
+    EXPECT_LE(between, 1.02 * twoR);  // touching: the 1% clearance and sampling only
+    EXPECT_GE(minSelfDistance(g.curves, kPi * o.radius), twoR);
+    // Parallel neighbours are one spacing apart, crossings 2 A apart.
+    const WeaveGeometry w = weaveGeometry(o.radius);
+    EXPECT_NEAR(curveDistance(g.curves.curves[0], g.curves.curves[1]), w.spacing, 1e-12);
+    EXPECT_NEAR(w.spacing, kPi * std::sqrt(2.0) * w.amplitude, 1e-15);
+}
+
+TEST(SceneGen, WeaveDerivationHoldsOnTheContinuousCurves) {
+    // D^2(u, v) = u^2 + v^2 + A^2 (cos ku + cos kv)^2 >= 4 A^2 on a fine grid of
+    // one cell (beyond |u|, |v| > d the u^2 + v^2 term alone exceeds it).
+    const WeaveGeometry w = weaveGeometry(1.0);
+    const double d = w.spacing, a = w.amplitude, k = kPi / d;
+    double best = std::numeric_limits<double>::infinity();
+    const int n = 800;
+    for (int i = 0; i <= n; ++i)
+        for (int j = 0; j <= n; ++j) {
+            const double u = d * i / n, v = d * j / n;
+            const double c = std::cos(k * u) + std::cos(k * v);
+            best = std::min(best, u * u + v * v + a * a * c * c);
+        }
+    EXPECT_NEAR(std::sqrt(best), 2 * a, 1e-12);
+    // A denser weave (d below pi sqrt(2) A) brings crossing yarns closer than 2 A.
+    // Along the diagonal u = v: D^2 = 2 u^2 + 4 A^2 cos^2(ku) dips below 4 A^2.
+    const double dense = 0.9 * d, kd = kPi / dense;
+    double diagonal = std::numeric_limits<double>::infinity();
+    for (int i = 0; i <= n; ++i) {
+        const double u = 0.5 * dense * i / n, c = 2 * std::cos(kd * u);
+        diagonal = std::min(diagonal, 2 * u * u + a * a * c * c);
+    }
+    EXPECT_LT(std::sqrt(diagonal), 2 * a);
+}
+
+TEST(SceneGen, KnitCoursesDoNotIntersect) {
+    const SceneOptions o = options(4);
+    const GeneratedScene g = knitScene(o);
+    ASSERT_EQ(g.curves.curves.size(), 4u);
+    ASSERT_EQ(g.curves.curves[0].points.size(), 4u * kKnitSamplesPerLoop + 1);
+    const double twoR = 2 * o.radius;
+    const double between = minDistanceBetweenCurves(g.curves);
+    const double self = minSelfDistance(g.curves, kPi * o.radius);
+    std::printf("knit: min distance between courses = %.5f (2R), self (> pi R apart) = %.5f (2R)\n",
+                between / twoR, self / twoR);
+    EXPECT_GE(between, twoR);
+    EXPECT_LE(between, 1.05 * twoR);  // neighbouring courses touch (within 5%)
+    EXPECT_GE(self, twoR);
+    // Courses interlock: each overlaps its neighbour in y by more than 2 R.
+    const render::Bounds3 b0 = render::bounds({{g.curves.curves[0]}});
+    const render::Bounds3 b1 = render::bounds({{g.curves.curves[1]}});
+    EXPECT_GT(b0.hi.y - b1.lo.y, twoR);
+}
+
+TEST(SceneGen, CloseupIsOneOpenYarnAcrossTheFrame) {
+    const SceneOptions o = options();
+    const GeneratedScene g = closeupScene(o);
+    ASSERT_EQ(g.curves.curves.size(), 1u);
+    EXPECT_FALSE(g.curves.curves[0].closed);
+    EXPECT_GE(minSelfDistance(g.curves, kPi * o.radius), 2 * o.radius);
+    expectAllInView(g);
+    // It fills the frame: its ends are near the left and right film edges.
+    const render::SceneDesc& s = g.scene;
+    const FilmPoint left = project(s.camera, 512, 512, g.curves.curves[0].points.front());
+    const FilmPoint right = project(s.camera, 512, 512, g.curves.curves[0].points.back());
+    EXPECT_LT(left.px, 0.1 * 512);
+    EXPECT_GT(right.px, 0.9 * 512);
+}
+
+TEST(SceneGen, CameraSeesTheWholePatchOnAnyFilm) {
+    for (const SceneKind kind : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit}) {
+        for (const auto& [w, h] : {std::pair{512, 512}, {640, 200}, {200, 640}, {1, 1}}) {
+            SCOPED_TRACE(std::string(sceneKindName(kind)) + " " + std::to_string(w) + "x" +
+                         std::to_string(h));
+            SceneOptions o = options(3);
+            o.width = w;
+            o.height = h;
+            const GeneratedScene g = generateScene(kind, o);
+            expectAllInView(g);
+            EXPECT_EQ(g.scene.film.width, w);
+            EXPECT_EQ(g.scene.film.height, h);
+        }
+    }
+}
+
+TEST(SceneGen, FrameBoxIsTight) {
+    // A flat square seen head-on touches the frame on all four sides.
+    render::Bounds3 box;
+    box.extend({-1, -1, 0});
+    box.extend({1, 1, 0});
+    const render::CameraDesc cam = frameBox(box, {0, 0, -1}, 30, 100, 100, 1.0);
+    const FilmPoint corner = project(cam, 100, 100, {1, 1, 0});
+    EXPECT_NEAR(corner.px, 100, 1e-9);
+    EXPECT_NEAR(corner.py, 0, 1e-9);
+    EXPECT_NEAR(length(cam.from - Vec3{0, 0, 1 / std::tan(radians(15))}), 0, 1e-12);
+}
+
+TEST(SceneGen, LightsAreTheSkyAndTwoSpheresOutOfView) {
+    const GeneratedScene g = weaveScene(options(3));
+    const render::SceneDesc& s = g.scene;
+    ASSERT_EQ(s.lights.size(), 3u);
+    EXPECT_EQ(s.lights[0].type, render::LightDesc::Type::Sky);
+    const double distance = length(s.camera.to - s.camera.from);
+    for (int i : {1, 2}) {
+        const render::LightDesc& l = s.lights[i];
+        ASSERT_EQ(l.type, render::LightDesc::Type::Sphere);
+        // Bright enough for highlights: brighter than the sky (order 1).
+        EXPECT_GT(l.radiance.maxComponent(), 10);
+        // Neither encloses the camera nor any yarn.
+        EXPECT_GT(length(l.center - s.camera.from), l.radius);
+        EXPECT_GT(length(l.center - s.camera.to), l.radius + 0.5 * distance);
+        // Off the film (its centre outside the image by more than its radius).
+        const FilmPoint fp = project(s.camera, 512, 512, l.center);
+        EXPECT_TRUE(fp.depth < 0 || fp.px < 0 || fp.px > 512 || fp.py < 0 || fp.py > 512);
+    }
+    // Key top-right, fill bottom-left of the view.
+    const FilmPoint key = project(s.camera, 512, 512, s.lights[1].center);
+    const FilmPoint fill = project(s.camera, 512, 512, s.lights[2].center);
+    EXPECT_GT(key.px, 512);
+    EXPECT_LT(key.py, 0);
+    EXPECT_LT(fill.px, 0);
+    EXPECT_GT(fill.py, 512);
+    EXPECT_GT(s.lights[1].radiance.average(), s.lights[2].radiance.average());
+}
+
+class SceneGenFiles : public testing::TempDirTest {};
+
+TEST_F(SceneGenFiles, WrittenFilesReadBack) {
+    for (const SceneKind kind : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit}) {
+        SCOPED_TRACE(sceneKindName(kind));
+        SceneOptions o = options(3);
+        o.radius = 0.02;
+        o.plies = 2;
+        o.plyTwist = -0.5;
+        o.width = 320;
+        o.height = 240;
+        o.spp = 7;
+        const GeneratedScene g = generateScene(kind, o);
+        const std::string dir = path(sceneKindName(kind));
+        writeScene(g, dir);
+
+        const render::SceneDesc s = render::loadScene(dir + "/scene.json");
+        EXPECT_EQ(s.film.width, 320);
+        EXPECT_EQ(s.film.height, 240);
+        EXPECT_EQ(s.render.spp, 7);
+        EXPECT_EQ(s.camera.fovDeg, g.scene.camera.fovDeg);
+        EXPECT_NEAR(length(s.camera.from - g.scene.camera.from), 0, 1e-12);
+        ASSERT_EQ(s.yarns.size(), 1u);
+        EXPECT_EQ(std::filesystem::path(s.yarns[0].curves),
+                  std::filesystem::path(dir) / "yarns.txt");
+        EXPECT_EQ(std::filesystem::path(s.yarns[0].model),
+                  std::filesystem::absolute(kFleece).lexically_normal());
+        EXPECT_EQ(*s.yarns[0].radius, 0.02);
+        EXPECT_EQ(s.yarns[0].plies, 2);
+        EXPECT_EQ(s.yarns[0].plyTwist, -0.5);
+        EXPECT_EQ(s.lights.size(), 3u);
+
+        const render::CurveSet read = render::readCurves(s.yarns[0].curves);
+        ASSERT_EQ(read.curves.size(), g.curves.curves.size());
+        for (size_t c = 0; c < read.curves.size(); ++c) {
+            ASSERT_EQ(read.curves[c].points.size(), g.curves.curves[c].points.size());
+            EXPECT_FALSE(read.curves[c].closed);
+            EXPECT_TRUE(read.curves[c].radii.empty());
+            for (size_t i = 0; i < read.curves[c].points.size(); ++i)
+                ASSERT_LE(length(read.curves[c].points[i] - g.curves.curves[c].points[i]),
+                          1e-8 * (length(g.curves.curves[c].points[i]) + o.radius));
+        }
+        // Only the two files, no leftovers beside or inside.
+        std::vector<std::string> names;
+        for (const auto& e : std::filesystem::directory_iterator(dir))
+            names.push_back(e.path().filename());
+        std::sort(names.begin(), names.end());
+        EXPECT_EQ(names, (std::vector<std::string>{"scene.json", "yarns.txt"}));
+    }
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir_),
+                            std::filesystem::directory_iterator()),
+              3);
+}
+
+TEST_F(SceneGenFiles, Deterministic) {
+    for (const SceneKind kind : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit}) {
+        const GeneratedScene a = generateScene(kind, options(3));
+        const GeneratedScene b = generateScene(kind, options(3));
+        EXPECT_EQ(curvesText(a.curves), curvesText(b.curves));
+        EXPECT_EQ(render::toJson(a.scene), render::toJson(b.scene));
+        writeScene(a, path("a"));
+        writeScene(b, path("b"));
+        EXPECT_EQ(readFile(path("a/scene.json")), readFile(path("b/scene.json")));
+        EXPECT_EQ(readFile(path("a/yarns.txt")), readFile(path("b/yarns.txt")));
+    }
+}
+
+TEST_F(SceneGenFiles, ReplacesAnEarlierSceneOnly) {
+    writeScene(weaveScene(options(2)), path("out"));
+    writeScene(knitScene(options(2)), path("out"));  // an earlier scene is replaced
+    EXPECT_EQ(render::readCurves(path("out/yarns.txt")).curves.size(), 2u);
+    writeFileAtomic(path("out/render.exr"), "x");
+    expectInputError([&] { writeScene(weaveScene(options(2)), path("out")); },
+                     {path("out"), "render.exr"});
+    EXPECT_TRUE(std::filesystem::exists(path("out/render.exr")));
+    writeFileAtomic(path("file"), "x");
+    expectInputError([&] { writeScene(weaveScene(options(2)), path("file")); },
+                     {path("file"), "not a directory"});
+}
+
+TEST_F(SceneGenFiles, EnvmapReplacesTheSky) {
+    writeFileAtomic(path("studio.HDR"), "#?RADIANCE\n");
+    SceneOptions o = options(2);
+    o.envmap = path("studio.HDR");
+    const GeneratedScene g = knitScene(o);
+    ASSERT_EQ(g.scene.lights.size(), 3u);
+    EXPECT_EQ(g.scene.lights[0].type, render::LightDesc::Type::Envmap);
+    EXPECT_EQ(g.scene.lights[0].file, path("studio.HDR"));
+    o.envmap = path("missing.exr");
+    expectInputError([&] { knitScene(o); }, {"--envmap", "missing.exr"});
+    o.envmap = path("studio.png");
+    expectInputError([&] { knitScene(o); }, {"--envmap", "studio.png", ".exr", ".hdr"});
+}
+
+TEST(SceneGen, OptionsAreRangeChecked) {
+    struct Case {
+        void (*set)(SceneOptions&);
+        std::vector<std::string> parts;
+    };
+    const std::vector<Case> cases = {
+        {[](SceneOptions& o) { o.size = 0; }, {"--size 0", "[1, 100]"}},
+        {[](SceneOptions& o) { o.size = 101; }, {"--size 101", "[1, 100]"}},
+        {[](SceneOptions& o) { o.radius = 0; }, {"--radius 0", "[1e-06, 1000]"}},
+        {[](SceneOptions& o) { o.radius = std::nan(""); }, {"--radius nan"}},
+        {[](SceneOptions& o) { o.radius = 2e3; }, {"--radius 2000"}},
+        {[](SceneOptions& o) { o.plies = 0; }, {"--plies 0", "[1, 16]"}},
+        {[](SceneOptions& o) { o.plies = 17; }, {"--plies 17", "[1, 16]"}},
+        {[](SceneOptions& o) { o.plyTwist = 101; }, {"--ply-twist 101", "[-100, 100]"}},
+        {[](SceneOptions& o) { o.width = 0; }, {"--width 0", "[1, 16384]"}},
+        {[](SceneOptions& o) { o.height = 16385; }, {"--height 16385", "[1, 16384]"}},
+        {[](SceneOptions& o) { o.spp = 0; }, {"--spp 0", "[1, 1048576]"}},
+        {[](SceneOptions& o) { o.model.clear(); }, {"--model", "required"}},
+        {[](SceneOptions& o) { o.model = "no-such-model.json"; },
+         {"--model", "no-such-model.json"}},
+        {[](SceneOptions& o) { o.model = std::string(WEFT_SOURCE_DIR) + "/tests/data/README.md"; },
+         {"--model", "README.md"}},
+    };
+    for (const Case& c : cases) {
+        for (const SceneKind kind : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit}) {
+            SceneOptions o = options(2);
+            c.set(o);
+            try {
+                generateScene(kind, o);
+                ADD_FAILURE() << "expected an InputError for " << c.parts[0];
+            } catch (const InputError& e) {
+                for (const std::string& p : c.parts)
+                    EXPECT_NE(std::string(e.what()).find(p), std::string::npos)
+                        << e.what() << " lacks " << p;
+            }
+        }
+    }
+}
+
+TEST(SceneGen, KindNames) {
+    for (const SceneKind kind : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit})
+        EXPECT_EQ(parseSceneKind(sceneKindName(kind)), kind);
+    expectInputError([] { parseSceneKind("twill"); }, {"twill", "closeup, weave, knit"});
+}
+
+}  // namespace
+}  // namespace weft::eval

@@ -46,16 +46,10 @@ void runRender(const RenderCmdOptions& o) {
     const render::SceneDesc desc = render::loadScene(o.scene);
 
     render::RenderOptions options;
-    if (o.sppOpt->count() && o.timeOpt->count())
-        throw InputError("--spp and --time are exclusive: give one budget");
-    options.spp = o.timeOpt->count() ? 0 : (o.sppOpt->count() ? o.spp : desc.render.spp);
+    // Flags override the scene's spp; RenderOptions::validate checks that
+    // exactly one budget is left and its range.
+    options.spp = o.sppOpt->count() ? o.spp : (o.timeOpt->count() ? 0 : desc.render.spp);
     options.seconds = o.timeOpt->count() ? o.seconds : 0;
-    if (o.sppOpt->count() && o.spp < 1)
-        throw InputError("--spp " + std::to_string(o.spp) +
-                         " is out of range: allowed [1, 1048576]");
-    if (o.timeOpt->count() && !(o.seconds > 0))
-        throw InputError("--time " + std::to_string(o.seconds) +
-                         " is out of range: allowed > 0 seconds");
     options.threads = o.threads;
     options.seed = o.seedOpt->count() ? o.seed : desc.render.seed;
     options.maxDepth = desc.render.maxDepth;

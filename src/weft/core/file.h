@@ -18,6 +18,10 @@ namespace weft {
 // (missing or unwritable directory, disk full, `path` is a directory...).
 void writeFileAtomic(const std::string& path, std::string_view bytes);
 
+// The extension of `path` with its dot, in lower case ("a/B.EXR" -> ".exr"; "" if none),
+// for picking a reader by file type.
+std::string lowercaseExtension(const std::string& path);
+
 // The whole file as bytes; InputError naming `path` if it is missing, a
 // directory or unreadable.
 std::string readFile(const std::string& path);

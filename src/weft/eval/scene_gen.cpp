@@ -57,11 +57,6 @@ void checkReal(const std::string& flag, double v, double lo, double hi) {
                                     "[" + formatNumber(lo) + ", " + formatNumber(hi) + "]"));
 }
 
-std::string lowercase(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
-
 std::string absolutePath(const std::string& path) {
     return fs::absolute(fs::path(path)).lexically_normal().string();
 }
@@ -162,7 +157,7 @@ void SceneOptions::validate() const {
     checkInt("--height", height, 1, 16384);
     checkInt("--spp", spp, 1, 1 << 20);
     if (!envmap.empty()) {
-        const std::string ext = lowercase(fs::path(envmap).extension().string());
+        const std::string ext = lowercaseExtension(envmap);
         if (ext != ".exr" && ext != ".hdr")
             throw InputError("--envmap " + envmap +
                              ": expected an .exr or .hdr lat-long environment map");

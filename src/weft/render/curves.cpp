@@ -51,11 +51,6 @@ std::string hexByte(unsigned char b) {
     return buf;
 }
 
-std::string lowercase(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
-
 }  // namespace
 
 size_t CurveSet::pointCount() const {
@@ -89,7 +84,7 @@ Bounds3 bounds(const CurveSet& set) {
 }
 
 CurveSet readCurves(const std::string& path) {
-    const std::string ext = lowercase(std::filesystem::path(path).extension().string());
+    const std::string ext = lowercaseExtension(path);
     if (ext == ".bcc") return parseBccCurves(readFile(path), path);
     if (ext == ".txt") return parseTextCurves(readFile(path), path);
     if (ext == ".obj") return parseObjCurves(readFile(path), path);

@@ -75,12 +75,6 @@ double sampleContinuous(const double* cdf, int n, double u, int* cell) {
     return (i + frac) / n;
 }
 
-std::string lowercaseExtension(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return ext;
-}
-
 [[noreturn]] void failRead(const std::string& path, const std::string& reason) {
     throw InputError("cannot read image '" + path + "': " + reason);
 }

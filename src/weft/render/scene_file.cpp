@@ -43,11 +43,6 @@ std::string joinNames(std::initializer_list<const char*> names) {
     return out;
 }
 
-std::string lowercase(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
-
 const json* find(const json& object, const char* key) {
     const auto it = object.find(key);
     return it == object.end() ? nullptr : &*it;
@@ -320,7 +315,7 @@ class Reader {
         if (name.find('\0') != std::string::npos)
             failAt(path, "a file name cannot contain a NUL character");
         if (extensions.size() != 0) {
-            const std::string ext = lowercase(std::filesystem::path(name).extension().string());
+            const std::string ext = lowercaseExtension(name);
             if (std::none_of(extensions.begin(), extensions.end(),
                              [&](const char* e) { return ext == e; }))
                 failAt(path, jsonString(name) + " has an unsupported extension (allowed: " +

@@ -138,6 +138,8 @@ uint32_t TubeAccel::addGeometry(const std::vector<Tube>& tubes, int material) {
                                                   (right ? RTC_CURVE_FLAG_NEIGHBOR_RIGHT : 0));
         }
     }
+    info.vertices = vertices;
+    info.indices = indices;
     rtcCommitGeometry(geom);
     const unsigned id = rtcAttachGeometry(scene_, geom);
     rtcReleaseGeometry(geom);
@@ -172,12 +174,7 @@ bool TubeAccel::intersect(const Vec3& org, const Vec3& dir, double tMax, const T
     hit->id = {rh.hit.geomID, info.tubeOf(rh.hit.primID)};
     hit->material = info.material;
     // Tangent: the segment direction (the index buffer gives its first vertex).
-    RTCGeometry geom = rtcGetGeometry(scene_, rh.hit.geomID);
-    const auto* vertices =
-        static_cast<const float*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_VERTEX, 0));
-    const auto* indices =
-        static_cast<const unsigned*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_INDEX, 0));
-    const float* v0 = vertices + 4 * static_cast<size_t>(indices[rh.hit.primID]);
+    const float* v0 = info.vertices + 4 * static_cast<size_t>(info.indices[rh.hit.primID]);
     const float* v1 = v0 + 4;
     const Vec3 axis{v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]};
     hit->tangent = normalize(axis);

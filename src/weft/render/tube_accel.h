@@ -83,6 +83,9 @@ class TubeAccel {
         int material = -1;
         std::vector<uint32_t> tubeFirstSegment;  // ascending; segment -> tube by binary search
         std::vector<float> tubeRadius;           // largest radius of each tube
+        // Embree's buffers (owned by the geometry the scene holds), for the hit tangent.
+        const float* vertices = nullptr;    // x, y, z, r per vertex
+        const unsigned* indices = nullptr;  // first vertex of each segment
         uint32_t tubeOf(uint32_t segment) const;
     };
 

@@ -26,12 +26,13 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr double kFovDeg = 30;
-// Share of the film's half-extents the framed box may fill: a close-up spans
-// the frame, a patch keeps a small border.
-constexpr double kCloseupFill = 0.95, kPatchFill = 0.92;
+// Share of the film's half-width the close-up's framed length spans.
+constexpr double kCloseupFill = 0.95;
 // Close-up: yarn length in radii and samples along it.
-constexpr double kCloseupLengthRadii = 24;
-constexpr int kCloseupSamples = 193;
+constexpr double kCloseupLengthRadii = 12;
+constexpr int kCloseupSamplesPerRadius = 8;
+// Yarn extensions tried before giving up (each a radius, a spacing or a loop).
+constexpr int kMaxEndMargin = 512;
 // Lights, relative to the camera distance D from the framed box's centre: two
 // spheres of radius kLightRadius * D at distance D, in the directions
 // (+-0.6 right, +-0.6 up, 0.55 towards the camera): outside a 30-degree view.
@@ -102,13 +103,12 @@ std::vector<render::LightDesc> paperLights(const render::CameraDesc& camera,
     return lights;
 }
 
-GeneratedScene assemble(render::CurveSet curves, const SceneOptions& o, const Vec3& forward,
-                        double fill) {
+GeneratedScene assemble(render::CurveSet curves, const render::CameraDesc& camera,
+                        const SceneOptions& o) {
     GeneratedScene g;
     g.curves = std::move(curves);
     render::SceneDesc& s = g.scene;
-    s.camera = frameBox(padded(render::bounds(g.curves), o.radius), forward, kFovDeg, o.width,
-                        o.height, fill);
+    s.camera = camera;
     s.film = {o.width, o.height};
     s.render.spp = o.spp;
     s.lights = paperLights(s.camera, o.envmap);
@@ -120,6 +120,24 @@ GeneratedScene assemble(render::CurveSet curves, const SceneOptions& o, const Ve
     yarn.model = absolutePath(o.model);
     s.yarns.push_back(yarn);
     return g;
+}
+
+// The shortest extension of the yarns (curvesWithMargin(0), (1), ...) whose
+// every end lies outside the view: a cut yarn end is drawn as a sphere cap
+// in neural mode and as flat-cut, splaying fibers in fiber mode, so ends in
+// view would be compared for a difference no model is meant to capture.
+template <class CurvesWithMargin>
+render::CurveSet extendEndsOutOfView(const CurvesWithMargin& curvesWithMargin,
+                                     const render::CameraDesc& camera, const SceneOptions& o) {
+    for (int margin = 0; margin <= kMaxEndMargin; ++margin) {
+        render::CurveSet set = curvesWithMargin(margin);
+        const bool allOut = std::all_of(set.curves.begin(), set.curves.end(), [&](const auto& c) {
+            return c.closed || (outOfView(camera, o.width, o.height, c.points.front(), o.radius) &&
+                                outOfView(camera, o.width, o.height, c.points.back(), o.radius));
+        });
+        if (allOut) return set;
+    }
+    throw std::logic_error("scene generator: yarn ends still in view after the largest margin");
 }
 
 // Patches are seen from the front and a little above; the close-up less so.
@@ -220,20 +238,95 @@ render::CameraDesc frameBox(const render::Bounds3& box, const Vec3& forward, dou
     return cam;
 }
 
+bool outOfView(const render::CameraDesc& camera, int width, int height, const Vec3& p,
+               double radius) {
+    const Vec3 f = normalize(camera.to - camera.from);
+    const Vec3 r = normalize(cross(f, camera.up));
+    const Vec3 u = cross(r, f);
+    const double half = std::tan(0.5 * radians(camera.fovDeg));
+    const double aspect = static_cast<double>(width) / height;
+    const double halfW = aspect >= 1 ? half * aspect : half;
+    const double halfH = aspect >= 1 ? half : half / aspect;
+    // Every corner of the cube p +- radius beyond one and the same side of the
+    // view frustum (its four side planes and the camera plane): then the whole
+    // ball of radius `radius` around p is out of view.
+    int beyond[5] = {0, 0, 0, 0, 0};
+    for (int i = 0; i < 8; ++i) {
+        const Vec3 corner = p + radius * Vec3{(i & 1) ? 1.0 : -1.0, (i & 2) ? 1.0 : -1.0,
+                                              (i & 4) ? 1.0 : -1.0};
+        const Vec3 q = corner - camera.from;
+        const double depth = dot(q, f), x = dot(q, r), y = dot(q, u);
+        beyond[0] += x > halfW * depth;
+        beyond[1] += x < -halfW * depth;
+        beyond[2] += y > halfH * depth;
+        beyond[3] += y < -halfH * depth;
+        beyond[4] += depth <= 0;
+    }
+    return std::any_of(std::begin(beyond), std::end(beyond), [](int n) { return n == 8; });
+}
+
+render::CameraDesc frameCover(double x0, double x1, double y0, double y1, const Vec3& forward,
+                              double fovDeg, int width, int height) {
+    render::CameraDesc cam;
+    cam.fovDeg = fovDeg;
+    const Vec3 f = normalize(forward);
+    const Vec3 r = normalize(cross(f, cam.up));
+    const Vec3 u = cross(r, f);
+    const double half = std::tan(0.5 * radians(fovDeg));
+    const double aspect = static_cast<double>(width) / height;
+    const double halfW = aspect >= 1 ? half * aspect : half;
+    const double halfH = aspect >= 1 ? half : half / aspect;
+    const Vec3 c{0.5 * (x0 + x1), 0.5 * (y0 + y1), 0};
+    // The footprint of the film on the plane grows with the distance D: find
+    // the largest D at which the four corner rays land inside the rectangle.
+    const auto covered = [&](double distance) {
+        const Vec3 from = c - distance * f;
+        for (const double sx : {-1.0, 1.0})
+            for (const double sy : {-1.0, 1.0}) {
+                const Vec3 dir = f + sx * halfW * r + sy * halfH * u;
+                if (dir.z >= 0) return false;
+                const Vec3 hit = from + (-from.z / dir.z) * dir;
+                if (hit.x < x0 || hit.x > x1 || hit.y < y0 || hit.y > y1) return false;
+            }
+        return true;
+    };
+    const double extent = std::hypot(x1 - x0, y1 - y0);
+    double lo = 0, hi = extent;
+    while (covered(hi)) hi *= 2;  // terminates: the footprint outgrows the rectangle
+    for (int i = 0; i < 60; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (covered(mid) ? lo : hi) = mid;
+    }
+    cam.to = c;
+    cam.from = c - lo * f;
+    return cam;
+}
+
 GeneratedScene closeupScene(const SceneOptions& o) {
     o.validate();
     // A yarn of length L along x, bowed up in y by 0.08 L and tilted in depth
-    // by +-0.04 L: gently curved, seen from the front.
+    // by +-0.04 L: gently curved, seen from the front. The camera frames this
+    // length; the yarn then runs on past both sides of the film.
     const double len = kCloseupLengthRadii * o.radius;
-    render::Curve c;
-    for (int i = 0; i < kCloseupSamples; ++i) {
-        const double x = len * (static_cast<double>(i) / (kCloseupSamples - 1) - 0.5);
-        c.points.push_back(
-            {x, 0.08 * len * std::cos(kPi * x / len), 0.04 * len * std::sin(kPi * x / len)});
-    }
-    render::CurveSet set;
-    set.curves.push_back(std::move(c));
-    return assemble(std::move(set), o, kCloseupForward, kCloseupFill);
+    const auto yarn = [&](int margin) {
+        const int steps = static_cast<int>(kCloseupLengthRadii) * kCloseupSamplesPerRadius +
+                          2 * margin * kCloseupSamplesPerRadius;
+        render::Curve c;
+        for (int i = 0; i <= steps; ++i) {
+            const double x = -0.5 * len + o.radius * (static_cast<double>(i) /
+                                                          kCloseupSamplesPerRadius -
+                                                      margin);
+            c.points.push_back(
+                {x, 0.08 * len * std::cos(kPi * x / len), 0.04 * len * std::sin(kPi * x / len)});
+        }
+        render::CurveSet set;
+        set.curves.push_back(std::move(c));
+        return set;
+    };
+    const render::CameraDesc camera = frameBox(padded(render::bounds(yarn(0)), o.radius),
+                                               kCloseupForward, kFovDeg, o.width, o.height,
+                                               kCloseupFill);
+    return assemble(extendEndsOutOfView(yarn, camera, o), camera, o);
 }
 
 GeneratedScene weaveScene(const SceneOptions& o) {
@@ -241,44 +334,65 @@ GeneratedScene weaveScene(const SceneOptions& o) {
     const WeaveGeometry g = weaveGeometry(o.radius);
     const double d = g.spacing, a = g.amplitude, k = kPi / d;
     const int n = o.size;
-    // Each yarn runs one spacing beyond the outermost crossing yarns: [-d, n d].
-    const int samples = (n + 1) * kWeaveSamplesPerSpacing + 1;
-    const auto along = [&](int i) { return -d + (n + 1) * d * i / (samples - 1); };
-    render::CurveSet set;
-    for (int j = 0; j < n; ++j) {  // warp: along x at y = j d
-        const double sign = j % 2 ? -1 : 1;
-        render::Curve c;
-        for (int i = 0; i < samples; ++i) {
-            const double x = along(i);
-            c.points.push_back({x, j * d, sign * a * std::cos(k * x)});
+    // The view covers the cells of N x N yarns; `margin` more yarns on each
+    // side, each running `margin` + 1 spacings past the outermost ones.
+    const auto weave = [&](int margin) {
+        const int first = -margin, last = n - 1 + margin;
+        const double start = (first - 1) * d, span = (last - first + 2) * d;
+        const int samples = (last - first + 2) * kWeaveSamplesPerSpacing + 1;
+        const auto along = [&](int i) { return start + span * i / (samples - 1); };
+        const auto parity = [](int j) { return ((j % 2) + 2) % 2 ? -1.0 : 1.0; };
+        render::CurveSet set;
+        for (int j = first; j <= last; ++j) {  // warp: along x at y = j d
+            render::Curve c;
+            for (int i = 0; i < samples; ++i) {
+                const double x = along(i);
+                c.points.push_back({x, j * d, parity(j) * a * std::cos(k * x)});
+            }
+            set.curves.push_back(std::move(c));
         }
-        set.curves.push_back(std::move(c));
-    }
-    for (int i = 0; i < n; ++i) {  // weft: along y at x = i d, opposite phase
-        const double sign = i % 2 ? 1 : -1;
-        render::Curve c;
-        for (int s = 0; s < samples; ++s) {
-            const double y = along(s);
-            c.points.push_back({i * d, y, sign * a * std::cos(k * y)});
+        for (int i = first; i <= last; ++i) {  // weft: along y at x = i d, opposite phase
+            render::Curve c;
+            for (int s = 0; s < samples; ++s) {
+                const double y = along(s);
+                c.points.push_back({i * d, y, -parity(i) * a * std::cos(k * y)});
+            }
+            set.curves.push_back(std::move(c));
         }
-        set.curves.push_back(std::move(c));
-    }
-    return assemble(std::move(set), o, kPatchForward, kPatchFill);
+        return set;
+    };
+    const double lo = -0.5 * d, hi = (n - 0.5) * d;
+    const render::CameraDesc camera =
+        frameCover(lo, hi, lo, hi, kPatchForward, kFovDeg, o.width, o.height);
+    return assemble(extendEndsOutOfView(weave, camera, o), camera, o);
 }
 
 GeneratedScene knitScene(const SceneOptions& o) {
     o.validate();
     const KnitGeometry g = knitGeometry(o.radius);
     const int n = o.size;
-    const int samples = n * kKnitSamplesPerLoop + 1;  // t in [0, 2 pi n]
-    render::CurveSet set;
-    for (int row = 0; row < n; ++row) {
-        render::Curve c;
-        for (int i = 0; i < samples; ++i)
-            c.points.push_back(knitPoint(g, row, kTwoPi * i / kKnitSamplesPerLoop));
-        set.curves.push_back(std::move(c));
-    }
-    return assemble(std::move(set), o, kPatchForward, kPatchFill);
+    // The view covers N courses of N loops; `margin` + 1 more courses above
+    // and below (the first one fills the top course's loops and the gaps below
+    // the bottom one), and every course `margin` loops longer at both ends.
+    const auto knit = [&](int margin) {
+        const int loops = n + 2 * margin;
+        const int samples = loops * kKnitSamplesPerLoop + 1;
+        render::CurveSet set;
+        for (int row = -margin - 1; row <= n + margin; ++row) {
+            render::Curve c;
+            for (int i = 0; i < samples; ++i)
+                c.points.push_back(
+                    knitPoint(g, row, kTwoPi * (static_cast<double>(i) / kKnitSamplesPerLoop -
+                                                margin)));
+            set.curves.push_back(std::move(c));
+        }
+        return set;
+    };
+    const double s = g.scale;
+    const render::CameraDesc camera =
+        frameCover(0, kTwoPi * n * s, -0.5 * g.rowSpacing * s, (n - 0.5) * g.rowSpacing * s,
+                   kPatchForward, kFovDeg, o.width, o.height);
+    return assemble(extendEndsOutOfView(knit, camera, o), camera, o);
 }
 
 GeneratedScene generateScene(SceneKind kind, const SceneOptions& options) {

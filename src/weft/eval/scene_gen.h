@@ -3,17 +3,24 @@
 // Three scenes, each one yarn set (one curve file, one fitted model) lit as in
 // the paper's figures: the procedural sky (or an environment map) plus two
 // sphere lights, a warm key light top-right and a cool fill light bottom-left
-// of the view; the camera is framed on the yarns' bounding box (frameBox).
-//   closeup  one gently curved open yarn across the frame (paper Fig. 8).
+// of the view. Every yarn end is kept out of view (the yarns run on past the
+// film's edges, extendEndsOutOfView in scene_gen.cpp): a cut end is a sphere
+// cap in neural mode and splayed, flat-cut fibers in fiber mode, a difference
+// no yarn model is meant to capture.
+//   closeup  one gently curved open yarn across the frame (paper Fig. 8),
+//            framed on a length of 12 R (frameBox), running on beyond the film.
 //   weave    a plain weave of N warp yarns along x and N weft yarns along y,
 //            sinusoidal in depth z; spacing and crimp amplitude chosen so that
 //            crossing yarns touch with 1% clearance and never intersect
-//            (weaveGeometry; derivation in docs/scenes.md).
+//            (weaveGeometry; derivation in docs/scenes.md). The film is
+//            covered by the cells of the N x N yarns (frameCover); more yarns
+//            lie around them so that the cloth fills the frame.
 //   knit     a stockinette patch of N courses of N loops each, from Crane's
 //            parametric plain-knit curve (K. Crane, "A Simple Parametric Model
 //            of Plain-Knit Yarns", 2023): gamma(t) = (t + a sin 2t, h cos t,
 //            d cos 2t), courses offset by w along y, scaled to the yarn radius
-//            (knitGeometry; docs/scenes.md).
+//            (knitGeometry; docs/scenes.md). The film is covered by N courses
+//            of N loops; more courses and loops lie around them.
 // Parameters (SceneOptions, flags of `weft scene`): the model file (must
 // load), N (--size), the yarn radius R, plies, ply twist, film size, spp and
 // an optional environment map. Scene units: the world of docs/scene-format.md
@@ -103,6 +110,18 @@ Vec3 knitPoint(const KnitGeometry& g, int row, double t);
 // the whole box is in view (the view frustum is convex).
 render::CameraDesc frameBox(const render::Bounds3& box, const Vec3& forward, double fovDeg,
                             int width, int height, double fill);
+
+// A camera looking along `forward` (up (0, 1, 0)) at the centre of the
+// rectangle [x0, x1] x [y0, y1] of the plane z = 0, as far away as it can be
+// while the rays through the four film corners still land in the rectangle:
+// the rectangle covers the whole film (the cloth fills the frame).
+render::CameraDesc frameCover(double x0, double x1, double y0, double y1, const Vec3& forward,
+                              double fovDeg, int width, int height);
+
+// True when the ball of radius `radius` around p is entirely out of the view
+// of `camera` on a width x height film (beyond one side of the frustum).
+bool outOfView(const render::CameraDesc& camera, int width, int height, const Vec3& p,
+               double radius);
 
 // Writes DIR/yarns.txt (docs/curves.md text format) and DIR/scene.json
 // (docs/scene-format.md) as one atomic directory (TempDirCommit). An existing

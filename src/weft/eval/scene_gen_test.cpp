@@ -123,41 +123,71 @@ FilmPoint project(const render::CameraDesc& cam, int width, int height, const Ve
     return fp;
 }
 
-// Every curve point, grown by the yarn radius along the image axes, lies on
-// the film; and the renderer's primary ray through its film position points
-// at it (so `project` is the renderer's convention).
-void expectAllInView(const GeneratedScene& g) {
+// The renderer's primary ray through a point's film position points at it
+// (so `project` is the renderer's convention), checked on the curves' points
+// that are in view.
+void expectProjectionMatchesCamera(const GeneratedScene& g) {
     const render::SceneDesc& s = g.scene;
     const render::Camera camera(s.camera, s.film.width, s.film.height);
-    const double radius = *s.yarns[0].radius;
-    const Vec3 f = normalize(s.camera.to - s.camera.from);
-    const Vec3 r = normalize(cross(f, s.camera.up));
-    const Vec3 u = cross(r, f);
     int checked = 0;
-    for (const render::Curve& c : g.curves.curves) {
+    for (const render::Curve& c : g.curves.curves)
         for (const Vec3& p : c.points) {
-            for (const Vec3& offset : {Vec3{}, r * radius, r * -radius, u * radius, u * -radius}) {
-                const FilmPoint fp = project(s.camera, s.film.width, s.film.height, p + offset);
-                ASSERT_GT(fp.depth, 0);
-                ASSERT_GE(fp.px, 0);
-                ASSERT_LE(fp.px, s.film.width);
-                ASSERT_GE(fp.py, 0);
-                ASSERT_LE(fp.py, s.film.height);
-            }
-            if (checked++ % 17 == 0) {
-                const FilmPoint fp = project(s.camera, s.film.width, s.film.height, p);
-                Vec3 org, dir;
-                camera.ray(fp.px, fp.py, &org, &dir);
-                EXPECT_NEAR(length(dir - normalize(p - org)), 0.0, 1e-9);
-            }
+            const FilmPoint fp = project(s.camera, s.film.width, s.film.height, p);
+            if (fp.depth <= 0 || fp.px < 0 || fp.px > s.film.width || fp.py < 0 ||
+                fp.py > s.film.height || checked++ % 17 != 0)
+                continue;
+            Vec3 org, dir;
+            camera.ray(fp.px, fp.py, &org, &dir);
+            EXPECT_NEAR(length(dir - normalize(p - org)), 0.0, 1e-9);
         }
+    EXPECT_GT(checked, 0);
+}
+
+// No yarn end (a ball of radius R around the end point: the cap) reaches the
+// film: sampled on a dense grid of the ball's surface with `project`.
+void expectEndsOutOfView(const GeneratedScene& g) {
+    const render::SceneDesc& s = g.scene;
+    const double radius = *s.yarns[0].radius;
+    for (const render::Curve& c : g.curves.curves)
+        for (const Vec3& end : {c.points.front(), c.points.back()})
+            for (int i = 0; i <= 12; ++i)
+                for (int j = 0; j < 24; ++j) {
+                    const double theta = kPi * i / 12, phi = kTwoPi * j / 24;
+                    const Vec3 p = end + radius * Vec3{std::sin(theta) * std::cos(phi),
+                                                       std::sin(theta) * std::sin(phi),
+                                                       std::cos(theta)};
+                    const FilmPoint fp = project(s.camera, s.film.width, s.film.height, p);
+                    const bool inView = fp.depth > 0 && fp.px >= 0 && fp.px <= s.film.width &&
+                                        fp.py >= 0 && fp.py <= s.film.height;
+                    ASSERT_FALSE(inView) << "yarn end (" << end.x << ", " << end.y << ", "
+                                         << end.z << ") is in view";
+                }
+}
+
+// The rays through the film's corners (and centre) hit the cloth's plane
+// z = 0 inside the rectangle the view must show.
+void expectFilmCovered(const GeneratedScene& g, double x0, double x1, double y0, double y1) {
+    const render::SceneDesc& s = g.scene;
+    const render::Camera camera(s.camera, s.film.width, s.film.height);
+    const double w = s.film.width, h = s.film.height;
+    for (const auto& [px, py] : {std::pair{0.0, 0.0}, {w, 0.0}, {0.0, h}, {w, h}, {w / 2, h / 2}}) {
+        Vec3 org, dir;
+        camera.ray(px, py, &org, &dir);
+        ASSERT_LT(dir.z, 0);
+        const Vec3 hit = org + (-org.z / dir.z) * dir;
+        EXPECT_GE(hit.x, x0 - 1e-9);
+        EXPECT_LE(hit.x, x1 + 1e-9);
+        EXPECT_GE(hit.y, y0 - 1e-9);
+        EXPECT_LE(hit.y, y1 + 1e-9);
     }
 }
 
 TEST(SceneGen, WeaveTouchesWithoutIntersecting) {
     const SceneOptions o = options(6);
     const GeneratedScene g = weaveScene(o);
-    ASSERT_EQ(g.curves.curves.size(), 12u);
+    // 6 warp and 6 weft yarns in view, as many more around them as hide the ends.
+    ASSERT_GE(g.curves.curves.size(), 12u);
+    ASSERT_EQ(g.curves.curves.size() % 2, 0u);
     const double twoR = 2 * o.radius;
     const double between = minDistanceBetweenCurves(g.curves);
     std::printf("weave: min distance between yarns = %.5f (2R), self = %.4f (2R)\n", between / twoR,
@@ -199,8 +229,11 @@ TEST(SceneGen, WeaveDerivationHoldsOnTheContinuousCurves) {
 TEST(SceneGen, KnitCoursesDoNotIntersect) {
     const SceneOptions o = options(4);
     const GeneratedScene g = knitScene(o);
-    ASSERT_EQ(g.curves.curves.size(), 4u);
-    ASSERT_EQ(g.curves.curves[0].points.size(), 4u * kKnitSamplesPerLoop + 1);
+    // The 4 courses of the view, one more above and below, and as many more
+    // courses and loops around them as hide the ends.
+    ASSERT_GE(g.curves.curves.size(), 6u);
+    const size_t extra = (g.curves.curves.size() - 6) / 2;
+    ASSERT_EQ(g.curves.curves[0].points.size(), (4 + 2 * extra) * kKnitSamplesPerLoop + 1);
     const double twoR = 2 * o.radius;
     const double between = minDistanceBetweenCurves(g.curves);
     const double self = minSelfDistance(g.curves, kPi * o.radius);
@@ -221,16 +254,26 @@ TEST(SceneGen, CloseupIsOneOpenYarnAcrossTheFrame) {
     ASSERT_EQ(g.curves.curves.size(), 1u);
     EXPECT_FALSE(g.curves.curves[0].closed);
     EXPECT_GE(minSelfDistance(g.curves, kPi * o.radius), 2 * o.radius);
-    expectAllInView(g);
-    // It fills the frame: its ends are near the left and right film edges.
+    expectProjectionMatchesCamera(g);
+    expectEndsOutOfView(g);
+    // The framed 12 R (x in [-6 R, 6 R]) spans the film: its ends project
+    // near the left and right edges, and the yarn runs on beyond both.
     const render::SceneDesc& s = g.scene;
-    const FilmPoint left = project(s.camera, 512, 512, g.curves.curves[0].points.front());
-    const FilmPoint right = project(s.camera, 512, 512, g.curves.curves[0].points.back());
-    EXPECT_LT(left.px, 0.1 * 512);
-    EXPECT_GT(right.px, 0.9 * 512);
+    const double len = 12 * o.radius;
+    const auto atX = [&](double x) {
+        return Vec3{x, 0.08 * len * std::cos(kPi * x / len), 0.04 * len * std::sin(kPi * x / len)};
+    };
+    const FilmPoint left = project(s.camera, 512, 512, atX(-0.5 * len));
+    const FilmPoint right = project(s.camera, 512, 512, atX(0.5 * len));
+    EXPECT_LT(left.px, 0.15 * 512);
+    EXPECT_GT(left.px, 0);
+    EXPECT_GT(right.px, 0.85 * 512);
+    EXPECT_LT(right.px, 512);
+    EXPECT_LT(g.curves.curves[0].points.front().x, -0.5 * len);
+    EXPECT_GT(g.curves.curves[0].points.back().x, 0.5 * len);
 }
 
-TEST(SceneGen, CameraSeesTheWholePatchOnAnyFilm) {
+TEST(SceneGen, ClothFillsTheFrameAndEndsStayOutOfViewOnAnyFilm) {
     for (const SceneKind kind : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit}) {
         for (const auto& [w, h] : {std::pair{512, 512}, {640, 200}, {200, 640}, {1, 1}}) {
             SCOPED_TRACE(std::string(sceneKindName(kind)) + " " + std::to_string(w) + "x" +
@@ -239,11 +282,42 @@ TEST(SceneGen, CameraSeesTheWholePatchOnAnyFilm) {
             o.width = w;
             o.height = h;
             const GeneratedScene g = generateScene(kind, o);
-            expectAllInView(g);
             EXPECT_EQ(g.scene.film.width, w);
             EXPECT_EQ(g.scene.film.height, h);
+            expectEndsOutOfView(g);
+            if (kind == SceneKind::Weave) {
+                const double d = weaveGeometry(o.radius).spacing;
+                expectFilmCovered(g, -0.5 * d, 2.5 * d, -0.5 * d, 2.5 * d);
+            } else if (kind == SceneKind::Knit) {
+                const KnitGeometry k = knitGeometry(o.radius);
+                expectFilmCovered(g, 0, 3 * kTwoPi * k.scale, -0.5 * k.rowSpacing * k.scale,
+                                  2.5 * k.rowSpacing * k.scale);
+            }
         }
     }
+}
+
+TEST(SceneGen, FrameCoverIsTight) {
+    // A square seen head-on fills a square film exactly: the corner rays land
+    // on its corners.
+    const render::CameraDesc cam = frameCover(-1, 1, -1, 1, {0, 0, -1}, 30, 100, 100);
+    EXPECT_NEAR(length(cam.from - Vec3{0, 0, 1 / std::tan(radians(15))}), 0, 1e-9);
+    const FilmPoint corner = project(cam, 100, 100, {1, 1, 0});
+    EXPECT_NEAR(corner.px, 100, 1e-6);
+    EXPECT_NEAR(corner.py, 0, 1e-6);
+}
+
+TEST(SceneGen, OutOfViewIsTheWholeBall) {
+    render::CameraDesc cam;
+    cam.from = {0, 0, 10};
+    cam.to = {0, 0, 0};
+    // The film's right edge on the plane z = 0 is at x = 10 tan 15 degrees.
+    const double edge = 10 * std::tan(radians(15));
+    EXPECT_FALSE(outOfView(cam, 64, 64, {edge + 0.5, 0, 0}, 1.0));  // the ball straddles the edge
+    EXPECT_TRUE(outOfView(cam, 64, 64, {edge + 1.5, 0, 0}, 1.0));
+    EXPECT_FALSE(outOfView(cam, 64, 64, {0, 0, 0}, 0.1));
+    EXPECT_TRUE(outOfView(cam, 64, 64, {0, 0, 12}, 1.0));  // behind the camera
+    EXPECT_FALSE(outOfView(cam, 64, 64, {0, 0, 10.5}, 1.0));  // around the camera
 }
 
 TEST(SceneGen, FrameBoxIsTight) {
@@ -356,7 +430,10 @@ TEST_F(SceneGenFiles, Deterministic) {
 TEST_F(SceneGenFiles, ReplacesAnEarlierSceneOnly) {
     writeScene(weaveScene(options(2)), path("out"));
     writeScene(knitScene(options(2)), path("out"));  // an earlier scene is replaced
-    EXPECT_EQ(render::readCurves(path("out/yarns.txt")).curves.size(), 2u);
+    EXPECT_EQ(render::readCurves(path("out/yarns.txt")).curves.size(),
+              knitScene(options(2)).curves.curves.size());
+    EXPECT_NE(knitScene(options(2)).curves.curves.size(),
+              weaveScene(options(2)).curves.curves.size());
     writeFileAtomic(path("out/render.exr"), "x");
     expectInputError([&] { writeScene(weaveScene(options(2)), path("out")); },
                      {path("out"), "render.exr"});

@@ -96,5 +96,6 @@ void addYarnCommands(CLI::App& app);
 void addRenderCommand(CLI::App& app);
 void addCompareCommand(CLI::App& app);
 void addSceneCommand(CLI::App& app);
+void addMontageCommand(CLI::App& app);
 
 }  // namespace weft::cmd

@@ -125,6 +125,25 @@ TEST_F(CompareCliTest, BadInputIsNamed) {
     EXPECT_FALSE(std::filesystem::exists(path("h.png")));
 }
 
+TEST_F(CompareCliTest, MontageOfRendersAndAHeatmap) {
+    ASSERT_EQ(run("compare off.exr ref.exr --heatmap heat.png").status, 0);
+    const RunResult r = run("montage ref.exr off.exr heat.png --gap 3 --out fig.png");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json line = nlohmann::json::parse(r.out);
+    EXPECT_EQ(line.at("width"), 3 * (16 + 3) + 3);
+    EXPECT_EQ(line.at("height"), 12 + 2 * 3);
+    int w = 0, h = 0, n = 0;
+    unsigned char* bytes = stbi_load(path("fig.png").c_str(), &w, &h, &n, 3);
+    ASSERT_NE(bytes, nullptr);
+    EXPECT_EQ(w, 60);
+    EXPECT_EQ(bytes[0], 255);  // the white border
+    stbi_image_free(bytes);
+    expectUserError(run("montage ref.exr --out fig.exr"), {"--out", ".png"});
+    expectUserError(run("montage ref.exr missing.exr --out f2.png"), {"missing.exr"});
+    expectUserError(run("montage ref.exr --columns 99 --out f2.png"), {"--columns", "[0, 64]"});
+    EXPECT_FALSE(std::filesystem::exists(path("f2.png")));
+}
+
 TEST_F(CompareCliTest, Help) {
     const RunResult r = run("compare --help");
     EXPECT_EQ(r.status, 0) << r.err;

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
     weft::cmd::addRenderCommand(app);
     weft::cmd::addCompareCommand(app);
     weft::cmd::addSceneCommand(app);
+    weft::cmd::addMontageCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -252,8 +252,8 @@ bool outOfView(const render::CameraDesc& camera, int width, int height, const Ve
     // ball of radius `radius` around p is out of view.
     int beyond[5] = {0, 0, 0, 0, 0};
     for (int i = 0; i < 8; ++i) {
-        const Vec3 corner = p + radius * Vec3{(i & 1) ? 1.0 : -1.0, (i & 2) ? 1.0 : -1.0,
-                                              (i & 4) ? 1.0 : -1.0};
+        const Vec3 corner =
+            p + radius * Vec3{(i & 1) ? 1.0 : -1.0, (i & 2) ? 1.0 : -1.0, (i & 4) ? 1.0 : -1.0};
         const Vec3 q = corner - camera.from;
         const double depth = dot(q, f), x = dot(q, r), y = dot(q, u);
         beyond[0] += x > halfW * depth;
@@ -313,9 +313,9 @@ GeneratedScene closeupScene(const SceneOptions& o) {
                           2 * margin * kCloseupSamplesPerRadius;
         render::Curve c;
         for (int i = 0; i <= steps; ++i) {
-            const double x = -0.5 * len + o.radius * (static_cast<double>(i) /
-                                                          kCloseupSamplesPerRadius -
-                                                      margin);
+            const double x =
+                -0.5 * len +
+                o.radius * (static_cast<double>(i) / kCloseupSamplesPerRadius - margin);
             c.points.push_back(
                 {x, 0.08 * len * std::cos(kPi * x / len), 0.04 * len * std::sin(kPi * x / len)});
         }
@@ -323,9 +323,9 @@ GeneratedScene closeupScene(const SceneOptions& o) {
         set.curves.push_back(std::move(c));
         return set;
     };
-    const render::CameraDesc camera = frameBox(padded(render::bounds(yarn(0)), o.radius),
-                                               kCloseupForward, kFovDeg, o.width, o.height,
-                                               kCloseupFill);
+    const render::CameraDesc camera =
+        frameBox(padded(render::bounds(yarn(0)), o.radius), kCloseupForward, kFovDeg, o.width,
+                 o.height, kCloseupFill);
     return assemble(extendEndsOutOfView(yarn, camera, o), camera, o);
 }
 
@@ -381,9 +381,8 @@ GeneratedScene knitScene(const SceneOptions& o) {
         for (int row = -margin - 1; row <= n + margin; ++row) {
             render::Curve c;
             for (int i = 0; i < samples; ++i)
-                c.points.push_back(
-                    knitPoint(g, row, kTwoPi * (static_cast<double>(i) / kKnitSamplesPerLoop -
-                                                margin)));
+                c.points.push_back(knitPoint(
+                    g, row, kTwoPi * (static_cast<double>(i) / kKnitSamplesPerLoop - margin)));
             set.curves.push_back(std::move(c));
         }
         return set;

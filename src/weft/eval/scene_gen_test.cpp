@@ -153,14 +153,14 @@ void expectEndsOutOfView(const GeneratedScene& g) {
             for (int i = 0; i <= 12; ++i)
                 for (int j = 0; j < 24; ++j) {
                     const double theta = kPi * i / 12, phi = kTwoPi * j / 24;
-                    const Vec3 p = end + radius * Vec3{std::sin(theta) * std::cos(phi),
-                                                       std::sin(theta) * std::sin(phi),
-                                                       std::cos(theta)};
+                    const Vec3 p =
+                        end + radius * Vec3{std::sin(theta) * std::cos(phi),
+                                            std::sin(theta) * std::sin(phi), std::cos(theta)};
                     const FilmPoint fp = project(s.camera, s.film.width, s.film.height, p);
                     const bool inView = fp.depth > 0 && fp.px >= 0 && fp.px <= s.film.width &&
                                         fp.py >= 0 && fp.py <= s.film.height;
-                    ASSERT_FALSE(inView) << "yarn end (" << end.x << ", " << end.y << ", "
-                                         << end.z << ") is in view";
+                    ASSERT_FALSE(inView) << "yarn end (" << end.x << ", " << end.y << ", " << end.z
+                                         << ") is in view";
                 }
 }
 
@@ -316,7 +316,7 @@ TEST(SceneGen, OutOfViewIsTheWholeBall) {
     EXPECT_FALSE(outOfView(cam, 64, 64, {edge + 0.5, 0, 0}, 1.0));  // the ball straddles the edge
     EXPECT_TRUE(outOfView(cam, 64, 64, {edge + 1.5, 0, 0}, 1.0));
     EXPECT_FALSE(outOfView(cam, 64, 64, {0, 0, 0}, 0.1));
-    EXPECT_TRUE(outOfView(cam, 64, 64, {0, 0, 12}, 1.0));  // behind the camera
+    EXPECT_TRUE(outOfView(cam, 64, 64, {0, 0, 12}, 1.0));     // behind the camera
     EXPECT_FALSE(outOfView(cam, 64, 64, {0, 0, 10.5}, 1.0));  // around the camera
 }
 

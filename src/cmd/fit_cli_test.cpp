@@ -2,6 +2,7 @@
 // and the report it writes, and the errors for bad input.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -9,6 +10,7 @@
 #include "cli_test_util.h"
 #include "weft/core/file.h"
 #include "weft/fit/yarn_model.h"
+#include "weft/render/lights.h"
 
 namespace weft {
 namespace {
@@ -107,6 +109,69 @@ TEST_F(FitCliTest, BadInputIsAClearError) {
     std::filesystem::remove(path("rdm/rdm_m.npy"));
     expectUserError(run("fit --rdm rdm --out m.json --config short.json"), {"rdm_m.npy"});
     EXPECT_FALSE(std::filesystem::exists(path("m.json")));
+}
+
+// The ablations of paper Fig. 5 (docs/fit.md): fitted, written, rendered.
+TEST_F(FitCliTest, AblationsFitAndRender) {
+    expectUserError(
+        run("fit --rdm rdm --out bogus.json --config short.json --ablation bogus --quiet"),
+        {"--ablation", "bogus", "naive", "no-r-lobe"});
+    EXPECT_FALSE(std::filesystem::exists(path("bogus.json")));
+
+    RunResult r =
+        run("fit --rdm rdm --out naive.json --config short.json --ablation naive --quiet");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out).at("ablation"), "naive");
+    const YarnModel naive = loadYarnModel(path("naive.json"));
+    EXPECT_EQ(naive.ablation, YarnAblation::Naive);
+    EXPECT_EQ(naive.fit.at("ablation"), "naive");
+    EXPECT_FALSE(naive.fit.contains("r_rel_l2"));
+    EXPECT_EQ(naive.mNet.widths(), (std::vector<int>{6, 8, 8, 3}));  // the M network's architecture
+    EXPECT_TRUE(std::filesystem::exists(path("naive-report/errors.json")));
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("naive.json"))).at("ablation"), "naive");
+
+    r =
+        run("fit --rdm rdm --out no-r.json --config short.json --ablation no-r-lobe --no-report "
+            "--quiet");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const YarnModel noR = loadYarnModel(path("no-r.json"));
+    EXPECT_EQ(noR.ablation, YarnAblation::NoRLobe);
+    EXPECT_EQ(noR.fit.at("ablation"), "no_r_lobe");
+    EXPECT_TRUE(noR.rLobe.masking.empty());
+    EXPECT_EQ(noR.sampling.kappaR, 0.0);
+
+    // --recalibrate keeps the variant; --ablation with it is refused.
+    r =
+        run("fit --recalibrate naive.json --rdm rdm --out naive-re.json --config short.json "
+            "--no-report --quiet");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const YarnModel recalibrated = loadYarnModel(path("naive-re.json"));
+    EXPECT_EQ(recalibrated.ablation, YarnAblation::Naive);
+    EXPECT_EQ(recalibrated.mNet.parameters(), naive.mNet.parameters());
+    expectUserError(run("fit --recalibrate naive.json --rdm rdm --out x.json --ablation naive "
+                        "--quiet"),
+                    {"--ablation", "--recalibrate"});
+
+    // Both render with the ordinary yarn BSDF.
+    writeFileAtomic(path("yarn.txt"), "-0.2 0 0\n0 0.01 0\n0.2 0 0\n");
+    for (const std::string model : {"naive", "no-r"}) {
+        writeFileAtomic(path(model + "-scene.json"), R"({
+            "camera": {"from": [0, 0, 1], "to": [0, 0, 0], "fov_deg": 8},
+            "film": {"width": 8, "height": 6},
+            "render": {"spp": 2, "seed": 1},
+            "yarns": [{"curves": "yarn.txt", "radius": 0.03, "plies": 3, "ply_twist": 0.3,
+                       "model": ")" + path(model + ".json") +
+                                                         R"("}]})");
+        r = run("render " + model + "-scene.json --spp 2 --quiet --out " + model + ".exr");
+        ASSERT_EQ(r.status, 0) << r.err;
+        const Image image = render::readImage(path(model + ".exr"));
+        double sum = 0;
+        for (float v : image.pixels) {
+            ASSERT_TRUE(std::isfinite(v)) << model;
+            sum += v;
+        }
+        EXPECT_GT(sum, 0.0) << model;
+    }
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 // weft fit: the neural yarn model (model.json) from a gathered RDM.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "commands.h"
@@ -13,7 +15,7 @@ namespace weft::cmd {
 namespace {
 
 struct FitCliOptions {
-    std::string rdm, out, config, reference, report, recalibrate;
+    std::string rdm, out, config, reference, report, recalibrate, ablation;
     uint64_t seed = 0;
     int threads = -1;
     bool quiet = false, printConfig = false, noReport = false;
@@ -25,6 +27,20 @@ void requireParentDirectory(const std::string& path, const std::string& flag) {
     std::error_code ec;
     if (!parent.empty() && !std::filesystem::is_directory(parent, ec))
         throw InputError(flag + " " + path + ": the folder " + parent.string() + " does not exist");
+}
+
+// --ablation: the variants of paper Fig. 5 (docs/fit.md).
+YarnAblation parseAblation(const std::string& name) {
+    if (name.empty() || name == "none") return YarnAblation::None;
+    if (name == "naive") return YarnAblation::Naive;
+    if (name == "no-r-lobe") return YarnAblation::NoRLobe;
+    throw InputError("--ablation \"" + name +
+                     "\": unknown ablation (allowed: naive, no-r-lobe, none)");
+}
+
+// A number of the summary line, or null (an ablated model has no R errors).
+nlohmann::json finiteOrNull(double v) {
+    return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
 }
 
 // fleece.json -> fleece-report
@@ -41,7 +57,12 @@ void runFit(const FitCliOptions& c) {
         std::printf("%s\n", config.toJson().dump(2).c_str());
         return;
     }
+    const YarnAblation ablation = parseAblation(c.ablation);
     if (c.rdm.empty() || c.out.empty()) throw InputError("weft fit needs --rdm DIR and --out MODEL.json");
+    if (!c.ablation.empty() && !c.recalibrate.empty())
+        throw InputError(
+            "--ablation cannot be combined with --recalibrate: the model file says "
+            "which variant it is, and it is recalibrated as that variant");
     if (config.threads < 0 || config.threads > 1024)
         throw InputError("--threads " + std::to_string(config.threads) + " is out of range: allowed [0, 1024]");
     const std::string reportDir = c.report.empty() ? defaultReportDir(c.out) : c.report;
@@ -50,17 +71,35 @@ void runFit(const FitCliOptions& c) {
     const RdmData rdm = loadRdm(c.rdm);
     std::unique_ptr<RdmData> reference;
     if (!c.reference.empty()) reference = std::make_unique<RdmData>(loadRdm(c.reference));
-    const FitResult fit = c.recalibrate.empty()
-                              ? fitYarnModel(rdm, config, c.seed, c.quiet)
-                              : recalibrateYarnModel(loadYarnModel(c.recalibrate), rdm, config, c.quiet);
+    const FitResult fit =
+        c.recalibrate.empty()
+            ? fitYarnModel(rdm, config, c.seed, c.quiet, ablation)
+            : recalibrateYarnModel(loadYarnModel(c.recalibrate), rdm, config, c.quiet);
     saveYarnModel(fit.model, c.out);
-    if (!c.noReport) writeFitReport(fit, rdm, reference.get(), reportDir);
+    if (!c.noReport) {
+        // An ablated model is measured against what it was fitted to (fit.h, ablationTarget).
+        const YarnAblation fitted = fit.model.ablation;
+        if (fitted == YarnAblation::None) {
+            writeFitReport(fit, rdm, reference.get(), reportDir);
+        } else {
+            std::unique_ptr<RdmData> referenceTarget;
+            if (reference)
+                referenceTarget = std::make_unique<RdmData>(ablationTarget(*reference, fitted));
+            writeFitReport(fit, ablationTarget(rdm, fitted), referenceTarget.get(), reportDir);
+        }
+    }
     const FitReport& r = fit.report;
-    std::printf(
-        "{\"out\": \"%s\", \"report\": %s, \"t_rmse\": %.5f, \"m_rel_l2\": %.4f, \"r_rel_l2\": %.4f, "
-        "\"r_rel_l2_eq8\": %.4f, \"seconds\": %.1f, \"m_samples_per_second\": %.0f}\n",
-        c.out.c_str(), c.noReport ? "null" : ("\"" + reportDir + "\"").c_str(), r.tRmse, r.mRelL2,
-        r.rRelL2, r.rRelL2Eq8, r.seconds, r.mSamplesPerSecond);
+    nlohmann::ordered_json summary = {
+        {"out", c.out},
+        {"report", c.noReport ? nlohmann::ordered_json() : nlohmann::ordered_json(reportDir)},
+        {"ablation", yarnAblationName(fit.model.ablation)},
+        {"t_rmse", r.tRmse},
+        {"m_rel_l2", r.mRelL2},
+        {"r_rel_l2", finiteOrNull(r.rRelL2)},
+        {"r_rel_l2_eq8", finiteOrNull(r.rRelL2Eq8)},
+        {"seconds", r.seconds},
+        {"m_samples_per_second", r.mSamplesPerSecond}};
+    std::printf("%s\n", summary.dump().c_str());
 }
 
 }  // namespace
@@ -83,6 +122,10 @@ void addFitCommand(CLI::App& app) {
     fit->add_option("--recalibrate", o->recalibrate,
                     "an existing MODEL.json: keep its networks and R lobe, redo only the energy "
                     "calibration and the sampling lobe against --rdm (seconds instead of minutes)");
+    fit->add_option("--ablation", o->ablation,
+                    "fit an ablated variant of paper Fig. 5 instead of the full model: naive (one "
+                    "network over the whole RDM, no T or R) or no-r-lobe (no analytic R lobe; the "
+                    "M network also carries R); see docs/fit.md");
     fit->add_flag("--no-report", o->noReport, "write only the model");
     fit->add_flag("--print-config", o->printConfig, "print the configuration in effect as JSON and exit");
     fit->add_flag("--quiet", o->quiet, "no progress output");

@@ -74,6 +74,26 @@ TEST_F(RenderCliTest, TimeBudgetAndSceneDefaults) {
     EXPECT_EQ(nlohmann::json::parse(readFile(path("default.json"))).at("spp"), 2);
 }
 
+// The sampling ablation of paper Fig. 5: the same image in expectation, another estimator.
+TEST_F(RenderCliTest, CosineYarnSampling) {
+    const RunResult r =
+        run("render scene.json --spp 2 --yarn-sampling cosine --quiet --out cos.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const Image image = render::readImage(path("cos.exr"));
+    double sum = 0;
+    for (float v : image.pixels) {
+        ASSERT_TRUE(std::isfinite(v));
+        sum += v;
+    }
+    EXPECT_GT(sum, 0.0);
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("cos.json"))).at("yarn_sampling"), "cosine");
+    ASSERT_EQ(run("render scene.json --spp 2 --quiet --out fitted.exr").status, 0);
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("fitted.json"))).at("yarn_sampling"), "fitted");
+    EXPECT_NE(render::readImage(path("fitted.exr")).pixels, image.pixels);
+    expectUserError(run("render scene.json --spp 1 --yarn-sampling x --out x.exr"),
+                    {"--yarn-sampling", "\"x\"", "fitted, cosine"});
+}
+
 TEST_F(RenderCliTest, BadInputIsNamed) {
     expectUserError(run("render scene.json --spp 2 --time 1 --out a.exr"), {"--spp", "--time"});
     expectUserError(run("render scene.json --spp 0 --out a.exr"), {"--spp"});

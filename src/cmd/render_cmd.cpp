@@ -19,7 +19,7 @@ namespace weft::cmd {
 namespace {
 
 struct RenderCmdOptions {
-    std::string scene, mode = "neural", out;
+    std::string scene, mode = "neural", out, yarnSampling = "fitted";
     int spp = 0, threads = 0;
     double seconds = 0, exposure = 0;
     uint64_t seed = 0;
@@ -43,6 +43,8 @@ void runRender(const RenderCmdOptions& o) {
         throw InputError("--exposure " + std::to_string(o.exposure) +
                          " is out of range: allowed [-64, 64] stops");
     const render::RenderMode mode = render::parseRenderMode(o.mode);
+    YarnBsdfOptions yarnOptions;
+    yarnOptions.sampling = parseYarnSampling(o.yarnSampling, "--yarn-sampling");
     const render::SceneDesc desc = render::loadScene(o.scene);
 
     render::RenderOptions options;
@@ -58,7 +60,7 @@ void runRender(const RenderCmdOptions& o) {
     options.validate();
 
     const std::string hash = render::sceneHash(desc);
-    const render::Scene scene(desc, mode, o.quiet);
+    const render::Scene scene(desc, mode, o.quiet, yarnOptions);
     const render::RenderResult result = render::render(scene, options);
 
     render::writeExr(o.out, result.image);
@@ -67,6 +69,7 @@ void runRender(const RenderCmdOptions& o) {
     stats["scene_file"] = o.scene;
     stats["scene_hash"] = hash;
     stats["next_event_estimation"] = !o.noNee;
+    stats["yarn_sampling"] = yarnSamplingName(yarnOptions.sampling);
     stats["max_depth"] = options.maxDepth;
     stats["exposure"] = o.exposure;
     stats["version"] = WEFT_VERSION;
@@ -97,6 +100,11 @@ void addRenderCommand(CLI::App& app) {
     cmd->add_option("--mode", o->mode,
                     "neural: plies as curves with the yarn BSDF; fiber: every fiber drawn "
                     "(ground truth)")
+        ->capture_default_str();
+    cmd->add_option("--yarn-sampling", o->yarnSampling,
+                    "Neural mode: how the yarn BSDF samples directions: fitted (its lobe "
+                    "selection and M lobe) or cosine (cosine about the normal on either side, "
+                    "for the sampling ablation; the T lobe stays a delta)")
         ->capture_default_str();
     o->sppOpt =
         cmd->add_option("--spp", o->spp, "Samples per pixel (default: the scene's render.spp)");

@@ -516,6 +516,7 @@ void forEachIncident(tbb::task_arena* arena, size_t count, const Eval& eval) {
 
 std::vector<double> modelTransmissionMap(const YarnModel& model, const RdmBins& bins) {
     const size_t nIn = bins.incidentCount();
+    if (!model.hasTransmissionLobe()) return std::vector<double>(nIn, 0.0);
     Mlp<float>::Matrix x(3, static_cast<Eigen::Index>(nIn));
     for (size_t i = 0; i < nIn; ++i) putColumn(x, static_cast<Eigen::Index>(i), bins.incidentCentre(i));
     const Mlp<float>::Matrix y = model.tNet.forward(x);
@@ -525,6 +526,8 @@ std::vector<double> modelTransmissionMap(const YarnModel& model, const RdmBins& 
 }
 
 std::vector<float> modelReflectionMap(const YarnModel& model, const RdmBins& bins) {
+    if (!model.hasReflectionLobe())
+        return std::vector<float>(bins.incidentCount() * bins.outgoingCount() * 3, 0.0f);
     const std::vector<double> pT = modelTransmissionMap(model, bins);
     const RLobe lobe(model.fiber, model.rLobe);
     const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
@@ -594,7 +597,8 @@ BinEnergies binEnergies(const YarnModel& model, const RdmData& rdm, int64_t minP
             Rgb r;
             for (Eigen::Index q = 0; q < nodes; ++q) {
                 const Vec3& wo = rule.directions[static_cast<size_t>(q)];
-                r += lobe.eval(wi, wo, pT[i]) * rule.weights[static_cast<size_t>(q)];
+                if (model.hasReflectionLobe())
+                    r += lobe.eval(wi, wo, pT[i]) * rule.weights[static_cast<size_t>(q)];
                 putColumn(x, q, wi, wo);
             }
             const Mlp<float>::Matrix y = model.mNet.forward(x);
@@ -795,7 +799,7 @@ void finishFit(YarnModel& model, const RdmData& rdm, const FitConfig& config, in
 }
 
 nlohmann::json fitRecord(const FitReport& report, const FitConfig& config, uint64_t seed,
-                         const RdmData& rdm) {
+                         const RdmData& rdm, YarnAblation ablation) {
     nlohmann::json fit;
     fit = {{"t_rmse", report.tRmse},
                  {"t_rmse_unweighted", report.tRmseUnweighted},
@@ -815,18 +819,71 @@ nlohmann::json fitRecord(const FitReport& report, const FitConfig& config, uint6
                    {"ply_seed", rdm.meta.value("ply_seed", nlohmann::json())},
                    {"bins", rdm.meta.value("bins", nlohmann::json())}}}};
     if (config.masking) fit["r_rel_l2_masked"] = report.rRelL2Masked;
+    if (ablation != YarnAblation::None) {
+        // No R lobe: its errors would compare two zero maps.
+        fit["ablation"] = yarnAblationName(ablation);
+        for (const char* key : {"r_rel_l2", "r_rel_l2_eq8", "r_energy_ratio", "r_rel_l2_masked"})
+            fit.erase(key);
+    }
     if (config.calibrationDegree >= 0) {
         fit["m_rel_l2_uncalibrated"] = report.mRelL2Uncalibrated;
-        fit["r_rel_l2_uncalibrated"] = report.rRelL2Uncalibrated;
+        if (ablation == YarnAblation::None)
+            fit["r_rel_l2_uncalibrated"] = report.rRelL2Uncalibrated;
         fit["energy_calibration"] = report.calibration;
     }
     return fit;
 }
 
+// The t_net of a naive model: the format needs a 3 -> 1 sigmoid network, and
+// this one is 0 to float precision (sigmoid(-100)), should anything read it,
+// although YarnBsdf and the model maps never do.
+Mlp<float> zeroTransmissionNetwork() {
+    Mlp<float> net({3, 1}, {false}, OutputFunction::Sigmoid, 0);
+    net.weight(0).setZero();
+    net.bias(0).setConstant(-100.0f);
+    return net;
+}
+
 }  // namespace
 
-FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t seed, bool quiet) {
+size_t transmissionOutgoingBin(const RdmBins& bins, size_t incidentBin) {
+    return bins.outgoingBin(-bins.incidentCentre(incidentBin));
+}
+
+RdmData ablationTarget(const RdmData& rdm, YarnAblation ablation) {
+    if (ablation == YarnAblation::None) return rdm;
+    RdmData target;
+    target.dir = rdm.dir;
+    target.meta = rdm.meta;
+    target.bins = rdm.bins;
+    target.count = rdm.count;
+    target.pT = rdm.pT;
+    target.rdmM.resize(rdm.rdmM.size());
+    for (size_t k = 0; k < rdm.rdmM.size(); ++k) target.rdmM[k] = rdm.rdmR[k] + rdm.rdmM[k];
+    target.rdmR.assign(rdm.rdmR.size(), 0.0f);
+    if (ablation == YarnAblation::Naive) {
+        const RdmBins& bins = rdm.bins;
+        const size_t nOut = bins.outgoingCount();
+        for (size_t i = 0; i < bins.incidentCount(); ++i) {
+            // All of T in the one bin of -wi (at the incident bin's centre):
+            // the bin average of the delta lobe, so its energy is kept exactly.
+            const size_t o = transmissionOutgoingBin(bins, i);
+            const double density = rdm.pT[i] / bins.outgoingSolidAngle(o);
+            for (int c = 0; c < 3; ++c)
+                target.rdmM[(i * nOut + o) * 3 + c] += static_cast<float>(density);
+            target.pT[i] = 0;
+        }
+    }
+    return target;
+}
+
+FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_t seed, bool quiet,
+                       YarnAblation ablation) {
     const auto t0 = Clock::now();
+    // Every step below sees the ablated model's target; the full model's is the gather itself.
+    RdmData ablated;
+    if (ablation != YarnAblation::None) ablated = ablationTarget(gathered, ablation);
+    const RdmData& rdm = ablation != YarnAblation::None ? ablated : gathered;
     const RdmBins& bins = rdm.bins;
     const int threads = config.threads > 0 ? config.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
@@ -838,6 +895,7 @@ FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t see
     FitResult result;
     YarnModel& model = result.model;
     FitReport& report = result.report;
+    model.ablation = ablation;
     try {
         model.fiber = FiberParams::fromJson(rdm.meta.at("fiber"), rdm.dir + "/meta.json: fiber");
         const auto& ply = rdm.meta.at("ply");
@@ -848,9 +906,11 @@ FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t see
     }
     model.ply.validate();
 
-    // 1. T network.
+    // 1. T network (none for the naive model, whose P(T) is 0).
     auto phase = Clock::now();
-    model.tNet = fitTransmission(rdm, config, seed, arena, quiet, &report.tLoss);
+    model.tNet = model.hasTransmissionLobe()
+                     ? fitTransmission(rdm, config, seed, arena, quiet, &report.tLoss)
+                     : zeroTransmissionNetwork();
     report.tSeconds = secondsSince(phase);
     phase = Clock::now();
     const std::vector<double> pT = modelTransmissionMap(model, bins);
@@ -864,17 +924,25 @@ FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t see
     report.tRmse = std::sqrt(se / countTotal);
     report.tRmseUnweighted = std::sqrt(seUnweighted / static_cast<double>(pT.size()));
 
-    // 2. R lobe: plain eq. 8, then the masking term.
+    // 2. R lobe: plain eq. 8, then the masking term. Ablated models have
+    // none (a zero map), but keep the tilt: the M sampling lobe lives in the
+    // surface fiber frame.
     model.rLobe.tiltDeg = SurfaceFiberFrame::tiltDegOfTwist(model.ply.twist);
     model.rLobe.masking.clear();
     std::vector<float> rEq8, rFit;  // plain eq. 8; the R lobe as stored in the model
     arena.execute([&] { rEq8 = modelReflectionMap(model, bins); });
-    report.rRelL2Eq8 = coarseRelativeL2(rEq8, rdm.rdmR, bins);
-    report.rEnergyRatio = mapEnergy(rdm.rdmR, bins) / mapEnergy(rEq8, bins);
     report.rRelL2Masked = std::numeric_limits<double>::quiet_NaN();
-    phaseDone("R lobe (eq. 8)", phase);
+    if (model.hasReflectionLobe()) {
+        report.rRelL2Eq8 = coarseRelativeL2(rEq8, rdm.rdmR, bins);
+        report.rEnergyRatio = mapEnergy(rdm.rdmR, bins) / mapEnergy(rEq8, bins);
+        phaseDone("R lobe (eq. 8)", phase);
+    } else {
+        report.rRelL2 = report.rRelL2Eq8 = report.rEnergyRatio = report.rRelL2Masked;
+    }
     phase = Clock::now();
-    if (config.masking) {
+    if (!model.hasReflectionLobe()) {
+        rFit = std::move(rEq8);
+    } else if (config.masking) {
         model.rLobe.masking = fitMaskingCoefficients(rEq8, rdm.rdmR, bins);
         arena.execute([&] { rFit = modelReflectionMap(model, bins); });
         report.rRelL2Masked = coarseRelativeL2(rFit, rdm.rdmR, bins);
@@ -882,6 +950,7 @@ FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t see
         phaseDone("R masking term", phase);
     } else {
         report.rRelL2 = report.rRelL2Eq8;
+        rFit = std::move(rEq8);
     }
 
     // 3. M network.
@@ -893,20 +962,24 @@ FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t see
     std::vector<float> mFit;
     arena.execute([&] { mFit = modelMultipleScatteringMap(model, bins); });
     report.mRelL2 = coarseRelativeL2(mFit, rdm.rdmM, bins);
-    if (!config.masking) rFit = std::move(rEq8);
     phase = Clock::now();
 
     // 4-5. Energy calibration and sampling lobe.
     finishFit(model, rdm, config, threads, quiet, rFit, mFit, report);
+    if (!model.hasReflectionLobe())
+        report.rRelL2 = report.rRelL2Uncalibrated = std::numeric_limits<double>::quiet_NaN();
 
     report.seconds = secondsSince(t0);
-    model.fit = fitRecord(report, config, seed, rdm);
+    model.fit = fitRecord(report, config, seed, rdm, ablation);
     return result;
 }
 
-FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& rdm, const FitConfig& config,
-                               bool quiet) {
+FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& gathered,
+                               const FitConfig& config, bool quiet) {
     const auto t0 = Clock::now();
+    RdmData ablated;
+    if (fitted.ablation != YarnAblation::None) ablated = ablationTarget(gathered, fitted.ablation);
+    const RdmData& rdm = fitted.ablation != YarnAblation::None ? ablated : gathered;
     const int threads = config.threads > 0 ? config.threads : tbb::this_task_arena::max_concurrency();
     FitResult result;
     result.model = fitted;
@@ -921,7 +994,7 @@ FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& rdm, cons
     });
     report.rRelL2 = coarseRelativeL2(rFit, rdm.rdmR, rdm.bins);
     report.mRelL2 = coarseRelativeL2(mFit, rdm.rdmM, rdm.bins);
-    report.tRmse = transmissionRmse(model.tNet, rdm);
+    report.tRmse = model.hasTransmissionLobe() ? transmissionRmse(model.tNet, rdm) : 0.0;
     report.rRelL2Eq8 = fitted.fit.value("r_rel_l2_eq8", 0.0);
     finishFit(model, rdm, config, threads, quiet, rFit, mFit, report);
     report.seconds = secondsSince(t0);
@@ -929,9 +1002,14 @@ FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& rdm, cons
     nlohmann::json record = fitted.fit;
     record["t_rmse"] = report.tRmse;
     record["m_rel_l2"] = report.mRelL2;
-    record["r_rel_l2"] = report.rRelL2;
     record["m_rel_l2_uncalibrated"] = report.mRelL2Uncalibrated;
-    record["r_rel_l2_uncalibrated"] = report.rRelL2Uncalibrated;
+    if (model.hasReflectionLobe()) {
+        record["r_rel_l2"] = report.rRelL2;
+        record["r_rel_l2_uncalibrated"] = report.rRelL2Uncalibrated;
+    } else {
+        report.rRelL2 = report.rRelL2Uncalibrated = report.rRelL2Eq8 =
+            std::numeric_limits<double>::quiet_NaN();
+    }
     record["m_second_moment"] = report.mSecondMoment;
     record["energy_calibration"] = report.calibration;
     record["recalibrated"] = {{"rdm", rdm.dir},

@@ -24,6 +24,11 @@
 //      gamma_M, kappa_M minimise the second moment sum f_M^2 / pdf_M (the
 //      variance of the M estimator) over the RDM grid, by Nelder-Mead.
 // Errors use the one coarse-grid metric (metrics.h).
+//
+// Ablations (paper Fig. 5, docs/fit.md): the same five steps against the
+// target of ablationTarget() below, with the parts the variant lacks left
+// out: naive (no T network, no R lobe, the M network on the whole RDM) and
+// no-R-lobe (T as usual, no R lobe, the M network on RDM_R + RDM_M).
 #pragma once
 
 #include <cstdint>
@@ -87,13 +92,27 @@ struct FitResult {
     FitReport report;
 };
 
-// Fits every part of the model. `rdmPath` is recorded in the fit block.
-FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t seed, bool quiet);
+// Fits every part of the model; `ablation` (recorded in the model and in its
+// fit block) fits one of the variants of paper Fig. 5 instead.
+FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t seed, bool quiet,
+                       YarnAblation ablation = YarnAblation::None);
+
+// The RDM as an ablated model sees it: what each of its parts is fitted to
+// and measured against. None: `rdm` unchanged. NoRLobe: rdmM = RDM_R + RDM_M,
+// rdmR = 0, P(T) kept. Naive: also P(T) = 0, and the T energy added to rdmM
+// as a density, P(T | bin i) / (solid angle of bin o), grey, in the outgoing
+// bin o = transmissionOutgoingBin(bins, i) (S_T's direction wo = -wi,
+// DESIGN.md 7); so for every incident bin the target's integral over wo,
+// sum_o rdmM dOmega_o, is P(T) + E_R + E_M of the gather.
+RdmData ablationTarget(const RdmData& rdm, YarnAblation ablation);
+// The outgoing bin of -wi for wi at the centre of incident bin i.
+size_t transmissionOutgoingBin(const RdmBins& bins, size_t incidentBin);
 
 // Steps 4 and 5 again on a fitted model (its networks and R lobe kept, its
 // calibration replaced): for models fitted before the calibration existed or
 // with another configuration. The fit record keeps the original entries and
-// gets the new errors and a "recalibrated" entry.
+// gets the new errors and a "recalibrated" entry. An ablated model is
+// recalibrated against its ablationTarget(rdm).
 FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& rdm, const FitConfig& config,
                                bool quiet);
 
@@ -118,14 +137,16 @@ SamplingParams fitSamplingLobe(const YarnModel& model, const std::vector<float>&
                                int threads = 0);
 
 // The model's maps on an RDM grid, evaluated at bin centres, in the layout of
-// the gather's arrays: P(T|wi) (TI, PI); R and M (TI, PI, TO, PO, 3).
+// the gather's arrays: P(T|wi) (TI, PI); R and M (TI, PI, TO, PO, 3). An
+// ablated model's missing parts are zero maps.
 std::vector<double> modelTransmissionMap(const YarnModel& model, const RdmBins& bins);
 std::vector<float> modelReflectionMap(const YarnModel& model, const RdmBins& bins);
 std::vector<float> modelMultipleScatteringMap(const YarnModel& model, const RdmBins& bins);
 
 // The report next to a model: errors.json, loss.png, and RDM-vs-fit slice
 // PNGs for a few incident directions; `reference` (an independent gather of
-// the same material) adds the errors against it and the noise floor.
+// the same material) adds the errors against it and the noise floor. For an
+// ablated model pass ablationTarget() of both gathers.
 void writeFitReport(const FitResult& fit, const RdmData& rdm, const RdmData* reference,
                     const std::string& dir);
 

@@ -326,12 +326,15 @@ EnergyCalibration readCalibration(const Reader& r, const json& j) {
 // Key order of the written file: the layout order of docs/model-format.md
 // (JSON objects are unordered; this is for the human reader). Keys not listed
 // (the free-form "fit" block) follow in alphabetical order.
-constexpr std::array<std::string_view, 34> kKeyOrder = {
-    "format",      "version",      "fiber",    "ply",        "t_net",       "m_net",
-    "r_lobe",      "sampling",     "energy_calibration", "degree", "r", "m", "fit",      "layers",     "output",      "weight",
-    "bias",        "prelu",        "tilt_deg", "masking",    "form",        "coefficients",
-    "fibers",      "density",      "twist",    "c_r",        "c_tt",        "beta_r_deg",
-    "beta_tt_deg", "gamma_tt_deg", "kappa_r",  "beta_m_deg", "gamma_m_deg", "kappa_m"};
+// clang-format off
+constexpr std::array<std::string_view, 35> kKeyOrder = {
+    "format",      "version",      "ablation", "fiber",      "ply",         "t_net",
+    "m_net",       "r_lobe",       "sampling", "energy_calibration", "degree", "r", "m", "fit",
+    "layers",      "output",       "weight",   "bias",       "prelu",       "tilt_deg",
+    "masking",     "form",         "coefficients", "fibers", "density",     "twist",
+    "c_r",         "c_tt",         "beta_r_deg", "beta_tt_deg", "gamma_tt_deg", "kappa_r",
+    "beta_m_deg",  "gamma_m_deg",  "kappa_m"};
+// clang-format on
 
 std::vector<std::string> orderedKeys(const json& object, bool layoutOrder) {
     std::vector<std::string> keys;
@@ -383,7 +386,28 @@ void writeValue(const json& v, int indent, bool layoutOrder, std::string& out) {
     }
 }
 
+YarnAblation readAblation(const Reader& r, const json& j) {
+    const std::string allowed = "(allowed: \"naive\", \"no_r_lobe\"; absent for the full model)";
+    if (!j.is_string())
+        r.fail("ablation", "expected a string " + allowed + ", got " + describeJson(j));
+    for (YarnAblation a : {YarnAblation::Naive, YarnAblation::NoRLobe})
+        if (j.get<std::string>() == yarnAblationName(a)) return a;
+    r.fail("ablation", "unknown value " + describeJson(j) + " " + allowed);
+}
+
 }  // namespace
+
+const char* yarnAblationName(YarnAblation ablation) {
+    switch (ablation) {
+        case YarnAblation::Naive:
+            return "naive";
+        case YarnAblation::NoRLobe:
+            return "no_r_lobe";
+        case YarnAblation::None:
+            break;
+    }
+    return "none";
+}
 
 nlohmann::json yarnModelToJson(const YarnModel& model) {
     json masking = nullptr;
@@ -395,23 +419,27 @@ nlohmann::json yarnModelToJson(const YarnModel& model) {
                        {"degree", model.calibration.degree},
                        {"r", model.calibration.r},
                        {"m", model.calibration.m}};
-    return {{"format", kYarnModelFormat},
-            {"version", kYarnModelVersion},
-            {"fiber", model.fiber.toJson()},
-            {"ply",
-             {{"fibers", model.ply.fibers},
-              {"density", model.ply.density},
-              {"twist", model.ply.twist}}},
-            {"t_net", networkToJson(model.tNet)},
-            {"m_net", networkToJson(model.mNet)},
-            {"r_lobe", {{"tilt_deg", model.rLobe.tiltDeg}, {"masking", masking}}},
-            {"sampling",
-             {{"kappa_r", model.sampling.kappaR},
-              {"beta_m_deg", model.sampling.betaMDeg},
-              {"gamma_m_deg", model.sampling.gammaMDeg},
-              {"kappa_m", model.sampling.kappaM}}},
-            {"energy_calibration", calibration},
-            {"fit", model.fit}};
+    json document = {{"format", kYarnModelFormat},
+                     {"version", kYarnModelVersion},
+                     {"fiber", model.fiber.toJson()},
+                     {"ply",
+                      {{"fibers", model.ply.fibers},
+                       {"density", model.ply.density},
+                       {"twist", model.ply.twist}}},
+                     {"t_net", networkToJson(model.tNet)},
+                     {"m_net", networkToJson(model.mNet)},
+                     {"r_lobe", {{"tilt_deg", model.rLobe.tiltDeg}, {"masking", masking}}},
+                     {"sampling",
+                      {{"kappa_r", model.sampling.kappaR},
+                       {"beta_m_deg", model.sampling.betaMDeg},
+                       {"gamma_m_deg", model.sampling.gammaMDeg},
+                       {"kappa_m", model.sampling.kappaM}}},
+                     {"energy_calibration", calibration},
+                     {"fit", model.fit}};
+    // Absent for the full model, so that its files stay as they were.
+    if (model.ablation != YarnAblation::None)
+        document["ablation"] = yarnAblationName(model.ablation);
+    return document;
 }
 
 YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) {
@@ -435,13 +463,15 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     if (version.get<int64_t>() != kYarnModelVersion)
         r.fail("version", "unsupported version " + describeJson(version) +
                               " (supported: " + std::to_string(kYarnModelVersion) + ")");
-    // energy_calibration may be absent (files written before it existed): null.
+    // energy_calibration may be absent (files written before it existed): null;
+    // ablation is absent for the full model.
     json keys = json::object();
     for (const auto& item : j.items()) keys[item.key()] = nullptr;
     keys["energy_calibration"] = nullptr;
+    keys["ablation"] = nullptr;
     r.expectKeys(keys, "",
-                 {"format", "version", "fiber", "ply", "t_net", "m_net", "r_lobe", "sampling",
-                  "energy_calibration", "fit"});
+                 {"format", "version", "ablation", "fiber", "ply", "t_net", "m_net", "r_lobe",
+                  "sampling", "energy_calibration", "fit"});
 
     YarnModel model;
     model.fiber = FiberParams::fromJson(j.at("fiber"), source + ": fiber");
@@ -455,6 +485,7 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     const json& fit = j.at("fit");
     if (!fit.is_object()) r.fail("fit", "expected an object, got " + describeJson(fit));
     model.fit = fit;
+    if (j.contains("ablation")) model.ablation = readAblation(r, j.at("ablation"));
     return model;
 }
 

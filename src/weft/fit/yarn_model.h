@@ -11,6 +11,8 @@
 //   energy_calibration  per-direction energy scales of R and M
 //             (energy_calibration.h), or null / absent for none
 //   fit       errors and provenance of the fit (free-form numbers and strings)
+//   ablation  optional: "naive" or "no_r_lobe" for the ablations of paper
+//             Fig. 5 (YarnAblation below); absent for the full model
 // Networks: {"layers": [{"weight": [[in numbers] x out rows], "bias": [out],
 // "prelu": [out] or null}, ...], "output": "sigmoid" | "exp" | "identity"};
 // layer l computes y = W x + b, then the PReLU when present. Network inputs
@@ -48,6 +50,18 @@ struct SamplingParams {
     double kappaM = 0.5;   // weight of the cone lobe against the uniform sphere, in [0, 1]
 };
 
+// Which model of paper Fig. 5 a file holds (docs/fit.md, "Ablations").
+//   None     the full model: S_T + S_R + S_M.
+//   Naive    one network over the whole RDM (paper Fig. 5, "naive", after
+//            [SRRW21]): P(T) = 0 and S_R = 0 everywhere; m_net alone is
+//            the BSDF, fitted to RDM_R + RDM_M + the T energy as a density
+//            in the outgoing bin of -wi. t_net is stored (the format needs
+//            one) but never read.
+//   NoRLobe  S_R = 0; m_net is fitted to RDM_R + RDM_M, T as usual.
+enum class YarnAblation { None, Naive, NoRLobe };
+// The file's names: "none" (written as an absent key), "naive", "no_r_lobe".
+const char* yarnAblationName(YarnAblation ablation);
+
 struct YarnModel {
     FiberParams fiber;
     PlyParams ply;
@@ -57,6 +71,11 @@ struct YarnModel {
     SamplingParams sampling;
     EnergyCalibration calibration;  // empty: none
     nlohmann::json fit = nlohmann::json::object();  // errors and provenance, written as is
+    YarnAblation ablation = YarnAblation::None;
+
+    // Whether S_T (the T network) and S_R (the analytic lobe) are part of the BSDF.
+    bool hasTransmissionLobe() const { return ablation != YarnAblation::Naive; }
+    bool hasReflectionLobe() const { return ablation == YarnAblation::None; }
 };
 
 // JSON document of a model (the layout above).

@@ -80,7 +80,7 @@ double largestRadius(const Curve& curve, const YarnDesc& yarn) {
 
 }  // namespace
 
-Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet)
+Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfOptions& yarnOptions)
     : mode_(mode),
       camera_(desc.camera, desc.film.width, desc.film.height),
       width_(desc.film.width),
@@ -104,7 +104,7 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet)
             const YarnModel model = loadYarnModel(yarn.model);
             plyOf.push_back(model.ply);
             if (mode == RenderMode::Neural)
-                yarnBsdfs_.push_back(std::make_unique<YarnBsdf>(model, yarn.model));
+                yarnBsdfs_.push_back(std::make_unique<YarnBsdf>(model, yarn.model, yarnOptions));
             else
                 fiberBcsdfs_.push_back(std::make_unique<FiberBcsdf>(model.fiber));
         }

@@ -13,7 +13,8 @@
 //         from its "ply" block; generatePly seeded per ply by the yarn,
 //         curve and ply index, so the fibers do not change with the render
 //         seed), shaded with the model's FiberBcsdf;
-//   - the materials, one per distinct model file.
+//   - the materials, one per distinct model file; in neural mode YarnBsdfs
+//     built with `yarnOptions` (the sampling ablation of paper Fig. 5).
 // Fiber geometry is generated ply by ply and handed to Embree at once, so the
 // peak memory is Embree's copy plus one ply's fibers.
 #pragma once
@@ -65,7 +66,8 @@ struct SceneBuildStats {
 
 class Scene {
   public:
-    Scene(const SceneDesc& desc, RenderMode mode, bool quiet = true);
+    Scene(const SceneDesc& desc, RenderMode mode, bool quiet = true,
+          const YarnBsdfOptions& yarnOptions = {});
 
     RenderMode mode() const { return mode_; }
     const Camera& camera() const { return camera_; }

@@ -67,9 +67,23 @@ YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
       mNet_(model.mNet, source + ": m_net"),
       rLobe_(withSource<RLobe>(source, model.fiber, model.rLobe)),
       lobes_(withSource<SamplingLobes>(source, model.fiber, model.rLobe.tiltDeg, model.sampling)),
-      kappaR_(model.sampling.kappaR),
+      ablation_(model.ablation),
+      hasTransmission_(model.hasTransmissionLobe()),
+      hasReflection_(model.hasReflectionLobe()),
+      sampling_(options.sampling),
+      kappaR_(hasReflection_ ? model.sampling.kappaR : 0.0),
       calibration_(model.calibration) {
     if (options.energyGuard) buildEnergyGuard();
+}
+
+YarnSampling parseYarnSampling(const std::string& name, const std::string& what) {
+    if (name == "fitted") return YarnSampling::Fitted;
+    if (name == "cosine") return YarnSampling::Cosine;
+    throw InputError(what + " \"" + name + "\": unknown yarn sampling (allowed: fitted, cosine)");
+}
+
+const char* yarnSamplingName(YarnSampling sampling) {
+    return sampling == YarnSampling::Cosine ? "cosine" : "fitted";
 }
 
 YarnBsdf YarnBsdf::load(const std::string& path, const YarnBsdfOptions& options) {
@@ -122,8 +136,9 @@ void YarnBsdf::buildEnergyGuard() {
     const size_t nodes = static_cast<size_t>(kGuardTheta) * kGuardPhi;
     guardReflectance_.assign(fiberNodes, Rgb());
     guardEnergyM_.assign(nodes, Rgb());
-    // R table, in surface-fiber angles.
+    // R table, in surface-fiber angles (zeros without an R lobe: E_R = 0).
     tbb::parallel_for(size_t(0), fiberNodes, [&](size_t node) {
+        if (!hasReflection_) return;
         const double thetaI = guardFiberAngle(static_cast<int>(node / kGuardFiber));
         const Vec3 wi = direction(thetaI, guardFiberAngle(static_cast<int>(node % kGuardFiber)));
         const double pT = transmissionUpper(wi);
@@ -257,6 +272,7 @@ Rgb YarnBsdf::multipleScatteringScale(const Vec3& wi) const {
 // -------------------------------------------------------------- the BSDF --
 
 double YarnBsdf::transmissionUpper(const Vec3& wi) const {
+    if (!hasTransmission_) return 0.0;
     const float x[3] = {static_cast<float>(wi.x), static_cast<float>(wi.y),
                         static_cast<float>(wi.z)};
     float y;
@@ -285,13 +301,20 @@ Rgb YarnBsdf::evalM(const Vec3& wi, const Vec3& wo) const {
 
 YarnBsdf::LobeProbabilities YarnBsdf::lobeProbabilities(const Vec3& wi) const {
     const double pT = transmission(wi);
+    if (sampling_ == YarnSampling::Cosine) return {pT, 0.0, 1.0 - pT};
     return {pT, (1.0 - pT) * kappaR_, (1.0 - pT) * (1.0 - kappaR_)};
 }
 
 void YarnBsdf::evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rgb* value,
                           double* density) const {
-    if (value) *value = rLobe_.eval(wi, wo, in.pT) * in.rScale + evalM(wi, wo) * in.mScale;
-    if (density) {
+    if (value) {
+        *value = evalM(wi, wo) * in.mScale;
+        if (hasReflection_) *value += rLobe_.eval(wi, wo, in.pT) * in.rScale;
+    }
+    if (density && sampling_ == YarnSampling::Cosine) {
+        // Cosine about n on the side of wo, each side with probability 1/2.
+        *density = (1.0 - in.pT) * std::fabs(wo.z) * (0.5 * kInvPi);
+    } else if (density) {
         // Paper eq. 10-11: the continuous mixture p_R pdf_R + p_M pdf_M.
         const double pR = (1.0 - in.pT) * kappaR_, pM = (1.0 - in.pT) * (1.0 - kappaR_);
         double d = 0;
@@ -317,7 +340,7 @@ YarnBsdf::Components YarnBsdf::components(const Vec3& wi, const Vec3& wo) const 
     const Incident in = incident(i, transmissionUpper(i));
     Components c;
     c.pT = in.pT;
-    c.r = rLobe_.eval(i, o, in.pT) * in.rScale;
+    if (hasReflection_) c.r = rLobe_.eval(i, o, in.pT) * in.rScale;
     c.m = evalM(i, o) * in.mScale;
     return c;
 }
@@ -372,7 +395,14 @@ BsdfSample YarnBsdf::Slice::sample(const BsdfSampleInput& u, Rng& rng) const {
     const double kappaR = bsdf_->kappaR_;
     const double pR = (1.0 - pT) * kappaR, pM = (1.0 - pT) * (1.0 - kappaR);
     Vec3 o;
-    if (u[0] < pT + pR || !(pM > 0)) {
+    if (bsdf_->sampling_ == YarnSampling::Cosine) {
+        s.lobe = kLobeM;
+        // The rest of u[0], rescaled to [0, 1), picks the side of the surface.
+        const double uSide = (u[0] - pT) / (1.0 - pT);
+        const double r = std::sqrt(u[1]), phi = kTwoPi * u[2];
+        const double z = std::sqrt(std::max(0.0, 1.0 - u[1]));
+        o = {r * std::cos(phi), r * std::sin(phi), uSide < 0.5 ? z : -z};
+    } else if (u[0] < pT + pR || !(pM > 0)) {
         s.lobe = kLobeR;
         o = bsdf_->lobes_.sampleR(upper_, u[1], u[2]);
     } else {

@@ -59,6 +59,22 @@
 // `weft yarn check` reports the raw model's albedo against the RDM, since
 // that is what the fit must get right.
 //
+// Ablated models (the model's "ablation", paper Fig. 5; fit/yarn_model.h):
+// naive has P(T) = 0 and S_R = 0 everywhere (eval, pdf, sample,
+// transmission()), so S = S_M; no_r_lobe has S_R = 0, so S = S_T + S_M. For
+// both, the lobe selection uses kappa_R = 0 whatever the file says, so R is
+// never sampled, and the energy guard runs with E_R = 0.
+//
+// Sampling (YarnBsdfOptions::sampling), for the ablation "cosine sampling"
+// of paper Fig. 5: Fitted is the above. Cosine keeps the delta T lobe
+// (chosen with p_T = P(T|wi) as above, same weight) but draws the continuous
+// part from a cosine density about n on either side of the surface, each with
+// probability 1/2 (the yarn BSDF covers the whole sphere: M also transmits):
+//   pdf(wi, wo) = (1 - p_T) |wo.z| / (2 pi),
+// which integrates to 1 - p_T over the sphere. u[0] picks T, then (rescaled)
+// the side; u[1], u[2] the direction. Such samples report lobe kLobeM (the
+// continuous part); eval is unchanged and weight = eval / pdf as always.
+//
 // The networks are evaluated by FixedMlp (float, no heap); R and the pdfs in
 // double. Construction validates the model once (InputError naming `source`).
 #pragma once
@@ -75,8 +91,15 @@
 
 namespace weft {
 
+// How sample() draws the continuous part (above).
+enum class YarnSampling { Fitted, Cosine };
+// "fitted" or "cosine"; InputError naming `what` and the allowed values otherwise.
+YarnSampling parseYarnSampling(const std::string& name, const std::string& what);
+const char* yarnSamplingName(YarnSampling sampling);
+
 struct YarnBsdfOptions {
     bool energyGuard = true;  // scale S_M where the model's albedo exceeds 1 (above)
+    YarnSampling sampling = YarnSampling::Fitted;
 };
 
 class YarnBsdf {
@@ -101,8 +124,11 @@ class YarnBsdf {
     BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u) const;
     BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) const;
 
-    // P(T | wi) from the T network.
+    // P(T | wi) from the T network (0 for a naive model).
     double transmission(const Vec3& wi) const;
+
+    YarnAblation ablation() const { return ablation_; }
+    YarnSampling sampling() const { return sampling_; }
 
   private:
     // What eval and pdf need of wi (in the upper hemisphere): P(T), the
@@ -138,6 +164,8 @@ class YarnBsdf {
         double pT = 0;  // P(T | wi)
         Rgb r, m;       // S_R and S_M (calibration and energy guard applied), cosine included
     };
+    // p_T, p_R, p_M of sample(); with cosine sampling p_R = 0 and p_M is the
+    // whole continuous part.
     Components components(const Vec3& wi, const Vec3& wo) const;
     struct LobeProbabilities {
         double t = 0, r = 0, m = 0;
@@ -184,7 +212,10 @@ class YarnBsdf {
     FixedMlp<64, 8192> mNet_;
     RLobe rLobe_;
     SamplingLobes lobes_;
-    double kappaR_;
+    YarnAblation ablation_;
+    bool hasTransmission_, hasReflection_;  // S_T and S_R are part of the BSDF
+    YarnSampling sampling_;
+    double kappaR_;  // 0 without an R lobe
     EnergyCalibration calibration_;
     bool guardActive_ = false;
     // Tables per channel: E_R / ((1 - P(T)) a_f) before the calibration (whose

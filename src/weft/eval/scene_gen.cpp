@@ -29,7 +29,7 @@ constexpr double kFovDeg = 30;
 // Share of the film's half-width the close-up's framed length spans.
 constexpr double kCloseupFill = 0.95;
 // Close-up: yarn length in radii and samples along it.
-constexpr double kCloseupLengthRadii = 12;
+constexpr double kCloseupLengthRadii = 8;
 constexpr int kCloseupSamplesPerRadius = 8;
 // Yarn extensions tried before giving up (each a radius, a spacing or a loop).
 constexpr int kMaxEndMargin = 512;

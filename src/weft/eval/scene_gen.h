@@ -8,7 +8,7 @@
 // cap in neural mode and splayed, flat-cut fibers in fiber mode, a difference
 // no yarn model is meant to capture.
 //   closeup  one gently curved open yarn across the frame (paper Fig. 8),
-//            framed on a length of 12 R (frameBox), running on beyond the film.
+//            framed on a length of 8 R (frameBox), running on beyond the film.
 //   weave    a plain weave of N warp yarns along x and N weft yarns along y,
 //            sinusoidal in depth z; spacing and crimp amplitude chosen so that
 //            crossing yarns touch with 1% clearance and never intersect

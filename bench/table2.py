@@ -174,6 +174,10 @@ def scene_cell(bench, cfg, preset, kind):
         "preset": preset, "scene": kind, "ref_spp": ref_spp, "size": cfg["size"],
         "scene_stats": {"fiber": fiber_stats["scene"], "neural": neural_stats["scene"]},
         "ssim": quality["ssim"], "rel_mse": quality["rel_mse"],
+        # relMSE of two converged renders = their difference + each one's noise
+        # (c / N): what is left after the noise is the neural model's error.
+        "rel_mse_minus_noise": quality["rel_mse"] - (fiber_eq["levels"][-1]["c"] +
+                                                     neural_eq["levels"][-1]["c"]) / ref_spp,
         "fiber": {"seconds_per_spp": fiber_stats["seconds_per_spp"],
                   "build_seconds": fiber_stats["scene"]["build_seconds"],
                   "embree_bytes": fiber_stats["scene"]["geometry_bvh_bytes"],
@@ -281,7 +285,9 @@ def mb(n):
 def write_tables(cfg, cells, ablation_rows, out_md):
     lines = ["# Table 2 on this machine%s" % (" (--quick)" if cfg["quick"] else ""), "",
              "Written by `bench/table2.py%s` in one run (%s, %d threads). Renders of %d x %d "
-             "pixels; references at %d spp (%d for silk and cotton). Times are render "
+             "pixels; references at %d spp (%d for silk and cotton). relMSE minus noise: "
+             "the relative MSE of the two converged renders less both renders' own noise "
+             "(c / N, from the ladder), an estimate of the model's error alone. Times are render "
              "seconds at equal quality: the time for each mode to reach relative MSE %.2f "
              "against its own converged image (estimated from renders at 1/16 and 1/4 of the "
              "reference spp, see the script). Memory: Embree geometry + BVH (and peak RSS "
@@ -289,7 +295,8 @@ def write_tables(cfg, cells, ablation_rows, out_md):
                                          cfg["threads"], cfg["size"], cfg["size"],
                                          cfg["ref_spp"], cfg["ref_spp_hard"], TARGET_REL_MSE),
              "",
-             "| material | scene | SSIM neural vs fiber ref | relMSE neural vs ref | fiber s (EQ) "
+             "| material | scene | SSIM neural vs fiber ref | relMSE neural vs ref (minus "
+             "noise) | fiber s (EQ) "
              "| neural s (EQ) | speed-up | fiber s/spp | neural s/spp | fiber build s "
              "| fiber MB | neural MB | memory ratio | RSS ratio | equal-time fiber SSIM / relMSE "
              "| equal-time neural SSIM / relMSE |",
@@ -297,9 +304,9 @@ def write_tables(cfg, cells, ablation_rows, out_md):
     for c in cells:
         f, n, e = c["fiber"], c["neural"], c["equal_time"]
         lines.append(
-            "| %s | %s | %.3f | %.4f | %.1f | %.2f | **%.1fx** | %.3f | %.3f | %.1f | %s | %s | "
+            "| %s | %s | %.3f | %.4f (%.4f) | %.1f | %.2f | **%.1fx** | %.3f | %.3f | %.1f | %s | %s | "
             "**%.0fx** | %.1fx | %.3f / %.4f | %.3f / %.4f |" % (
-                c["preset"], c["scene"], c["ssim"], c["rel_mse"],
+                c["preset"], c["scene"], c["ssim"], c["rel_mse"], c["rel_mse_minus_noise"],
                 f["equal_quality"]["seconds_to_target"], n["equal_quality"]["seconds_to_target"],
                 c["speedup"], f["seconds_per_spp"], n["seconds_per_spp"], f["build_seconds"],
                 mb(f["embree_bytes"]), mb(n["embree_bytes"]), c["memory_ratio"], c["rss_ratio"],
@@ -348,6 +355,9 @@ def main():
     p.add_argument("--scenes", default=",".join(SCENES))
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("--no-ablations", action="store_true")
+    p.add_argument("--size", type=int, default=None, help="image side in pixels (overrides)")
+    p.add_argument("--ref-spp", type=int, default=None,
+                   help="spp of the converged renders, every preset (overrides)")
     args = p.parse_args()
     name = "table2-quick" if args.quick else "table2"
     if args.work is None:
@@ -372,6 +382,14 @@ def main():
         "machine": "%s, %d cores" % (os.uname().machine, os.cpu_count()),
         "figures": os.path.join(ROOT, "bench", "results", name),
     }
+    if args.size is not None:
+        cfg["size"] = args.size
+    if args.ref_spp is not None:
+        cfg["ref_spp"] = cfg["ref_spp_hard"] = args.ref_spp
+    for key, lo, hi in (("size", 16, 4096), ("ref_spp", 16, 1 << 20)):
+        if not lo <= cfg[key] <= hi:
+            sys.exit("table2: --%s %d is out of range [%d, %d]" % (key.replace("_", "-"), cfg[key],
+                                                                   lo, hi))
     os.makedirs(cfg["figures"], exist_ok=True)
     bench = Bench(args)
     cells = []

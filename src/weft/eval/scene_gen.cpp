@@ -103,6 +103,25 @@ std::vector<render::LightDesc> paperLights(const render::CameraDesc& camera,
     return lights;
 }
 
+// The view axes of a camera looking along `forward` with `up`, as
+// render::Camera builds them, and the half-extents of its image plane at
+// distance 1 (the field of view spans the shorter film side).
+struct ViewBasis {
+    Vec3 f, r, u;
+    double halfW = 0, halfH = 0;
+};
+ViewBasis viewBasis(const Vec3& forward, const Vec3& up, double fovDeg, int width, int height) {
+    ViewBasis v;
+    v.f = normalize(forward);
+    v.r = normalize(cross(v.f, up));
+    v.u = cross(v.r, v.f);
+    const double half = std::tan(0.5 * radians(fovDeg));
+    const double aspect = static_cast<double>(width) / height;
+    v.halfW = aspect >= 1 ? half * aspect : half;
+    v.halfH = aspect >= 1 ? half : half / aspect;
+    return v;
+}
+
 GeneratedScene assemble(render::CurveSet curves, const render::CameraDesc& camera,
                         const SceneOptions& o) {
     GeneratedScene g;
@@ -212,14 +231,9 @@ render::CameraDesc frameBox(const render::Bounds3& box, const Vec3& forward, dou
                             int width, int height, double fill) {
     render::CameraDesc cam;
     cam.fovDeg = fovDeg;
-    const Vec3 f = normalize(forward);
-    const Vec3 r = normalize(cross(f, cam.up));
-    const Vec3 u = cross(r, f);
-    // The half-extents of the image plane at distance 1, as render::Camera.
-    const double half = std::tan(0.5 * radians(fovDeg));
-    const double aspect = static_cast<double>(width) / height;
-    const double halfW = fill * (aspect >= 1 ? half * aspect : half);
-    const double halfH = fill * (aspect >= 1 ? half : half / aspect);
+    const ViewBasis view = viewBasis(forward, cam.up, fovDeg, width, height);
+    const Vec3 &f = view.f, &r = view.r, &u = view.u;
+    const double halfW = fill * view.halfW, halfH = fill * view.halfH;
     const Vec3 c = boxCentre(box);
     const double extent = length(box.hi - box.lo);
     // A corner q (relative to c) is at depth D + q.f from the camera at c - D f;
@@ -240,13 +254,10 @@ render::CameraDesc frameBox(const render::Bounds3& box, const Vec3& forward, dou
 
 bool outOfView(const render::CameraDesc& camera, int width, int height, const Vec3& p,
                double radius) {
-    const Vec3 f = normalize(camera.to - camera.from);
-    const Vec3 r = normalize(cross(f, camera.up));
-    const Vec3 u = cross(r, f);
-    const double half = std::tan(0.5 * radians(camera.fovDeg));
-    const double aspect = static_cast<double>(width) / height;
-    const double halfW = aspect >= 1 ? half * aspect : half;
-    const double halfH = aspect >= 1 ? half : half / aspect;
+    const ViewBasis view =
+        viewBasis(camera.to - camera.from, camera.up, camera.fovDeg, width, height);
+    const Vec3 &f = view.f, &r = view.r, &u = view.u;
+    const double halfW = view.halfW, halfH = view.halfH;
     // Every corner of the cube p +- radius beyond one and the same side of the
     // view frustum (its four side planes and the camera plane): then the whole
     // ball of radius `radius` around p is out of view.
@@ -269,13 +280,9 @@ render::CameraDesc frameCover(double x0, double x1, double y0, double y1, const 
                               double fovDeg, int width, int height) {
     render::CameraDesc cam;
     cam.fovDeg = fovDeg;
-    const Vec3 f = normalize(forward);
-    const Vec3 r = normalize(cross(f, cam.up));
-    const Vec3 u = cross(r, f);
-    const double half = std::tan(0.5 * radians(fovDeg));
-    const double aspect = static_cast<double>(width) / height;
-    const double halfW = aspect >= 1 ? half * aspect : half;
-    const double halfH = aspect >= 1 ? half : half / aspect;
+    const ViewBasis view = viewBasis(forward, cam.up, fovDeg, width, height);
+    const Vec3 &f = view.f, &r = view.r, &u = view.u;
+    const double halfW = view.halfW, halfH = view.halfH;
     const Vec3 c{0.5 * (x0 + x1), 0.5 * (y0 + y1), 0};
     // The footprint of the film on the plane grows with the distance D: find
     // the largest D at which the four corner rays land inside the rectangle.

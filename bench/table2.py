@@ -35,8 +35,9 @@ its parameters change, so an interrupted run resumes where it stopped.
                     [--presets fleece,...] [--scenes closeup,weave,knit] [--threads 0]
 
 --quick: 128 x 128, 256 spp references, 3 x 3 patches, ablations on the
-close-up from a 2M-path gather with a shortened fit: about 30 minutes on 2
-cores. The full version: 256 x 256, 1024 spp (4096 for silk and cotton, as
+close-up from a 2M-path gather with a shortened fit: 42 minutes on 2 cores
+(measured; the equal-time renders of the slowly converging cotton and
+gabardine patches take a third of it). The full version: 256 x 256, 1024 spp (4096 for silk and cotton, as
 the paper), 4 x 4 patches, ablations on all three scenes from a 16M-path
 gather with the default fit: hours.
 Writes bench/results/table2.md (table2-quick.md) and .json, and one figure per
@@ -291,7 +292,7 @@ def write_tables(cfg, cells, ablation_rows, out_md):
              "seconds at equal quality: the time for each mode to reach relative MSE %.2f "
              "against its own converged image (estimated from renders at 1/16 and 1/4 of the "
              "reference spp, see the script). Memory: Embree geometry + BVH (and peak RSS "
-             "of the whole process)." % (" --quick" if cfg["quick"] else "", cfg["machine"],
+             "of the whole process)." % (cfg["arguments"], cfg["machine"],
                                          cfg["threads"], cfg["size"], cfg["size"],
                                          cfg["ref_spp"], cfg["ref_spp_hard"], TARGET_REL_MSE),
              "",
@@ -346,6 +347,19 @@ def write_tables(cfg, cells, ablation_rows, out_md):
     return text
 
 
+def shown_arguments(argv):
+    """The command's flags for the table's caption, without machine-local paths."""
+    shown, skip = [], False
+    for a in argv:
+        if skip:
+            skip = False
+        elif a in ("--weft", "--work"):
+            skip = True
+        elif not a.startswith(("--weft=", "--work=")):
+            shown.append(" " + a)
+    return "".join(shown)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--quick", action="store_true", help="the ~30 minute version")
@@ -358,8 +372,13 @@ def main():
     p.add_argument("--size", type=int, default=None, help="image side in pixels (overrides)")
     p.add_argument("--ref-spp", type=int, default=None,
                    help="spp of the converged renders, every preset (overrides)")
+    p.add_argument("--name", default=None,
+                   help="results name: bench/results/NAME.md, .json and NAME/ (default table2 "
+                        "or table2-quick)")
     args = p.parse_args()
-    name = "table2-quick" if args.quick else "table2"
+    name = args.name or ("table2-quick" if args.quick else "table2")
+    if not name.replace("-", "").replace("_", "").isalnum():
+        sys.exit("table2: --name %r: use letters, digits, '-' and '_'" % name)
     if args.work is None:
         args.work = os.path.join(ROOT, "bench", "work", name)
     if not os.access(args.weft, os.X_OK):
@@ -381,6 +400,7 @@ def main():
         "threads": args.threads or os.cpu_count(),
         "machine": "%s, %d cores" % (os.uname().machine, os.cpu_count()),
         "figures": os.path.join(ROOT, "bench", "results", name),
+        "arguments": shown_arguments(sys.argv[1:]),
     }
     if args.size is not None:
         cfg["size"] = args.size

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "weft/core/error.h"
+#include "weft/core/image.h"
 
 namespace weft::testing {
 
@@ -53,14 +54,22 @@ inline void expectInputError(const std::function<void()>& f,
     }
 }
 
+// A width x height image of one colour.
+inline Image constantImage(int width, int height, const Rgb& colour) {
+    Image image(width, height);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) image.set(x, y, colour);
+    return image;
+}
+
 // A fixture with a fresh directory per test, removed afterwards.
 class TempDirTest : public ::testing::Test {
-protected:
+  protected:
     void SetUp() override {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
         dir_ = std::filesystem::path(::testing::TempDir()) /
-               (std::string("weft_") + info->test_suite_name() + "." +
-                std::to_string(::getpid()) + "." + info->name());
+               (std::string("weft_") + info->test_suite_name() + "." + std::to_string(::getpid()) +
+                "." + info->name());
         std::filesystem::remove_all(dir_);
         std::filesystem::create_directories(dir_);
     }

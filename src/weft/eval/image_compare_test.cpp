@@ -23,12 +23,7 @@ namespace {
 
 using testing::expectInputError;
 
-Image constantImage(int w, int h, const Rgb& c) {
-    Image image(w, h);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) image.set(x, y, c);
-    return image;
-}
+using testing::constantImage;
 
 Image randomImage(int w, int h, uint64_t seed, double maxValue) {
     Rng rng(7, seed);

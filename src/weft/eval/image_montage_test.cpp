@@ -18,12 +18,7 @@ namespace {
 
 using testing::expectInputError;
 
-Image filled(int w, int h, const Rgb& c) {
-    Image im(w, h);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) im.set(x, y, c);
-    return im;
-}
+using testing::constantImage;
 
 TEST(Montage, CellsAreCentredWithGapsOfBackground) {
     MontageOptions o;
@@ -31,8 +26,9 @@ TEST(Montage, CellsAreCentredWithGapsOfBackground) {
     o.columns = 2;
     o.background = {0.5, 0.5, 0.5};
     // Three images in rows of two: cells are 4 x 3 (the largest width, height).
-    const std::vector<Image> images = {filled(4, 3, {1, 0, 0}), filled(2, 1, {0, 1, 0}),
-                                       filled(3, 3, {0, 0, 1})};
+    const std::vector<Image> images = {constantImage(4, 3, {1, 0, 0}),
+                                       constantImage(2, 1, {0, 1, 0}),
+                                       constantImage(3, 3, {0, 0, 1})};
     const Image fig = montage(images, {true, true, true}, o);
     ASSERT_EQ(fig.width, 2 * (4 + 2) + 2);
     ASSERT_EQ(fig.height, 2 * (3 + 2) + 2);
@@ -63,8 +59,9 @@ TEST(Montage, ExposureScalesLinearInputsOnly) {
     MontageOptions o;
     o.gap = 0;
     o.exposure = 1;
-    const Image fig = montage({filled(1, 1, {0.25, 0.25, 0.25}), filled(1, 1, {0.25, 0.25, 0.25})},
-                              {true, false}, o);
+    const Image fig =
+        montage({constantImage(1, 1, {0.25, 0.25, 0.25}), constantImage(1, 1, {0.25, 0.25, 0.25})},
+                {true, false}, o);
     EXPECT_DOUBLE_EQ(fig.get(0, 0).r, 0.5);
     EXPECT_DOUBLE_EQ(fig.get(1, 0).r, 0.25);
 }
@@ -93,7 +90,7 @@ TEST_F(MontageFiles, PngInputsKeepTheirEightBitValues) {
 }
 
 TEST_F(MontageFiles, ExrInputsAreReadAsStored) {
-    render::writeExr(path("a.exr"), filled(2, 2, {0.1, 0.2, 0.3}));
+    render::writeExr(path("a.exr"), constantImage(2, 2, {0.1, 0.2, 0.3}));
     const Image im = readMontageInput(path("a.exr"));
     EXPECT_FLOAT_EQ(static_cast<float>(im.get(1, 1).g), 0.2f);
 }
@@ -112,9 +109,12 @@ TEST_F(MontageFiles, BadInputsNameTheFileOrFlag) {
     o = {};
     o.exposure = std::nan("");
     expectInputError([&] { o.validate(); }, {"--exposure"});
-    expectInputError([&] { montage(std::vector<Image>(65, filled(1, 1, {})),
-                                   std::vector<bool>(65, true), MontageOptions{}); },
-                     {"at most 64"});
+    expectInputError(
+        [&] {
+            montage(std::vector<Image>(65, constantImage(1, 1, {})), std::vector<bool>(65, true),
+                    MontageOptions{});
+        },
+        {"at most 64"});
 }
 
 }  // namespace

@@ -257,7 +257,8 @@ py::object evalRows(const Bsdf& bsdf, const py::handle& wiArg, const py::handle&
     {
         py::gil_scoped_release release;
         for (size_t i = 0; i < n; ++i) {
-            const Rgb f = bsdf.eval(unitRow(wi, i, "wi"), unitRow(wo, i, "wo"));
+            const Vec3 in = unitRow(wi, i, "wi");  // wi checked first
+            const Rgb f = bsdf.eval(in, unitRow(wo, i, "wo"));
             o[3 * i] = f.r, o[3 * i + 1] = f.g, o[3 * i + 2] = f.b;
         }
     }
@@ -272,7 +273,10 @@ py::object pdfRows(const Bsdf& bsdf, const py::handle& wiArg, const py::handle& 
     double* o = out.mutable_data();
     {
         py::gil_scoped_release release;
-        for (size_t i = 0; i < n; ++i) o[i] = bsdf.pdf(unitRow(wi, i, "wi"), unitRow(wo, i, "wo"));
+        for (size_t i = 0; i < n; ++i) {
+            const Vec3 in = unitRow(wi, i, "wi");  // wi checked first
+            o[i] = bsdf.pdf(in, unitRow(wo, i, "wo"));
+        }
     }
     return scalarResult(out, wi.single && wo.single);
 }
@@ -311,7 +315,8 @@ py::dict sampleRows(const Bsdf& bsdf, const py::handle& wiArg, const py::handle&
     const Rows wi = rowsOf(wiArg, "wi"), u = rowsOf(uArg, "u");
     const size_t n = broadcastRows(wi, "wi", u, "u");
     return sampleDict(n, wi.single && u.single, [&](size_t i) {
-        return bsdf.sample(directionRow(wi, i, "wi"), uniformRow(u, i));
+        const Vec3 in = directionRow(wi, i, "wi");  // wi checked first
+        return bsdf.sample(in, uniformRow(u, i));
     });
 }
 

@@ -66,6 +66,8 @@ def test_bad_directions_and_random_numbers():
         fiber.eval([0.0, 1.0, 0.0], [[0.0, 1.0, 0.0], [0.0, 2.0, 0.0]])
     with pytest.raises(ValueError, match="wi row 0"):
         fiber.pdf([math.nan, 1.0, 0.0], [0.0, 1.0, 0.0])
+    with pytest.raises(ValueError, match=r"wi row 0: \(0, 0, 0\)"):  # wi is named first
+        fiber.eval(np.zeros((2, 3)), np.zeros((2, 3)))
     with pytest.raises(ValueError, match=r"u row 2: .* must lie in \[0, 1\)"):
         fiber.sample([0.0, 1.0, 0.0], [[0.1, 0.1, 0.1], [0.2, 0.2, 0.2], [0.5, 1.0, 0.5]])
     with pytest.raises(ValueError, match="non-zero"):

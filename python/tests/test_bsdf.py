@@ -236,3 +236,26 @@ def test_network_weights_match_model_file(root):
     wi, wo = np.array([0.0, 0.0, 1.0]), np.array([0.3, 0.0, 0.954])
     np.testing.assert_array_equal(again.eval(wi, wo), yarn.eval(wi, wo))
     assert yarn.fiber.params == weft.FiberBcsdf.preset("fleece").params
+
+
+def test_calls_release_the_gil():
+    # While a long call runs in a thread, the main thread keeps executing
+    # Python: were the GIL held, its loop would stop for the whole call.
+    import threading
+    import time
+    fiber = weft.FiberBcsdf.preset("fleece")
+    call = {}
+
+    def work():
+        start = time.perf_counter()
+        fiber.sample_seeded([0.0, 1.0, 0.0], 1_000_000)
+        call["seconds"] = time.perf_counter() - start
+
+    worker = threading.Thread(target=work)
+    ticks = [time.perf_counter()]
+    worker.start()
+    while worker.is_alive():
+        ticks.append(time.perf_counter())
+    worker.join()
+    longest_stop = np.diff(ticks).max()
+    assert longest_stop < 0.5 * call["seconds"], (longest_stop, call["seconds"])

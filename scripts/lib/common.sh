@@ -41,6 +41,7 @@ weft_install_deps() {
 weft_build() {
     local dir="$1"
     shift
-    cmake -S "$WEFT_ROOT" -B "$dir" "$@" >/dev/null
+    # The Python module is built for Debian's interpreter (docs/python.md).
+    cmake -S "$WEFT_ROOT" -B "$dir" -DPython3_EXECUTABLE="$WEFT_PYTHON" "$@" >/dev/null
     cmake --build "$dir" -j"$WEFT_JOBS"
 }

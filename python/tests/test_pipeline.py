@@ -1,0 +1,79 @@
+"""gather, fit and render from Python: the same arrays as the CLI, a tiny fit,
+a tiny render."""
+import json
+
+import numpy as np
+
+import weft
+
+GATHER_ARRAYS = ["count", "count_t", "p_t", "rdm_r", "rdm_m", "truncated", "depth"]
+# A fit that trains for a few hundred steps (as src/cmd/fit_cli_test.cpp).
+SHORT_FIT = {"t_net": {"steps": 200, "restarts": 2, "batch": 64},
+             "m_net": {"hidden": [8, 8], "steps": 200, "batch": 64}}
+
+
+def test_gather_matches_cli_and_fit_runs(cli, tmp_path):
+    args = dict(preset="fleece", paths=4000, bins=[4, 8, 6, 12], seed=1)
+    g = weft.gather(**args, out=tmp_path / "py-rdm")
+    cli("gather", "--preset", "fleece", "--paths", 4000, "--bins", "4,8,6,12", "--seed", 1,
+        "--quiet", "--out", tmp_path / "cli-rdm")
+    for name in GATHER_ARRAYS:
+        from_cli = np.load(tmp_path / "cli-rdm" / f"{name}.npy")
+        written = np.load(tmp_path / "py-rdm" / f"{name}.npy")
+        assert g[name].dtype == from_cli.dtype and g[name].shape == from_cli.shape, name
+        np.testing.assert_array_equal(g[name], from_cli, err_msg=name)
+        np.testing.assert_array_equal(written, from_cli, err_msg=name)
+    assert g["rdm_r"].shape == (4, 8, 6, 12, 3)
+    assert g["stats"]["paths"] == 4000 and g["stats"]["out"] == str(tmp_path / "py-rdm")
+    # Without out= nothing is written and the arrays are the same.
+    again = weft.gather(**args, threads=1)
+    np.testing.assert_array_equal(again["rdm_m"], g["rdm_m"])
+
+    r = weft.fit(tmp_path / "py-rdm", config=SHORT_FIT, seed=3, out=tmp_path / "m.json")
+    model, report = r["model"], r["report"]
+    assert isinstance(model, weft.YarnModel)
+    assert 0 <= report["t_rmse"] < 0.5 and np.isfinite(report["m_rel_l2"])
+    assert len(report["m_loss"]["loss"]) > 0
+    assert [layer["weight"].shape for layer in model.m_net["layers"]] == [(8, 6), (8, 8), (3, 8)]
+    # The written model is the returned one, and the CLI fits the same model.
+    loaded = weft.YarnModel.load(tmp_path / "m.json")
+    (tmp_path / "short.json").write_text(json.dumps(SHORT_FIT))
+    cli("fit", "--rdm", tmp_path / "py-rdm", "--out", tmp_path / "cli.json", "--config",
+        tmp_path / "short.json", "--seed", 3, "--quiet", "--no-report")
+    from_cli = weft.YarnModel.load(tmp_path / "cli.json")
+    wi = np.array([0.0, 0.6, 0.8])
+    wo = np.array([[0.3, 0.0, 0.954], [0.0, -0.6, -0.8]])
+    np.testing.assert_array_equal(loaded.eval(wi, wo), model.eval(wi, wo))
+    np.testing.assert_array_equal(from_cli.eval(wi, wo), model.eval(wi, wo))
+    assert np.all(np.isfinite(model.eval(wi, wo)))
+
+
+def test_fit_config_defaults():
+    config = weft.fit_config()
+    assert config["t_net"]["hidden"] == [7, 7]
+    assert config["m_net"]["hidden"] == [21, 21, 21]
+    assert weft.fit_config({"m_net": {"steps": 5}})["m_net"]["steps"] == 5
+
+
+def test_tiny_render(cli, tmp_path, root):
+    cli("scene", "closeup", "--model", root / "models" / "fleece.json", "--width", 16,
+        "--height", 16, "--out", tmp_path / "closeup")
+    scene = tmp_path / "closeup" / "scene.json"
+    image, stats = weft.render(scene, spp=2, seed=1)
+    assert image.shape == (16, 16, 3) and image.dtype == np.float32
+    assert np.all(np.isfinite(image)) and image.mean() > 0
+    assert stats["spp"] == 2 and stats["mode"] == "neural" and stats["seed"] == 1
+    assert stats["width"] == 16 and stats["scene_file"] == str(scene)
+
+    # The CLI renders the same image.
+    cli("render", scene, "--spp", 2, "--seed", 1, "--quiet", "--out", tmp_path / "cli.exr")
+    assert json.loads((tmp_path / "cli.json").read_text())["scene_hash"] == stats["scene_hash"]
+
+    # A dict scene, its relative paths resolved against base_dir.
+    doc = json.loads(scene.read_text())
+    image2, stats2 = weft.render(doc, spp=2, seed=1, base_dir=tmp_path / "closeup")
+    np.testing.assert_array_equal(image2, image)
+    assert stats2["scene_file"] is None
+
+    fiber, fstats = weft.render(scene, mode="fiber", spp=1)
+    assert fiber.shape == (16, 16, 3) and fstats["mode"] == "fiber"

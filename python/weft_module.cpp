@@ -1,0 +1,848 @@
+// python/weft_module.cpp — the Python module `weft` (issue 9, docs/python.md).
+//
+// pybind11 bindings of weft_lib for NumPy and Jupyter:
+//   FiberBcsdf   the fiber BCSDF (preset or parameter dict): eval, pdf, sample
+//   YarnModel    a fitted model.json: the yarn BSDF's eval, pdf, sample, P(T|wi)
+//                and the raw network weights
+//   gather, fit, render, fit_config, presets
+// The BSDF calls are vectorised: (n,3) float64 arrays in, one loop in C++ with
+// the GIL released, NumPy arrays out. Directions follow the CLI probes exactly
+// (docs/cli.md), so that the numbers are the same as `weft fiber eval` and
+// `weft yarn eval`: a row of wi or wo must have length 1 within 1e-3 and is
+// divided by its length; the wi of sample() and sample_seeded() may be any
+// non-zero vector and is normalised as `--wi` is. sample_seeded(wi, count,
+// seed) draws exactly the samples of `weft {fiber,yarn} sample`.
+// weft::InputError becomes ValueError (its message unchanged), any other C++
+// exception RuntimeError.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "weft/core/error.h"
+#include "weft/core/file.h"
+#include "weft/core/rng.h"
+#include "weft/fiber/fiber_bcsdf.h"
+#include "weft/fiber/fiber_params.h"
+#include "weft/fit/fit.h"
+#include "weft/fit/yarn_model.h"
+#include "weft/gather/gather.h"
+#include "weft/gather/rdm_io.h"
+#include "weft/render/renderer.h"
+#include "weft/render/scene.h"
+#include "weft/render/scene_file.h"
+#include "weft/yarn/yarn_bsdf.h"
+
+namespace py = pybind11;
+using nlohmann::json;
+
+namespace weft::python {
+
+namespace {
+
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+// ---------------------------------------------------------------------------
+// Python objects <-> JSON (parameter, configuration, model and scene dicts).
+
+json jsonFromPy(py::handle h, const std::string& where) {
+    if (h.is_none()) return nullptr;
+    if (py::isinstance<py::bool_>(h)) return h.cast<bool>();
+    if (py::isinstance<py::int_>(h)) {
+        try {
+            return h.cast<int64_t>();
+        } catch (const py::cast_error&) {
+            throw InputError(where + ": integer " + py::str(h).cast<std::string>() +
+                             " does not fit in 64 bits");
+        }
+    }
+    if (py::isinstance<py::float_>(h)) return h.cast<double>();
+    if (py::isinstance<py::str>(h)) return h.cast<std::string>();
+    if (py::isinstance<py::dict>(h)) {
+        json j = json::object();
+        for (const auto& item : h.cast<py::dict>()) {
+            if (!py::isinstance<py::str>(item.first))
+                throw InputError(where + ": dict keys must be strings, got " +
+                                 py::repr(item.first).cast<std::string>());
+            const std::string key = item.first.cast<std::string>();
+            j[key] = jsonFromPy(item.second, where + "." + key);
+        }
+        return j;
+    }
+    if (py::isinstance<py::list>(h) || py::isinstance<py::tuple>(h)) {
+        json j = json::array();
+        size_t i = 0;
+        for (const auto& item : h)
+            j.push_back(jsonFromPy(item, where + "[" + std::to_string(i++) + "]"));
+        return j;
+    }
+    // NumPy arrays and scalars (np.float32, np.int64, ...) through tolist().
+    if (py::hasattr(h, "tolist") && py::hasattr(h, "dtype"))
+        return jsonFromPy(h.attr("tolist")(), where);
+    throw InputError(where + ": cannot use a value of type " +
+                     py::str(py::type::of(h).attr("__name__")).cast<std::string>() +
+                     " (expected dict, list, str, number, bool or None)");
+}
+
+py::object pyFromJson(const json& j) {
+    switch (j.type()) {
+        case json::value_t::null:
+            return py::none();
+        case json::value_t::boolean:
+            return py::bool_(j.get<bool>());
+        case json::value_t::number_integer:
+            return py::int_(j.get<int64_t>());
+        case json::value_t::number_unsigned:
+            return py::int_(j.get<uint64_t>());
+        case json::value_t::number_float:
+            return py::float_(j.get<double>());
+        case json::value_t::string:
+            return py::str(j.get<std::string>());
+        case json::value_t::array: {
+            py::list list;
+            for (const auto& item : j) list.append(pyFromJson(item));
+            return list;
+        }
+        case json::value_t::object: {
+            py::dict dict;
+            for (const auto& item : j.items()) dict[py::str(item.key())] = pyFromJson(item.value());
+            return dict;
+        }
+        default:
+            return py::none();
+    }
+}
+
+// Runs a reader of user JSON: a type mismatch deep inside it is the user's
+// error too, named with `source`.
+template <typename F>
+auto readUserJson(const std::string& source, F&& read) {
+    try {
+        return read();
+    } catch (const json::exception& e) {
+        throw InputError(source + ": " + e.what());
+    }
+}
+
+// A str or os.PathLike argument as a path string.
+std::string pathOf(py::handle h, const std::string& what) {
+    if (!py::isinstance<py::str>(h) && !py::hasattr(h, "__fspath__"))
+        throw InputError(what + ": expected a path (str or os.PathLike)");
+    return py::str(py::module_::import("os").attr("fspath")(h)).cast<std::string>();
+}
+
+// ---------------------------------------------------------------------------
+// Arrays of directions and random numbers.
+
+// An (n,3) array, or one (3,) vector that broadcasts against the other argument.
+struct Rows {
+    DoubleArray array;
+    const double* data = nullptr;
+    size_t n = 0;
+    bool single = false;
+
+    Vec3 at(size_t i) const {
+        const double* p = data + (single ? 0 : 3 * i);
+        return {p[0], p[1], p[2]};
+    }
+};
+
+Rows rowsOf(const py::handle& h, const char* name) {
+    Rows r;
+    try {
+        r.array = DoubleArray::ensure(h);
+    } catch (const py::error_already_set&) {
+    }
+    if (!r.array)
+        throw InputError(std::string(name) + ": expected a float array of shape (n, 3) or (3,)");
+    if (r.array.ndim() == 1 && r.array.shape(0) == 3) {
+        r.single = true;
+        r.n = 1;
+    } else if (r.array.ndim() == 2 && r.array.shape(1) == 3) {
+        r.n = static_cast<size_t>(r.array.shape(0));
+    } else {
+        std::ostringstream shape;
+        shape << "(";
+        for (py::ssize_t d = 0; d < r.array.ndim(); ++d)
+            shape << (d ? ", " : "") << r.array.shape(d);
+        shape << (r.array.ndim() == 1 ? ",)" : ")");
+        throw InputError(std::string(name) + ": expected shape (n, 3) or (3,), got " + shape.str());
+    }
+    r.data = r.array.data();
+    return r;
+}
+
+// The number of rows of a result: (3,) vectors broadcast; otherwise the
+// row counts must agree.
+size_t broadcastRows(const Rows& a, const char* nameA, const Rows& b, const char* nameB) {
+    if (a.single) return b.n;
+    if (b.single || a.n == b.n) return a.n;
+    throw InputError(std::string(nameA) + " has " + std::to_string(a.n) + " rows but " + nameB +
+                     " has " + std::to_string(b.n) + " (give equal counts, or one (3,) vector)");
+}
+
+// A row of PAIRS in `weft fiber eval`: unit length within 1e-3, renormalised
+// (the same arithmetic as the CLI's unitVectorAt, so the results are equal).
+Vec3 unitRow(const Rows& r, size_t i, const char* name) {
+    const Vec3 v = r.at(i);
+    const double len = length(v);
+    if (!isFinite(v) || !(std::fabs(len - 1.0) <= 1e-3)) {
+        std::ostringstream msg;
+        msg << name << " row " << i << ": " << v
+            << " is not a unit vector (length must be within 1e-3 of 1)";
+        throw InputError(msg.str());
+    }
+    return v / len;
+}
+
+// The incident direction of a sample, normalised as the CLI's --wi.
+Vec3 directionRow(const Rows& r, size_t i, const char* name) {
+    const Vec3 v = r.at(i);
+    const double largest = std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
+    if (!isFinite(v) || !(largest > 0)) {
+        std::ostringstream msg;
+        msg << name << " row " << i << ": " << v << " must be a finite non-zero vector";
+        throw InputError(msg.str());
+    }
+    return normalize(v / largest);
+}
+
+BsdfSampleInput uniformRow(const Rows& r, size_t i) {
+    const Vec3 v = r.at(i);
+    for (int k = 0; k < 3; ++k) {
+        if (!(v[k] >= 0.0 && v[k] < 1.0)) {
+            std::ostringstream msg;
+            msg << "u row " << i << ": " << v << " must lie in [0, 1)";
+            throw InputError(msg.str());
+        }
+    }
+    return {v.x, v.y, v.z};
+}
+
+py::array_t<double> rgbArray(size_t n, bool single) {
+    if (single) return py::array_t<double>(std::vector<py::ssize_t>{3});
+    return py::array_t<double>(std::vector<py::ssize_t>{static_cast<py::ssize_t>(n), 3});
+}
+
+// A (n,) array, or a Python float when both inputs were single vectors.
+py::object scalarResult(py::array_t<double>& a, bool single) {
+    if (single) return py::float_(a.data()[0]);
+    return std::move(a);
+}
+
+py::array_t<double> scalarArray(size_t n) {
+    return py::array_t<double>(std::vector<py::ssize_t>{static_cast<py::ssize_t>(n)});
+}
+
+// ---------------------------------------------------------------------------
+// The BSDF calls, shared by FiberBcsdf and YarnModel.
+
+template <typename Bsdf>
+py::object evalRows(const Bsdf& bsdf, const py::handle& wiArg, const py::handle& woArg) {
+    const Rows wi = rowsOf(wiArg, "wi"), wo = rowsOf(woArg, "wo");
+    const size_t n = broadcastRows(wi, "wi", wo, "wo");
+    const bool single = wi.single && wo.single;
+    py::array_t<double> out = rgbArray(n, single);
+    double* o = out.mutable_data();
+    {
+        py::gil_scoped_release release;
+        for (size_t i = 0; i < n; ++i) {
+            const Vec3 in = unitRow(wi, i, "wi");  // wi checked first
+            const Rgb f = bsdf.eval(in, unitRow(wo, i, "wo"));
+            o[3 * i] = f.r, o[3 * i + 1] = f.g, o[3 * i + 2] = f.b;
+        }
+    }
+    return out;
+}
+
+template <typename Bsdf>
+py::object pdfRows(const Bsdf& bsdf, const py::handle& wiArg, const py::handle& woArg) {
+    const Rows wi = rowsOf(wiArg, "wi"), wo = rowsOf(woArg, "wo");
+    const size_t n = broadcastRows(wi, "wi", wo, "wo");
+    py::array_t<double> out = scalarArray(n);
+    double* o = out.mutable_data();
+    {
+        py::gil_scoped_release release;
+        for (size_t i = 0; i < n; ++i) {
+            const Vec3 in = unitRow(wi, i, "wi");  // wi checked first
+            o[i] = bsdf.pdf(in, unitRow(wo, i, "wo"));
+        }
+    }
+    return scalarResult(out, wi.single && wo.single);
+}
+
+// {wo, weight, pdf, lobe} of n samples; `draw(i)` returns sample i.
+template <typename Draw>
+py::dict sampleDict(size_t n, bool single, const Draw& draw) {
+    py::array_t<double> wo = rgbArray(n, single), weight = rgbArray(n, single);
+    py::array_t<double> pdf = scalarArray(n);
+    py::array_t<int64_t> lobe(std::vector<py::ssize_t>{static_cast<py::ssize_t>(n)});
+    double *w = wo.mutable_data(), *f = weight.mutable_data(), *p = pdf.mutable_data();
+    int64_t* l = lobe.mutable_data();
+    {
+        py::gil_scoped_release release;
+        for (size_t i = 0; i < n; ++i) {
+            const BsdfSample s = draw(i);
+            w[3 * i] = s.wo.x, w[3 * i + 1] = s.wo.y, w[3 * i + 2] = s.wo.z;
+            f[3 * i] = s.weight.r, f[3 * i + 1] = s.weight.g, f[3 * i + 2] = s.weight.b;
+            p[i] = s.pdf;
+            l[i] = s.lobe;
+        }
+    }
+    py::dict d;
+    d["wo"] = wo;
+    d["weight"] = weight;
+    d["pdf"] = scalarResult(pdf, single);
+    if (single)
+        d["lobe"] = py::int_(l[0]);
+    else
+        d["lobe"] = lobe;
+    return d;
+}
+
+template <typename Bsdf>
+py::dict sampleRows(const Bsdf& bsdf, const py::handle& wiArg, const py::handle& uArg) {
+    const Rows wi = rowsOf(wiArg, "wi"), u = rowsOf(uArg, "u");
+    const size_t n = broadcastRows(wi, "wi", u, "u");
+    return sampleDict(n, wi.single && u.single, [&](size_t i) {
+        const Vec3 in = directionRow(wi, i, "wi");  // wi checked first
+        return bsdf.sample(in, uniformRow(u, i));
+    });
+}
+
+// The samples of `weft {fiber,yarn} sample --wi WI --count N --seed S`
+// (cmd/commands.h, writeSamples): sample i draws from random stream i.
+template <typename Bsdf>
+py::dict sampleSeeded(const Bsdf& bsdf, const py::handle& wiArg, int64_t count, uint64_t seed) {
+    const Rows wiRows = rowsOf(wiArg, "wi");
+    if (!wiRows.single)
+        throw InputError("wi: sample_seeded takes one incident direction, shape (3,)");
+    if (count < 1 || count > 100000000)
+        throw InputError("count = " + std::to_string(count) + " is out of range: allowed [1, 1e8]");
+    const Vec3 wi = directionRow(wiRows, 0, "wi");
+    return sampleDict(static_cast<size_t>(count), false, [&](size_t i) {
+        Rng rng(static_cast<uint64_t>(i), seed);
+        const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
+        return bsdf.sample(wi, u, rng);
+    });
+}
+
+// ---------------------------------------------------------------------------
+// Fiber BCSDF.
+
+FiberParams fiberParamsOf(const py::dict& params) {
+    const std::string source = "fiber parameters";
+    const json j = jsonFromPy(params, source);
+    return readUserJson(source, [&] { return FiberParams::fromJson(j, source); });
+}
+
+// ---------------------------------------------------------------------------
+// Yarn model: the model (for its weights and JSON) and the BSDF built from it.
+
+struct PyYarnModel {
+    YarnModel model;
+    std::string source;
+    std::unique_ptr<YarnBsdf> bsdf;
+
+    PyYarnModel(YarnModel m, std::string src, bool energyGuard, const std::string& sampling)
+        : model(std::move(m)), source(std::move(src)) {
+        YarnBsdfOptions options;
+        options.energyGuard = energyGuard;
+        options.sampling = parseYarnSampling(sampling, "sampling");
+        bsdf = std::make_unique<YarnBsdf>(model, source, options);
+    }
+};
+
+const char* outputName(OutputFunction f) {
+    switch (f) {
+        case OutputFunction::Sigmoid:
+            return "sigmoid";
+        case OutputFunction::Exp:
+            return "exp";
+        default:
+            return "identity";
+    }
+}
+
+// {"layers": [{"weight": (out,in) float32, "bias": (out,), "prelu": (out,) or None}], "output"}
+py::dict networkDict(const Mlp<float>& net) {
+    py::list layers;
+    for (int l = 0; l < static_cast<int>(net.layers().size()); ++l) {
+        const auto& layer = net.layers()[l];
+        py::array_t<float> weight(std::vector<py::ssize_t>{layer.out, layer.in});
+        py::array_t<float> bias(std::vector<py::ssize_t>{layer.out});
+        const auto w = net.weight(l);
+        const auto b = net.bias(l);
+        for (int r = 0; r < layer.out; ++r) {
+            for (int c = 0; c < layer.in; ++c) weight.mutable_at(r, c) = w(r, c);
+            bias.mutable_at(r) = b(r);
+        }
+        py::dict d;
+        d["weight"] = weight;
+        d["bias"] = bias;
+        if (layer.prelu) {
+            const auto s = net.preluSlopes(l);
+            py::array_t<float> slopes(std::vector<py::ssize_t>{layer.out});
+            for (int r = 0; r < layer.out; ++r) slopes.mutable_at(r) = s(r);
+            d["prelu"] = slopes;
+        } else {
+            d["prelu"] = py::none();
+        }
+        layers.append(d);
+    }
+    py::dict d;
+    d["layers"] = layers;
+    d["output"] = outputName(net.output());
+    return d;
+}
+
+// ---------------------------------------------------------------------------
+// gather, fit, render.
+
+template <typename T>
+py::array_t<T> ndarray(const std::vector<T>& values, std::vector<py::ssize_t> shape) {
+    py::array_t<T> a(shape);
+    std::copy(values.begin(), values.end(), a.mutable_data());
+    return a;
+}
+
+py::dict pyGather(const py::object& preset, const py::object& params, const py::object& fibers,
+                  const py::object& density, const py::object& twist, int64_t paths, uint64_t seed,
+                  const py::object& plySeed, const std::vector<int>& bins, int maxDepth,
+                  int threads, int segmentsPerTwist, const py::object& out, bool quiet) {
+    GatherOptions o;
+    const bool geometry = !fibers.is_none() || !density.is_none() || !twist.is_none();
+    if (!preset.is_none()) {
+        if (!params.is_none() || geometry)
+            throw InputError(
+                "preset gives fiber and ply parameters: do not combine it with "
+                "params, fibers, density or twist");
+        const MaterialPreset& p = findMaterialPreset(preset.cast<std::string>());
+        o.fiber = p.fiber;
+        o.ply = p.ply;
+        o.material = std::string(p.name);
+    } else {
+        if (params.is_none() || fibers.is_none() || density.is_none() || twist.is_none())
+            throw InputError(
+                "give preset=NAME, or params={...} with fibers=N, density=RHO, "
+                "twist=ALPHA");
+        o.fiber = fiberParamsOf(params.cast<py::dict>());
+        o.ply = {fibers.cast<int>(), density.cast<double>(), twist.cast<double>()};
+        o.material = "params (Python)";
+    }
+    if (bins.size() != 4)
+        throw InputError("bins: expected four counts (theta_i, phi_i, theta_o, phi_o), got " +
+                         std::to_string(bins.size()));
+    o.bins = {bins[0], bins[1], bins[2], bins[3]};
+    o.paths = paths;
+    o.seed = seed;
+    if (!plySeed.is_none()) o.plySeed = plySeed.cast<uint64_t>();
+    o.maxDepth = maxDepth;
+    o.threads = threads;
+    o.segmentsPerTwist = segmentsPerTwist;
+    o.quiet = quiet;
+    o.validate();
+    std::unique_ptr<TempDirCommit> dir;
+    std::string outPath;
+    if (!out.is_none()) {
+        outPath = pathOf(out, "out");
+        dir = std::make_unique<TempDirCommit>(outPath);  // fails now, not after the walks
+    }
+    GatherResult r;
+    {
+        py::gil_scoped_release release;
+        r = gatherRdm(o);
+        if (dir) writeGather(r, o, *dir);
+    }
+    const py::ssize_t ti = r.bins.thetaI, pi = r.bins.phiI, to = r.bins.thetaO, po = r.bins.phiO;
+    py::dict d;
+    d["count"] = ndarray(r.count, {ti, pi});
+    d["count_t"] = ndarray(r.countT, {ti, pi});
+    d["p_t"] = ndarray(r.pT, {ti, pi});
+    d["rdm_r"] = ndarray(r.rdmR, {ti, pi, to, po, 3});
+    d["rdm_m"] = ndarray(r.rdmM, {ti, pi, to, po, 3});
+    d["truncated"] = ndarray(r.truncated, {ti, pi, 3});
+    d["depth"] = ndarray(r.depth, {static_cast<py::ssize_t>(r.depth.size())});
+    const GatherStats& s = r.stats;
+    const json stats = {
+        {"material", o.material},
+        {"fiber", o.fiber.toJson()},
+        {"ply", {{"fibers", o.ply.fibers}, {"density", o.ply.density}, {"twist", o.ply.twist}}},
+        {"bins", {ti, pi, to, po}},
+        {"paths", s.paths},
+        {"seed", o.seed},
+        {"ply_seed", o.placementSeed()},
+        {"max_depth", o.maxDepth},
+        {"threads", s.threads},
+        {"elapsed_seconds", s.seconds},
+        {"walk_seconds", s.walkSeconds},
+        {"rays", s.rays},
+        {"mean_depth", s.meanDepth},
+        {"truncated_fraction", static_cast<double>(s.truncatedPaths) / s.paths},
+        {"truncated_energy", {s.truncatedEnergy[0], s.truncatedEnergy[1], s.truncatedEnergy[2]}},
+        {"axial_fraction", static_cast<double>(s.axialPaths) / s.paths},
+        {"fiber_radius", s.fiberRadius},
+        {"period", s.period},
+        {"segments", s.segments},
+        {"embree_bytes", s.embreeBytes},
+        {"out", outPath.empty() ? json() : json(outPath)}};
+    d["stats"] = pyFromJson(stats);
+    return d;
+}
+
+YarnAblation ablationOf(const std::string& name) {
+    if (name.empty() || name == "none") return YarnAblation::None;
+    if (name == "naive") return YarnAblation::Naive;
+    if (name == "no-r-lobe" || name == "no_r_lobe") return YarnAblation::NoRLobe;
+    throw InputError("ablation \"" + name +
+                     "\": unknown ablation (allowed: naive, no-r-lobe, none)");
+}
+
+FitConfig fitConfigOf(const py::object& config) {
+    if (config.is_none()) return FitConfig{};
+    if (py::isinstance<py::dict>(config)) {
+        const std::string source = "fit config";
+        const json j = jsonFromPy(config, source);
+        return readUserJson(source, [&] { return FitConfig::fromJson(j, source); });
+    }
+    const std::string path = pathOf(config, "config");
+    return readUserJson(path, [&] { return FitConfig::fromJsonFile(path); });
+}
+
+py::dict lossDict(const LossCurve& c) {
+    py::dict d;
+    d["step"] = ndarray(c.step, {static_cast<py::ssize_t>(c.step.size())});
+    d["loss"] = ndarray(c.loss, {static_cast<py::ssize_t>(c.loss.size())});
+    return d;
+}
+
+py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object& config,
+               uint64_t seed, const py::object& threads, const std::string& ablationName,
+               const py::object& reference, const py::object& report, bool quiet) {
+    FitConfig c = fitConfigOf(config);
+    if (!threads.is_none()) c.threads = threads.cast<int>();
+    if (c.threads < 0 || c.threads > 1024)
+        throw InputError("threads = " + std::to_string(c.threads) +
+                         " is out of range: allowed [0, 1024]");
+    const YarnAblation ablation = ablationOf(ablationName);
+    const std::string rdmDir = pathOf(rdmArg, "rdm");
+    const std::string outPath = out.is_none() ? std::string() : pathOf(out, "out");
+    const std::string reportDir = report.is_none() ? std::string() : pathOf(report, "report");
+    const std::string referenceDir =
+        reference.is_none() ? std::string() : pathOf(reference, "reference");
+    for (const std::string& path : {outPath, reportDir}) {
+        const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+        std::error_code ec;
+        if (!path.empty() && !parent.empty() && !std::filesystem::is_directory(parent, ec))
+            throw InputError(path + ": the folder " + parent.string() + " does not exist");
+    }
+    std::optional<FitResult> result;
+    {
+        py::gil_scoped_release release;
+        const RdmData rdm = loadRdm(rdmDir);
+        std::unique_ptr<RdmData> ref;
+        if (!referenceDir.empty()) ref = std::make_unique<RdmData>(loadRdm(referenceDir));
+        result = fitYarnModel(rdm, c, seed, quiet, ablation);
+        if (!outPath.empty()) saveYarnModel(result->model, outPath);
+        if (!reportDir.empty()) {
+            if (result->model.ablation == YarnAblation::None) {
+                writeFitReport(*result, rdm, ref.get(), reportDir);
+            } else {
+                std::unique_ptr<RdmData> refTarget;
+                if (ref) refTarget = std::make_unique<RdmData>(ablationTarget(*ref, ablation));
+                writeFitReport(*result, ablationTarget(rdm, ablation), refTarget.get(), reportDir);
+            }
+        }
+    }
+    const FitReport& r = result->report;
+    const auto finite = [](double v) -> py::object {
+        return std::isfinite(v) ? py::object(py::float_(v)) : py::object(py::none());
+    };
+    py::dict summary;
+    summary["t_rmse"] = r.tRmse;
+    summary["t_rmse_unweighted"] = r.tRmseUnweighted;
+    summary["m_rel_l2"] = r.mRelL2;
+    summary["r_rel_l2"] = finite(r.rRelL2);
+    summary["r_rel_l2_eq8"] = finite(r.rRelL2Eq8);
+    summary["m_second_moment"] = finite(r.mSecondMoment);
+    summary["seconds"] = r.seconds;
+    summary["m_samples_per_second"] = r.mSamplesPerSecond;
+    summary["t_loss"] = lossDict(r.tLoss);
+    summary["m_loss"] = lossDict(r.mLoss);
+    summary["calibration"] = pyFromJson(r.calibration);
+    summary["out"] = outPath.empty() ? py::object(py::none()) : py::object(py::str(outPath));
+    summary["report"] = reportDir.empty() ? py::object(py::none()) : py::object(py::str(reportDir));
+    py::dict d;
+    d["model"] = py::cast(std::make_unique<PyYarnModel>(
+        std::move(result->model), outPath.empty() ? "fitted model" : outPath, true, "fitted"));
+    d["report"] = summary;
+    return d;
+}
+
+py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, const py::object& spp,
+                   const py::object& seconds, int threads, const py::object& seed, bool nee,
+                   const std::string& yarnSampling, const py::object& baseDir, bool quiet) {
+    if (modeName != "neural" && modeName != "fiber")
+        throw InputError("mode \"" + modeName + "\" is not a render mode: allowed neural, fiber");
+    const render::RenderMode mode = render::parseRenderMode(modeName);
+    YarnBsdfOptions yarnOptions;
+    yarnOptions.sampling = parseYarnSampling(yarnSampling, "yarn_sampling");
+    render::SceneDesc desc;
+    py::object sceneFile = py::none();
+    if (py::isinstance<py::dict>(sceneArg)) {
+        const std::string base =
+            std::filesystem::absolute(baseDir.is_none()
+                                          ? std::filesystem::current_path()
+                                          : std::filesystem::path(pathOf(baseDir, "base_dir")))
+                .string();
+        const json j = jsonFromPy(sceneArg, "scene");
+        desc = readUserJson("scene", [&] { return render::parseScene(j, "scene", base); });
+    } else {
+        if (!baseDir.is_none())
+            throw InputError(
+                "base_dir applies to a scene dict; a scene file's paths are "
+                "relative to its folder");
+        const std::string path = pathOf(sceneArg, "scene");
+        desc = render::loadScene(path);
+        sceneFile = py::str(path);
+    }
+    render::RenderOptions options;
+    options.spp = !spp.is_none() ? spp.cast<int>() : (!seconds.is_none() ? 0 : desc.render.spp);
+    options.seconds = seconds.is_none() ? 0.0 : seconds.cast<double>();
+    options.threads = threads;
+    options.seed = seed.is_none() ? desc.render.seed : seed.cast<uint64_t>();
+    options.maxDepth = desc.render.maxDepth;
+    options.nextEventEstimation = nee;
+    options.quiet = quiet;
+    options.validate();
+    std::optional<render::RenderResult> result;
+    std::string hash;
+    {
+        py::gil_scoped_release release;
+        hash = render::sceneHash(desc);
+        const render::Scene scene(desc, mode, quiet, yarnOptions);
+        result = render::render(scene, options);
+    }
+    json stats = render::toJson(result->stats);
+    stats["scene_hash"] = hash;
+    stats["next_event_estimation"] = nee;
+    stats["yarn_sampling"] = yarnSamplingName(yarnOptions.sampling);
+    stats["max_depth"] = options.maxDepth;
+    stats["version"] = WEFT_VERSION;
+    py::dict statsDict = pyFromJson(stats).cast<py::dict>();
+    statsDict["scene_file"] = sceneFile;
+    const Image& image = result->image;
+    py::array_t<float> pixels(std::vector<py::ssize_t>{image.height, image.width, 3});
+    std::copy(image.pixels.begin(), image.pixels.end(), pixels.mutable_data());
+    return py::make_tuple(pixels, statsDict);
+}
+
+}  // namespace
+
+}  // namespace weft::python
+
+PYBIND11_MODULE(weft, m) {
+    using namespace weft;
+    using namespace weft::python;
+
+    m.doc() =
+        "weft: the neural yarn appearance model (Soh & Montazeri 2024) from Python. "
+        "See docs/python.md.";
+    m.attr("__version__") = WEFT_VERSION;
+
+    py::register_exception_translator([](std::exception_ptr p) {
+        try {
+            if (p) std::rethrow_exception(p);
+        } catch (const InputError& e) {
+            PyErr_SetString(PyExc_ValueError, e.what());
+        }
+    });
+
+    m.def(
+        "presets",
+        [] {
+            std::vector<std::string> names;
+            for (const auto& p : materialPresets()) names.emplace_back(p.name);
+            return names;
+        },
+        "Names of the paper's Table 3 materials.");
+
+    py::class_<FiberBcsdf>(m, "FiberBcsdf",
+                           "The fiber BCSDF of Khungurn et al. (2015) in its local frame: tangent "
+                           "+x, azimuth in the y-z plane (docs/cli.md, `weft fiber`).")
+        .def(py::init([](const py::dict& params) { return FiberBcsdf(fiberParamsOf(params)); }),
+             py::arg("params"),
+             "From a dict {c_r, c_tt, beta_r_deg, beta_tt_deg, gamma_tt_deg} (every key "
+             "required, as the --params JSON).")
+        .def_static(
+            "preset",
+            [](const std::string& name) { return FiberBcsdf(findMaterialPreset(name).fiber); },
+            py::arg("name"), "A Table 3 material: fleece, silk, polyester, cotton, gabardine.")
+        .def_property_readonly("params",
+                               [](const FiberBcsdf& f) { return pyFromJson(f.params().toJson()); })
+        .def(
+            "eval",
+            [](const FiberBcsdf& f, const py::object& wi, const py::object& wo) {
+                return evalRows(f, wi, wo);
+            },
+            py::arg("wi"), py::arg("wo"), "RGB eval(wi, wo), cos(theta_o) included: (n,3).")
+        .def(
+            "pdf",
+            [](const FiberBcsdf& f, const py::object& wi, const py::object& wo) {
+                return pdfRows(f, wi, wo);
+            },
+            py::arg("wi"), py::arg("wo"), "Solid-angle density of sample(): (n,).")
+        .def(
+            "sample",
+            [](const FiberBcsdf& f, const py::object& wi, const py::object& u) {
+                return sampleRows(f, wi, u);
+            },
+            py::arg("wi"), py::arg("u"),
+            "One sample per row of u (n,3) in [0,1): dict wo (n,3), weight (n,3), pdf (n,), "
+            "lobe (n,) (0 = R, 1 = TT).")
+        .def(
+            "sample_seeded",
+            [](const FiberBcsdf& f, const py::object& wi, int64_t count, uint64_t seed) {
+                return sampleSeeded(f, wi, count, seed);
+            },
+            py::arg("wi"), py::arg("count"), py::arg("seed") = 0,
+            "The samples of `weft fiber sample --wi WI --count COUNT --seed SEED`.")
+        .def(
+            "albedo",
+            [](const FiberBcsdf& f, const py::object& wiArg) {
+                const Rows wi = rowsOf(wiArg, "wi");
+                py::array_t<double> out = rgbArray(wi.n, wi.single);
+                double* o = out.mutable_data();
+                {
+                    py::gil_scoped_release release;
+                    for (size_t i = 0; i < wi.n; ++i) {
+                        const Rgb a = f.albedo(unitRow(wi, i, "wi"));
+                        o[3 * i] = a.r, o[3 * i + 1] = a.g, o[3 * i + 2] = a.b;
+                    }
+                }
+                return out;
+            },
+            py::arg("wi"), "Analytic directional albedo F + (1 - F) C_TT: (n,3).");
+
+    py::class_<PyYarnModel>(m, "YarnModel",
+                            "A fitted neural yarn model (model.json) and its yarn BSDF, in the "
+                            "yarn frame t = +x, b = +y, n = +z (docs/yarn.md).")
+        .def(py::init([](const py::dict& model, bool energyGuard, const std::string& sampling) {
+                 const std::string source = "model";
+                 const json j = jsonFromPy(model, source);
+                 YarnModel ym = readUserJson(source, [&] { return yarnModelFromJson(j, source); });
+                 return std::make_unique<PyYarnModel>(std::move(ym), source, energyGuard, sampling);
+             }),
+             py::arg("model"), py::arg("energy_guard") = true, py::arg("sampling") = "fitted",
+             "From a dict in the model.json layout (docs/model-format.md).")
+        .def_static(
+            "load",
+            [](const py::object& path, bool energyGuard, const std::string& sampling) {
+                const std::string p = pathOf(path, "path");
+                YarnModel ym = readUserJson(p, [&] { return loadYarnModel(p); });
+                return std::make_unique<PyYarnModel>(std::move(ym), p, energyGuard, sampling);
+            },
+            py::arg("path"), py::arg("energy_guard") = true, py::arg("sampling") = "fitted",
+            "Reads a model.json (weft fit); energy_guard=False is --no-energy-guard.")
+        .def(
+            "eval",
+            [](const PyYarnModel& y, const py::object& wi, const py::object& wo) {
+                return evalRows(*y.bsdf, wi, wo);
+            },
+            py::arg("wi"), py::arg("wo"), "Continuous part R + M of eval(wi, wo): (n,3).")
+        .def(
+            "pdf",
+            [](const PyYarnModel& y, const py::object& wi, const py::object& wo) {
+                return pdfRows(*y.bsdf, wi, wo);
+            },
+            py::arg("wi"), py::arg("wo"), "Density of sample() over the continuous part: (n,).")
+        .def(
+            "sample",
+            [](const PyYarnModel& y, const py::object& wi, const py::object& u) {
+                return sampleRows(*y.bsdf, wi, u);
+            },
+            py::arg("wi"), py::arg("u"),
+            "One sample per row of u (n,3) in [0,1): dict wo, weight, pdf (0 for the delta T "
+            "lobe), lobe (0 = T, 1 = R, 2 = M).")
+        .def(
+            "sample_seeded",
+            [](const PyYarnModel& y, const py::object& wi, int64_t count, uint64_t seed) {
+                return sampleSeeded(*y.bsdf, wi, count, seed);
+            },
+            py::arg("wi"), py::arg("count"), py::arg("seed") = 0,
+            "The samples of `weft yarn sample --wi WI --count COUNT --seed SEED`.")
+        .def(
+            "p_t",
+            [](const PyYarnModel& y, const py::object& wiArg) {
+                const Rows wi = rowsOf(wiArg, "wi");
+                py::array_t<double> out = scalarArray(wi.n);
+                double* o = out.mutable_data();
+                {
+                    py::gil_scoped_release release;
+                    for (size_t i = 0; i < wi.n; ++i)
+                        o[i] = y.bsdf->transmission(unitRow(wi, i, "wi"));
+                }
+                return scalarResult(out, wi.single);
+            },
+            py::arg("wi"), "P(T | wi) of the T network: (n,).")
+        .def_property_readonly("t_net",
+                               [](const PyYarnModel& y) { return networkDict(y.model.tNet); })
+        .def_property_readonly("m_net",
+                               [](const PyYarnModel& y) { return networkDict(y.model.mNet); })
+        .def_property_readonly(
+            "fiber", [](const PyYarnModel& y) { return FiberBcsdf(y.model.fiber); },
+            "The fiber BCSDF of the model's material.")
+        .def_property_readonly(
+            "ablation",
+            [](const PyYarnModel& y) { return std::string(yarnAblationName(y.model.ablation)); })
+        .def_property_readonly("source", [](const PyYarnModel& y) { return y.source; })
+        .def(
+            "to_dict", [](const PyYarnModel& y) { return pyFromJson(yarnModelToJson(y.model)); },
+            "The model.json document as a dict.")
+        .def(
+            "save",
+            [](const PyYarnModel& y, const py::object& path) {
+                saveYarnModel(y.model, pathOf(path, "path"));
+            },
+            py::arg("path"), "Writes model.json (atomically).");
+
+    m.def(
+        "fit_config",
+        [](const py::object& config) { return pyFromJson(fitConfigOf(config).toJson()); },
+        py::arg("config") = py::none(),
+        "The fit configuration in effect (defaults, or a dict / FIT.json path over them), as "
+        "`weft fit --print-config`.");
+
+    m.def("gather", &pyGather, py::kw_only(), py::arg("preset") = py::none(),
+          py::arg("params") = py::none(), py::arg("fibers") = py::none(),
+          py::arg("density") = py::none(), py::arg("twist") = py::none(), py::arg("paths"),
+          py::arg("seed") = 0, py::arg("ply_seed") = py::none(),
+          py::arg("bins") = std::vector<int>{22, 90, 45, 90}, py::arg("max_depth") = 1000,
+          py::arg("threads") = 0, py::arg("segments_per_twist") = 128, py::arg("out") = py::none(),
+          py::arg("quiet") = true,
+          "`weft gather`: the RDM of a ply as a dict of arrays (count, count_t, p_t, rdm_r, "
+          "rdm_m, truncated, depth) and stats; out=DIR also writes the gather folder.");
+
+    m.def("fit", &pyFit, py::arg("rdm"), py::kw_only(), py::arg("out") = py::none(),
+          py::arg("config") = py::none(), py::arg("seed") = 0, py::arg("threads") = py::none(),
+          py::arg("ablation") = "none", py::arg("reference") = py::none(),
+          py::arg("report") = py::none(), py::arg("quiet") = true,
+          "`weft fit`: fits a YarnModel to a gather folder; returns {model, report}.");
+
+    m.def("render", &pyRender, py::arg("scene"), py::kw_only(), py::arg("mode") = "neural",
+          py::arg("spp") = py::none(), py::arg("seconds") = py::none(), py::arg("threads") = 0,
+          py::arg("seed") = py::none(), py::arg("nee") = true, py::arg("yarn_sampling") = "fitted",
+          py::arg("base_dir") = py::none(), py::arg("quiet") = true,
+          "`weft render`: a scene file or dict to an (H,W,3) float32 linear RGB image and the "
+          "statistics dict.");
+}

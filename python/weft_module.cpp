@@ -473,29 +473,9 @@ py::dict pyGather(const py::object& preset, const py::object& params, const py::
     d["rdm_m"] = ndarray(r.rdmM, {ti, pi, to, po, 3});
     d["truncated"] = ndarray(r.truncated, {ti, pi, 3});
     d["depth"] = ndarray(r.depth, {static_cast<py::ssize_t>(r.depth.size())});
-    const GatherStats& s = r.stats;
-    const json stats = {
-        {"material", o.material},
-        {"fiber", o.fiber.toJson()},
-        {"ply", {{"fibers", o.ply.fibers}, {"density", o.ply.density}, {"twist", o.ply.twist}}},
-        {"bins", {ti, pi, to, po}},
-        {"paths", s.paths},
-        {"seed", o.seed},
-        {"ply_seed", o.placementSeed()},
-        {"max_depth", o.maxDepth},
-        {"threads", s.threads},
-        {"elapsed_seconds", s.seconds},
-        {"walk_seconds", s.walkSeconds},
-        {"rays", s.rays},
-        {"mean_depth", s.meanDepth},
-        {"truncated_fraction", static_cast<double>(s.truncatedPaths) / s.paths},
-        {"truncated_energy", {s.truncatedEnergy[0], s.truncatedEnergy[1], s.truncatedEnergy[2]}},
-        {"axial_fraction", static_cast<double>(s.axialPaths) / s.paths},
-        {"fiber_radius", s.fiberRadius},
-        {"period", s.period},
-        {"segments", s.segments},
-        {"embree_bytes", s.embreeBytes},
-        {"out", outPath.empty() ? json() : json(outPath)}};
+    // The gather folder's meta.json, and where it was written (None: nowhere).
+    json stats = gatherMetadata(r, o);
+    stats["out"] = outPath.empty() ? json() : json(outPath);
     d["stats"] = pyFromJson(stats);
     return d;
 }

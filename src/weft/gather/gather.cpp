@@ -219,8 +219,14 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
     lines.closed.assign(lines.curves.size(), false);
     writeCurveText(file("ply.txt"), lines);
 
+    writeFileAtomic(file("meta.json"), gatherMetadata(r, o).dump(2) + "\n");
+    out.commit();
+}
+
+nlohmann::json gatherMetadata(const GatherResult& r, const GatherOptions& o) {
+    const RdmBins& b = r.bins;
     const GatherStats& s = r.stats;
-    const nlohmann::json meta = {
+    return {
         {"format", "weft-gather"},
         {"version", 1},
         {"material", o.material},
@@ -261,8 +267,6 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
           {"rdm_m", "float32 (TI,PI,TO,PO,3): M weight / count / outgoing solid angle"},
           {"truncated", "float64 (TI,PI,3): weight of paths cut at max_depth / count"},
           {"depth", "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}}};
-    writeFileAtomic(file("meta.json"), meta.dump(2) + "\n");
-    out.commit();
 }
 
 }  // namespace weft

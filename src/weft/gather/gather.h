@@ -22,6 +22,7 @@
 #pragma once
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -83,5 +84,7 @@ class TempDirCommit;
 // it into place. Create `out` before gathering so that an unwritable
 // destination fails at once.
 void writeGather(const GatherResult& result, const GatherOptions& options, TempDirCommit& out);
+// The content of meta.json: inputs, bins, statistics, versions, array descriptions.
+nlohmann::json gatherMetadata(const GatherResult& result, const GatherOptions& options);
 
 }  // namespace weft

@@ -480,12 +480,9 @@ py::dict pyGather(const py::object& preset, const py::object& params, const py::
     return d;
 }
 
+// The CLI's names, plus the model file's spelling "no_r_lobe".
 YarnAblation ablationOf(const std::string& name) {
-    if (name.empty() || name == "none") return YarnAblation::None;
-    if (name == "naive") return YarnAblation::Naive;
-    if (name == "no-r-lobe" || name == "no_r_lobe") return YarnAblation::NoRLobe;
-    throw InputError("ablation \"" + name +
-                     "\": unknown ablation (allowed: naive, no-r-lobe, none)");
+    return parseYarnAblation(name == "no_r_lobe" ? "no-r-lobe" : name, "ablation");
 }
 
 FitConfig fitConfigOf(const py::object& config) {

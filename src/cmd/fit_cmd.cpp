@@ -29,15 +29,6 @@ void requireParentDirectory(const std::string& path, const std::string& flag) {
         throw InputError(flag + " " + path + ": the folder " + parent.string() + " does not exist");
 }
 
-// --ablation: the variants of paper Fig. 5 (docs/fit.md).
-YarnAblation parseAblation(const std::string& name) {
-    if (name.empty() || name == "none") return YarnAblation::None;
-    if (name == "naive") return YarnAblation::Naive;
-    if (name == "no-r-lobe") return YarnAblation::NoRLobe;
-    throw InputError("--ablation \"" + name +
-                     "\": unknown ablation (allowed: naive, no-r-lobe, none)");
-}
-
 // A number of the summary line, or null (an ablated model has no R errors).
 nlohmann::json finiteOrNull(double v) {
     return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
@@ -46,7 +37,8 @@ nlohmann::json finiteOrNull(double v) {
 // fleece.json -> fleece-report
 std::string defaultReportDir(const std::string& modelPath) {
     std::string stem = modelPath;
-    if (stem.size() > 5 && stem.compare(stem.size() - 5, 5, ".json") == 0) stem.resize(stem.size() - 5);
+    if (stem.size() > 5 && stem.compare(stem.size() - 5, 5, ".json") == 0)
+        stem.resize(stem.size() - 5);
     return stem + "-report";
 }
 
@@ -57,14 +49,17 @@ void runFit(const FitCliOptions& c) {
         std::printf("%s\n", config.toJson().dump(2).c_str());
         return;
     }
-    const YarnAblation ablation = parseAblation(c.ablation);
-    if (c.rdm.empty() || c.out.empty()) throw InputError("weft fit needs --rdm DIR and --out MODEL.json");
+    // --ablation: the variants of paper Fig. 5 (docs/fit.md).
+    const YarnAblation ablation = parseYarnAblation(c.ablation, "--ablation");
+    if (c.rdm.empty() || c.out.empty())
+        throw InputError("weft fit needs --rdm DIR and --out MODEL.json");
     if (!c.ablation.empty() && !c.recalibrate.empty())
         throw InputError(
             "--ablation cannot be combined with --recalibrate: the model file says "
             "which variant it is, and it is recalibrated as that variant");
     if (config.threads < 0 || config.threads > 1024)
-        throw InputError("--threads " + std::to_string(config.threads) + " is out of range: allowed [0, 1024]");
+        throw InputError("--threads " + std::to_string(config.threads) +
+                         " is out of range: allowed [0, 1024]");
     const std::string reportDir = c.report.empty() ? defaultReportDir(c.out) : c.report;
     requireParentDirectory(c.out, "--out");
     if (!c.noReport) requireParentDirectory(reportDir, "--report");
@@ -107,18 +102,21 @@ void runFit(const FitCliOptions& c) {
 void addFitCommand(CLI::App& app) {
     auto o = std::make_shared<FitCliOptions>();
     CLI::App* fit = app.add_subcommand(
-        "fit", "Fit the neural yarn model (T and M networks, R lobe, sampling lobe) to a gathered "
-               "RDM and write MODEL.json plus a report folder (errors, loss curves, slices)");
+        "fit",
+        "Fit the neural yarn model (T and M networks, R lobe, sampling lobe) to a gathered "
+        "RDM and write MODEL.json plus a report folder (errors, loss curves, slices)");
     fit->add_option("--rdm", o->rdm, "gather directory written by weft gather");
     fit->add_option("--out", o->out, "output model file (.json, written atomically)");
-    fit->add_option("--config", o->config,
-                    "training configuration FIT.json (see docs/fit.md; --print-config shows the defaults)");
+    fit->add_option(
+        "--config", o->config,
+        "training configuration FIT.json (see docs/fit.md; --print-config shows the defaults)");
     addSeedOption(*fit, o->seed, "random seed of network initialisation and training samples");
     fit->add_option("--threads", o->threads, "worker threads (0: all cores; overrides the config)");
     fit->add_option("--reference", o->reference,
                     "an independent gather of the same material: adds errors against it and the "
                     "noise floor to the report");
-    fit->add_option("--report", o->report, "report directory (default: MODEL path without .json + \"-report\")");
+    fit->add_option("--report", o->report,
+                    "report directory (default: MODEL path without .json + \"-report\")");
     fit->add_option("--recalibrate", o->recalibrate,
                     "an existing MODEL.json: keep its networks and R lobe, redo only the energy "
                     "calibration and the sampling lobe against --rdm (seconds instead of minutes)");
@@ -127,7 +125,8 @@ void addFitCommand(CLI::App& app) {
                     "network over the whole RDM, no T or R) or no-r-lobe (no analytic R lobe; the "
                     "M network also carries R); see docs/fit.md");
     fit->add_flag("--no-report", o->noReport, "write only the model");
-    fit->add_flag("--print-config", o->printConfig, "print the configuration in effect as JSON and exit");
+    fit->add_flag("--print-config", o->printConfig,
+                  "print the configuration in effect as JSON and exit");
     fit->add_flag("--quiet", o->quiet, "no progress output");
     fit->callback([o] { runFit(*o); });
 }

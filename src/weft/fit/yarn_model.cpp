@@ -409,6 +409,14 @@ const char* yarnAblationName(YarnAblation ablation) {
     return "none";
 }
 
+YarnAblation parseYarnAblation(const std::string& name, const std::string& what) {
+    if (name.empty() || name == "none") return YarnAblation::None;
+    if (name == "naive") return YarnAblation::Naive;
+    if (name == "no-r-lobe") return YarnAblation::NoRLobe;
+    throw InputError(what + " \"" + name +
+                     "\": unknown ablation (allowed: naive, no-r-lobe, none)");
+}
+
 nlohmann::json yarnModelToJson(const YarnModel& model) {
     json masking = nullptr;
     if (!model.rLobe.masking.empty())

@@ -61,6 +61,10 @@ struct SamplingParams {
 enum class YarnAblation { None, Naive, NoRLobe };
 // The file's names: "none" (written as an absent key), "naive", "no_r_lobe".
 const char* yarnAblationName(YarnAblation ablation);
+// The names a user types (`weft fit --ablation`, Python's fit(ablation=)):
+// "" or "none", "naive", "no-r-lobe". InputError naming `what` and the allowed
+// names otherwise.
+YarnAblation parseYarnAblation(const std::string& name, const std::string& what);
 
 struct YarnModel {
     FiberParams fiber;

@@ -148,7 +148,7 @@ void YarnRLobe(benchmark::State& state) {
 
 // What FixedMlp replaces: the training code's forward pass on one column.
 void MlpForwardBatchOfOne(benchmark::State& state) {
-    const Mlp<float>& net = model().mNet;
+    const Mlp<float> net(model().mNet);
     Mlp<float>::Matrix x(6, 1);
     loop(state, [&](const Vec3& wi, const Vec3& wo, const BsdfSampleInput&) {
         x << static_cast<float>(wi.x), static_cast<float>(wi.y), static_cast<float>(wi.z),

@@ -35,7 +35,7 @@
 #include "weft/fiber/fiber_bcsdf.h"
 #include "weft/fiber/fiber_params.h"
 #include "weft/fit/fit.h"
-#include "weft/fit/yarn_model.h"
+#include "weft/yarn/yarn_model.h"
 #include "weft/gather/gather.h"
 #include "weft/gather/rdm_io.h"
 #include "weft/render/renderer.h"
@@ -363,46 +363,27 @@ struct PyYarnModel {
     }
 };
 
-const char* outputName(OutputFunction f) {
-    switch (f) {
-        case OutputFunction::Sigmoid:
-            return "sigmoid";
-        case OutputFunction::Exp:
-            return "exp";
-        default:
-            return "identity";
-    }
+// A float vector as a NumPy array of the given shape (a copy).
+py::array_t<float> floatArray(const std::vector<float>& values, std::vector<py::ssize_t> shape) {
+    py::array_t<float> a(shape);
+    std::copy(values.begin(), values.end(), a.mutable_data());
+    return a;
 }
 
 // {"layers": [{"weight": (out,in) float32, "bias": (out,), "prelu": (out,) or None}], "output"}
-py::dict networkDict(const Mlp<float>& net) {
+py::dict networkDict(const NetworkWeights& net) {
     py::list layers;
-    for (int l = 0; l < static_cast<int>(net.layers().size()); ++l) {
-        const auto& layer = net.layers()[l];
-        py::array_t<float> weight(std::vector<py::ssize_t>{layer.out, layer.in});
-        py::array_t<float> bias(std::vector<py::ssize_t>{layer.out});
-        const auto w = net.weight(l);
-        const auto b = net.bias(l);
-        for (int r = 0; r < layer.out; ++r) {
-            for (int c = 0; c < layer.in; ++c) weight.mutable_at(r, c) = w(r, c);
-            bias.mutable_at(r) = b(r);
-        }
+    for (const NetworkLayer& layer : net.layers) {
         py::dict d;
-        d["weight"] = weight;
-        d["bias"] = bias;
-        if (layer.prelu) {
-            const auto s = net.preluSlopes(l);
-            py::array_t<float> slopes(std::vector<py::ssize_t>{layer.out});
-            for (int r = 0; r < layer.out; ++r) slopes.mutable_at(r) = s(r);
-            d["prelu"] = slopes;
-        } else {
-            d["prelu"] = py::none();
-        }
+        d["weight"] = floatArray(layer.weight, {layer.out, layer.in});
+        d["bias"] = floatArray(layer.bias, {layer.out});
+        d["prelu"] = layer.hasPrelu() ? py::object(floatArray(layer.prelu, {layer.out}))
+                                      : py::object(py::none());
         layers.append(d);
     }
     py::dict d;
     d["layers"] = layers;
-    d["output"] = outputName(net.output());
+    d["output"] = toString(net.output);
     return d;
 }
 

@@ -11,7 +11,7 @@
 #include "weft/core/npy.h"
 #include "weft/gather/rdm_io.h"
 #include "weft/yarn/yarn_bsdf.h"
-#include "weft/yarn/yarn_check.h"
+#include "weft/fit/model_check.h"
 
 namespace weft::cmd {
 

@@ -55,4 +55,6 @@ std::string jsonIndexPath(const std::string& path, size_t index) {
     return path + "[" + std::to_string(index) + "]";
 }
 
+nlohmann::json rgbJson(const Rgb& c) { return nlohmann::json::array({c.r, c.g, c.b}); }
+
 }  // namespace weft

@@ -1,6 +1,6 @@
 // weft/core/json_message.h — pieces of error messages about JSON input.
 //
-// Shared by the readers of model.json (fit/yarn_model.cpp) and scene.json
+// Shared by the readers of model.json (yarn/yarn_model.cpp) and scene.json
 // (render/scene_file.cpp), so that both name values and keys the same way:
 //   `yarns[1].plies = 0 is out of range`, `got the string "x"`, `got an array of 2`.
 #pragma once
@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+
+#include "weft/core/rgb.h"
 
 namespace weft {
 
@@ -22,5 +24,8 @@ std::string describeJson(const nlohmann::json& v);
 std::string jsonChildPath(const std::string& path, std::string_view key);
 // "yarns" + 1 -> "yarns[1]".
 std::string jsonIndexPath(const std::string& path, size_t index);
+
+// [r, g, b]: the one JSON form of a colour in reports and files.
+nlohmann::json rgbJson(const Rgb& c);
 
 }  // namespace weft

@@ -79,4 +79,17 @@ struct Frame {
     constexpr Vec3 fromLocal(const Vec3& l) const { return s * l.x + t * l.y + n * l.z; }
 };
 
+// The yarn shading frame (DESIGN.md 2) of a ply surface point with unit
+// tangent t and outward unit normal n: local coordinates (w.t, w.b, w.n) with
+// b = t x n. The gather (entry frame of a walk) and the renderer (shading
+// frame of a ply hit) both use it, so the RDM and the BSDF share one frame.
+inline Frame yarnFrame(const Vec3& t, const Vec3& n) { return Frame(t, cross(t, n), n); }
+
+// Direction from the polar angle theta (from the frame's third axis, n) and
+// the azimuth phi (from the first axis towards the second), in that frame.
+inline Vec3 sphericalDirection(double theta, double phi) {
+    const double s = std::sin(theta);
+    return {s * std::cos(phi), s * std::sin(phi), std::cos(theta)};
+}
+
 }  // namespace weft

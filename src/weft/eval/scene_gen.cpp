@@ -17,7 +17,7 @@
 #include "weft/core/file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/math.h"
-#include "weft/fit/yarn_model.h"
+#include "weft/yarn/yarn_model.h"
 
 namespace weft::eval {
 

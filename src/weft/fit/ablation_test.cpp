@@ -9,7 +9,7 @@
 #include "weft/core/math.h"
 #include "weft/core/rng.h"
 #include "weft/fit/fit.h"
-#include "weft/fit/yarn_model.h"
+#include "weft/yarn/yarn_model.h"
 
 namespace weft {
 namespace {

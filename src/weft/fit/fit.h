@@ -23,7 +23,10 @@
 //   5. Sampling: kappa_R = R energy / (R + M energy) of the model; beta_M,
 //      gamma_M, kappa_M minimise the second moment sum f_M^2 / pdf_M (the
 //      variance of the M estimator) over the RDM grid, by Nelder-Mead.
-// Errors use the one coarse-grid metric (metrics.h).
+// Errors use the one coarse-grid metric (metrics.h). The steps live in
+// train.h (1, 3), masking_fit.h (2), calibration.h (4), sampling_fit.h (5);
+// the configuration in fit_config.h, the model's maps in model_maps.h. This
+// header gathers them and declares the orchestration (fit.cpp).
 //
 // Ablations (paper Fig. 5, docs/fit.md): the same five steps against the
 // target of ablationTarget() below, with the parts the variant lacks left
@@ -37,39 +40,16 @@
 #include <string>
 #include <vector>
 
-#include "weft/fit/mlp.h"
-#include "weft/fit/yarn_model.h"
+#include "weft/fit/calibration.h"
+#include "weft/fit/fit_config.h"
+#include "weft/fit/masking_fit.h"
+#include "weft/fit/model_maps.h"
+#include "weft/fit/sampling_fit.h"
+#include "weft/fit/train.h"
 #include "weft/gather/rdm_io.h"
+#include "weft/yarn/yarn_model.h"
 
 namespace weft {
-
-struct NetworkTraining {
-    std::vector<int> hidden;          // hidden layer widths
-    int64_t steps = 0;                // Adam steps
-    int restarts = 1;                 // independent trainings from different seeds; the best is kept (T only)
-    int batch = 0;                    // samples per step
-    double learningRate = 1e-3;       // at step 0
-    double finalLearningRate = 1e-5;  // at the last step (exponential decay in between)
-    Loss loss = Loss::Mse;
-};
-
-struct FitConfig {
-    NetworkTraining t{{7, 7}, 60000, 4, 512, 3e-2, 1e-5, Loss::Mse};
-    NetworkTraining m{{21, 21, 21}, 150000, 1, 1024, 3e-3, 3e-5, Loss::Mse};
-    bool jitter = true;     // train on random directions inside the bins (else bin centres)
-    bool masking = true;    // fit the R masking term (else plain eq. 8)
-    int calibrationDegree = 8;  // energy calibration polynomial degree; -1: none
-    int threads = 0;        // 0: all cores; never changes the result
-
-    // Strict reading (unknown keys are errors naming the key); missing keys keep the defaults.
-    static FitConfig fromJson(const nlohmann::json& j, const std::string& source);
-    static FitConfig fromJsonFile(const std::string& path);
-    nlohmann::json toJson() const;
-};
-
-struct LossCurve {
-    std::vector<double> step, loss;  // mean batch loss over each logging interval
-};
 
 struct FitReport {
     double tRmse = 0;            // path-count-weighted RMS error of P(T|wi) over incident bins
@@ -115,33 +95,6 @@ size_t transmissionOutgoingBin(const RdmBins& bins, size_t incidentBin);
 // recalibrated against its ablationTarget(rdm).
 FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& rdm, const FitConfig& config,
                                bool quiet);
-
-// Step 4: the energy calibration of `model` (its calibration is ignored) on
-// incident bins with at least kCalibrationMinPaths paths; `summary` (optional)
-// gets the albedo errors before and after and the range of the scales.
-inline constexpr int64_t kCalibrationMinPaths = 100;
-EnergyCalibration fitEnergyCalibration(const YarnModel& model, const RdmData& rdm, int degree,
-                                       int threads, nlohmann::json* summary = nullptr);
-
-// Step 2: least-squares masking coefficients (yarn_lobes.h) so that
-// m(wi, wo) * eq8 matches rdmR on the coarse error grid (both maps on `bins`).
-std::vector<double> fitMaskingCoefficients(const std::vector<float>& eq8,
-                                           const std::vector<float>& rdmR, const RdmBins& bins);
-
-// Step 4: beta_M, gamma_M, kappa_M minimising the mean over incident
-// directions of sum_o f^2 / pdf_M dw / (sum_o f dw)^2 (f: the channel mean of
-// mMap; 1 when pdf_M is proportional to f), for the model's fiber and tilt.
-// kappaR is copied into the result; `secondMoment` receives the minimum.
-SamplingParams fitSamplingLobe(const YarnModel& model, const std::vector<float>& mMap,
-                               const RdmBins& bins, double kappaR, double* secondMoment = nullptr,
-                               int threads = 0);
-
-// The model's maps on an RDM grid, evaluated at bin centres, in the layout of
-// the gather's arrays: P(T|wi) (TI, PI); R and M (TI, PI, TO, PO, 3). An
-// ablated model's missing parts are zero maps.
-std::vector<double> modelTransmissionMap(const YarnModel& model, const RdmBins& bins);
-std::vector<float> modelReflectionMap(const YarnModel& model, const RdmBins& bins);
-std::vector<float> modelMultipleScatteringMap(const YarnModel& model, const RdmBins& bins);
 
 // The report next to a model: errors.json, loss.png, and RDM-vs-fit slice
 // PNGs for a few incident directions; `reference` (an independent gather of

@@ -7,7 +7,7 @@
 #include "weft/core/math.h"
 #include "weft/core/test_util.h"
 #include "weft/fit/metrics.h"
-#include "weft/fit/yarn_lobes.h"
+#include "weft/yarn/yarn_lobes.h"
 
 namespace weft {
 namespace {
@@ -52,8 +52,8 @@ TEST(Fit, RecoversKnownNetworks) {
     const Mlp<float> teacherT({3, 5, 1}, OutputFunction::Sigmoid, 11);
     const Mlp<float> teacherM({6, 6, 3}, OutputFunction::Exp, 12);
     YarnModel teacher;
-    teacher.tNet = teacherT;
-    teacher.mNet = teacherM;
+    teacher.tNet = teacherT.weights();
+    teacher.mNet = teacherM.weights();
     rdm.pT = modelTransmissionMap(teacher, kBins);
     rdm.rdmM = modelMultipleScatteringMap(teacher, kBins);
     const FitResult fit = fitYarnModel(rdm, smallConfig(), 3, true);
@@ -61,7 +61,7 @@ TEST(Fit, RecoversKnownNetworks) {
     EXPECT_LT(fit.report.mRelL2, 0.03);
     // Far from the starting point: the untrained student is way off.
     YarnModel untrained;
-    untrained.mNet = Mlp<float>({6, 16, 16, 3}, OutputFunction::Exp, 3);
+    untrained.mNet = Mlp<float>({6, 16, 16, 3}, OutputFunction::Exp, 3).weights();
     EXPECT_GT(coarseRelativeL2(modelMultipleScatteringMap(untrained, kBins), rdm.rdmM, kBins), 0.15);
 }
 
@@ -70,7 +70,7 @@ TEST(Fit, RecoversKnownNetworks) {
 TEST(Fit, MaskingTermIsRecovered) {
     YarnModel model;
     model.fiber = fleece().fiber;
-    model.tNet = Mlp<float>({3, 2, 1}, OutputFunction::Sigmoid, 1);
+    model.tNet = Mlp<float>({3, 2, 1}, OutputFunction::Sigmoid, 1).weights();
     model.rLobe.tiltDeg = SurfaceFiberFrame::tiltDegOfTwist(0.24);
     const std::vector<float> eq8 = modelReflectionMap(model, kBins);
     model.rLobe.masking = {0.3, 0.25, -0.1, 0.05};
@@ -112,8 +112,8 @@ TEST(Fit, DeterministicForAnyThreadCount) {
     const RdmBins bins{6, 12, 8, 16};
     RdmData rdm = syntheticRdm(bins);
     YarnModel teacher;
-    teacher.tNet = Mlp<float>({3, 4, 1}, OutputFunction::Sigmoid, 5);
-    teacher.mNet = Mlp<float>({6, 4, 3}, OutputFunction::Exp, 6);
+    teacher.tNet = Mlp<float>({3, 4, 1}, OutputFunction::Sigmoid, 5).weights();
+    teacher.mNet = Mlp<float>({6, 4, 3}, OutputFunction::Exp, 6).weights();
     rdm.pT = modelTransmissionMap(teacher, bins);
     rdm.rdmM = modelMultipleScatteringMap(teacher, bins);
     FitConfig config = smallConfig();
@@ -123,12 +123,12 @@ TEST(Fit, DeterministicForAnyThreadCount) {
     const FitResult one = fitYarnModel(rdm, config, 9, true);
     config.threads = 3;
     const FitResult three = fitYarnModel(rdm, config, 9, true);
-    EXPECT_EQ(one.model.tNet.parameters(), three.model.tNet.parameters());
-    EXPECT_EQ(one.model.mNet.parameters(), three.model.mNet.parameters());
+    EXPECT_TRUE(one.model.tNet == three.model.tNet);
+    EXPECT_TRUE(one.model.mNet == three.model.mNet);
     EXPECT_EQ(one.model.rLobe.masking, three.model.rLobe.masking);
     EXPECT_EQ(one.model.sampling.betaMDeg, three.model.sampling.betaMDeg);
     const FitResult other = fitYarnModel(rdm, config, 10, true);
-    EXPECT_NE(one.model.mNet.parameters(), other.model.mNet.parameters());
+    EXPECT_FALSE(one.model.mNet == other.model.mNet);
 }
 
 TEST(FitConfig, DefaultsRoundTripAndStrictKeys) {

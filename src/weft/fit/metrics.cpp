@@ -69,4 +69,43 @@ double coarseRelativeL2(const std::vector<float>& fit, const std::vector<float>&
     return den > 0 ? std::sqrt(num / den) : (num > 0 ? INFINITY : 0.0);
 }
 
+std::vector<Rgb> incidentEnergies(const std::vector<float>& map, const RdmBins& bins) {
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    if (map.size() != nIn * nOut * 3)
+        throw std::invalid_argument("incidentEnergies: map size does not match bins");
+    std::vector<Rgb> energy(nIn);
+    for (size_t i = 0; i < nIn; ++i)
+        for (size_t o = 0; o < nOut; ++o) {
+            const double omega = bins.outgoingSolidAngle(o);
+            const float* v = &map[(i * nOut + o) * 3];
+            for (int c = 0; c < 3; ++c) energy[i][c] += v[c] * omega;
+        }
+    return energy;
+}
+
+double mapEnergy(const std::vector<float>& map, const RdmBins& bins) {
+    const std::vector<Rgb> energy = incidentEnergies(map, bins);
+    double total = 0, incidentTotal = 0;
+    for (size_t i = 0; i < energy.size(); ++i) {
+        const double w = bins.incidentSolidAngle(i);
+        total += w * energy[i].average();
+        incidentTotal += w;
+    }
+    return total / incidentTotal;
+}
+
+TransmissionError transmissionError(const std::vector<double>& pT, const RdmData& rdm) {
+    double se = 0, seUnweighted = 0, count = 0;
+    for (size_t i = 0; i < pT.size(); ++i) {
+        const double d = pT[i] - rdm.pT[i], w = static_cast<double>(rdm.count[i]);
+        se += w * d * d;
+        seUnweighted += d * d;
+        count += w;
+    }
+    TransmissionError e;
+    e.weighted = count > 0 ? std::sqrt(se / count) : 0.0;
+    e.unweighted = pT.empty() ? 0.0 : std::sqrt(seUnweighted / static_cast<double>(pT.size()));
+    return e;
+}
+
 }  // namespace weft

@@ -14,7 +14,9 @@
 
 #include <vector>
 
+#include "weft/core/rgb.h"
 #include "weft/gather/rdm.h"
+#include "weft/gather/rdm_io.h"
 
 namespace weft {
 
@@ -28,5 +30,20 @@ std::vector<double> poolRdm(const std::vector<float>& map, const RdmBins& fine,
 // The relative L2 error of `fit` against `reference` (both fine maps on `fine`).
 double coarseRelativeL2(const std::vector<float>& fit, const std::vector<float>& reference,
                         const RdmBins& fine, const RdmBins& coarse = kCoarseErrorBins);
+
+// Energy of a (TI, PI, TO, PO, 3) map per incident bin and channel:
+// sum_o v[i, o] dOmega_o (an RDM's directional albedo of that component).
+std::vector<Rgb> incidentEnergies(const std::vector<float>& map, const RdmBins& bins);
+// The energy of a whole map: the channel mean of incidentEnergies averaged
+// over incident bins weighted by their solid angle.
+double mapEnergy(const std::vector<float>& map, const RdmBins& bins);
+
+// Error of a P(T | wi) map (at incident bin centres) against the gather's:
+// RMS over incident bins weighted by the path counts (bins with few paths
+// weigh less, as their variance says), and unweighted.
+struct TransmissionError {
+    double weighted = 0, unweighted = 0;
+};
+TransmissionError transmissionError(const std::vector<double>& pT, const RdmData& rdm);
 
 }  // namespace weft

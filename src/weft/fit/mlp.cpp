@@ -1,5 +1,6 @@
 #include "weft/fit/mlp.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -8,52 +9,24 @@
 
 namespace weft {
 
-std::string toString(OutputFunction f) {
-    switch (f) {
-        case OutputFunction::Identity: return "identity";
-        case OutputFunction::Sigmoid: return "sigmoid";
-        case OutputFunction::Exp: return "exp";
-    }
-    return "identity";
-}
-
-OutputFunction outputFunctionFromString(const std::string& name) {
-    if (name == "identity") return OutputFunction::Identity;
-    if (name == "sigmoid") return OutputFunction::Sigmoid;
-    if (name == "exp") return OutputFunction::Exp;
-    throw InputError("unknown output function \"" + name + "\" (allowed: identity, sigmoid, exp)");
-}
-
-namespace {
-
-std::vector<bool> preluAfterHiddenLayers(size_t widthCount) {
-    std::vector<bool> prelu(widthCount < 2 ? 0 : widthCount - 1, true);
-    if (!prelu.empty()) prelu.back() = false;
-    return prelu;
-}
-
-}  // namespace
-
 template <typename Real>
 Mlp<Real>::Mlp(const std::vector<int>& widths, OutputFunction output, uint64_t seed)
-    : Mlp(widths, preluAfterHiddenLayers(widths.size()), output, seed) {}
+    : Mlp(NetworkWeights::initialised(widths, output, seed)) {}
 
 template <typename Real>
 Mlp<Real>::Mlp(const std::vector<int>& widths, const std::vector<bool>& prelu,
                OutputFunction output, uint64_t seed)
-    : output_(output) {
-    if (widths.size() < 2) throw InputError("a network needs at least an input and an output width");
-    if (prelu.size() + 1 != widths.size())
-        throw std::invalid_argument("Mlp: one PReLU flag per layer expected");
-    for (int w : widths)
-        if (w < 1 || w > 4096)
-            throw InputError("layer width " + std::to_string(w) + " is out of range: allowed [1, 4096]");
+    : Mlp(NetworkWeights::initialised(widths, prelu, output, seed)) {}
+
+template <typename Real>
+Mlp<Real>::Mlp(const NetworkWeights& weights) : output_(weights.output) {
+    if (weights.layers.empty()) throw InputError("a network needs at least one layer");
     size_t offset = 0;
-    for (size_t l = 0; l + 1 < widths.size(); ++l) {
+    for (const NetworkLayer& src : weights.layers) {
         Layer layer;
-        layer.in = widths[l];
-        layer.out = widths[l + 1];
-        layer.prelu = prelu[l];
+        layer.in = src.in;
+        layer.out = src.out;
+        layer.prelu = src.hasPrelu();
         layer.weightOffset = offset;
         offset += static_cast<size_t>(layer.in) * layer.out;
         layer.biasOffset = offset;
@@ -63,14 +36,37 @@ Mlp<Real>::Mlp(const std::vector<int>& widths, const std::vector<bool>& prelu,
         layers_.push_back(layer);
     }
     params_.assign(offset, Real(0));
-    Rng rng(0x4d4c50, seed);
-    for (const Layer& layer : layers_) {
-        const double bound = 1.0 / std::sqrt(static_cast<double>(layer.in));
-        for (size_t k = layer.weightOffset; k < layer.preluOffset; ++k)
-            params_[k] = static_cast<Real>(bound * (2.0 * rng.uniform() - 1.0));
-        if (layer.prelu)
-            for (int k = 0; k < layer.out; ++k) params_[layer.preluOffset + k] = Real(0.25);
+    for (size_t l = 0; l < layers_.size(); ++l) {
+        const Layer& layer = layers_[l];
+        const NetworkLayer& src = weights.layers[l];
+        if (src.weight.size() != static_cast<size_t>(layer.in) * layer.out ||
+            src.bias.size() != static_cast<size_t>(layer.out))
+            throw std::invalid_argument("Mlp: layer sizes do not match their shape");
+        std::copy(src.weight.begin(), src.weight.end(), params_.begin() + layer.weightOffset);
+        std::copy(src.bias.begin(), src.bias.end(), params_.begin() + layer.biasOffset);
+        std::copy(src.prelu.begin(), src.prelu.end(), params_.begin() + layer.preluOffset);
     }
+}
+
+template <typename Real>
+NetworkWeights Mlp<Real>::weights() const {
+    NetworkWeights net;
+    net.output = output_;
+    for (const Layer& layer : layers_) {
+        NetworkLayer dst;
+        dst.in = layer.in;
+        dst.out = layer.out;
+        auto range = [&](size_t offset, size_t count) {
+            std::vector<float> v(count);
+            for (size_t k = 0; k < count; ++k) v[k] = static_cast<float>(params_[offset + k]);
+            return v;
+        };
+        dst.weight = range(layer.weightOffset, static_cast<size_t>(layer.in) * layer.out);
+        dst.bias = range(layer.biasOffset, static_cast<size_t>(layer.out));
+        if (layer.prelu) dst.prelu = range(layer.preluOffset, static_cast<size_t>(layer.out));
+        net.layers.push_back(std::move(dst));
+    }
+    return net;
 }
 
 template <typename Real>
@@ -237,6 +233,17 @@ void Adam<Real>::step(std::vector<Real>& params, const std::vector<Real>& gradie
         v_[k] = beta2_ * v_[k] + (1.0 - beta2_) * g * g;
         params[k] -= static_cast<Real>(learningRate_ * (m_[k] / c1) / (std::sqrt(v_[k] / c2) + epsilon_));
     }
+}
+
+void setInputColumn(Mlp<float>::Matrix& x, Eigen::Index col, const Vec3& w) {
+    x(0, col) = static_cast<float>(w.x), x(1, col) = static_cast<float>(w.y),
+          x(2, col) = static_cast<float>(w.z);
+}
+
+void setInputColumn(Mlp<float>::Matrix& x, Eigen::Index col, const Vec3& wi, const Vec3& wo) {
+    setInputColumn(x, col, wi);
+    x(3, col) = static_cast<float>(wo.x), x(4, col) = static_cast<float>(wo.y),
+          x(5, col) = static_cast<float>(wo.z);
 }
 
 template class Mlp<float>;

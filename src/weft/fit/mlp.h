@@ -9,6 +9,8 @@
 // flat vector (per layer: W row-major, then b, then the PReLU slopes) so that
 // the optimiser and the model file see one array. Deterministic for a seed.
 // Instantiated for float (training, inference) and double (gradient checks).
+// The weights come from and go to yarn/network.h's NetworkWeights, the form
+// that model.json stores and the renderer evaluates.
 #pragma once
 
 #include <Eigen/Dense>
@@ -16,16 +18,15 @@
 #include <string>
 #include <vector>
 
+#include "weft/core/vec.h"
+#include "weft/yarn/network.h"
+
 namespace weft {
 
-enum class OutputFunction { Identity, Sigmoid, Exp };
 enum class Loss {
     Mse,     // mean over the batch of sum_k w_k (y_k - t_k)^2
     LogMse,  // the same on log(1 + y) and log(1 + t): tames the range of RDM values
 };
-
-std::string toString(OutputFunction f);
-OutputFunction outputFunctionFromString(const std::string& name);  // InputError if unknown
 
 template <typename Real>
 class Mlp {
@@ -41,14 +42,15 @@ public:
     };
 
     Mlp() = default;
-    // widths = {inputs, hidden..., outputs}; PReLU after every hidden layer.
-    // Weights and biases U(-1/sqrt(in), 1/sqrt(in)) (PyTorch's Linear
-    // default), PReLU slopes 0.25, from the given seed.
+    // widths = {inputs, hidden..., outputs}; PReLU after every hidden layer;
+    // initialised by NetworkWeights::initialised (PyTorch's Linear default).
     Mlp(const std::vector<int>& widths, OutputFunction output, uint64_t seed);
-    // The same with an explicit PReLU flag per layer (size widths.size() - 1),
-    // e.g. for networks read from a model file.
+    // The same with an explicit PReLU flag per layer (size widths.size() - 1).
     Mlp(const std::vector<int>& widths, const std::vector<bool>& prelu, OutputFunction output,
         uint64_t seed);
+    // A copy of stored weights (a model's network), and back.
+    explicit Mlp(const NetworkWeights& weights);
+    NetworkWeights weights() const;
 
     const std::vector<Layer>& layers() const { return layers_; }
     OutputFunction output() const { return output_; }
@@ -85,6 +87,11 @@ private:
     OutputFunction output_ = OutputFunction::Identity;
     std::vector<Real> params_;
 };
+
+// Column `col` of a float input batch: a direction (T network) or a pair
+// (wi, wo) (M network), in the yarn frame.
+void setInputColumn(Mlp<float>::Matrix& x, Eigen::Index col, const Vec3& w);
+void setInputColumn(Mlp<float>::Matrix& x, Eigen::Index col, const Vec3& wi, const Vec3& wo);
 
 // Adam (Kingma & Ba 2015) with bias correction, over a flat parameter vector.
 template <typename Real>

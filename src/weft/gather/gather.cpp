@@ -87,8 +87,7 @@ GatherResult gatherRdm(const GatherOptions& o) {
                     const double psi = kTwoPi * rng.uniform();
                     const Vec3 n{std::cos(psi), std::sin(psi), 0.0};
                     const Vec3 t{0.0, 0.0, 1.0};
-                    const Vec3 b = cross(t, n);
-                    const Frame entry(t, b, n);
+                    const Frame entry = yarnFrame(t, n);
                     Vec3 org = n * ply.radius;
                     org.z = period * rng.uniform();
                     // wi uniform over the upper hemisphere: cos(theta) uniform.

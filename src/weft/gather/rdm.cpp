@@ -17,11 +17,6 @@ int angleBin(double value, double lo, double hi, int bins) {
 
 }  // namespace
 
-Vec3 sphericalDirection(double theta, double phi) {
-    const double s = std::sin(theta);
-    return {s * std::cos(phi), s * std::sin(phi), std::cos(theta)};
-}
-
 void RdmBins::validate() const {
     const std::pair<const char*, int> counts[] = {
         {"theta_i", thetaI}, {"phi_i", phiI}, {"theta_o", thetaO}, {"phi_o", phiO}};

@@ -43,7 +43,4 @@ struct RdmBins {
     Vec3 outgoingDirectionIn(size_t bin, double u1, double u2) const;
 };
 
-// Local (t, b, n) direction from polar angle theta (from n) and azimuth phi (from t towards b).
-Vec3 sphericalDirection(double theta, double phi);
-
 }  // namespace weft

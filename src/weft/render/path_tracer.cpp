@@ -22,7 +22,7 @@ class ShadingPoint {
     ShadingPoint(const Scene& scene, const TubeHit& hit, const Vec3& wiWorld) {
         if (scene.mode() == RenderMode::Neural) {
             // DESIGN.md 2: local coordinates (w . t, w . b, w . n) with b = t x n.
-            frame_ = Frame(hit.tangent, cross(hit.tangent, hit.normal), hit.normal);
+            frame_ = yarnFrame(hit.tangent, hit.normal);
             wi_ = frame_.toLocal(wiWorld);
             yarn_ = scene.yarnBsdf(hit.material).slice(wi_);
             isYarn_ = true;

@@ -9,7 +9,7 @@
 #include "weft/core/math.h"
 #include "weft/core/progress.h"
 #include "weft/core/rng.h"
-#include "weft/fit/yarn_model.h"
+#include "weft/yarn/yarn_model.h"
 #include "weft/render/curves.h"
 #include "weft/render/yarn_geometry.h"
 

@@ -474,7 +474,6 @@ YarnDesc readYarn(const Reader& r, const json& j, const std::string& path) {
 }
 
 json vecJson(const Vec3& v) { return json::array({v.x, v.y, v.z}); }
-json rgbJson(const Rgb& c) { return json::array({c.r, c.g, c.b}); }
 
 // FNV-1a, 64 bit.
 uint64_t fnv1a(std::string_view bytes) {

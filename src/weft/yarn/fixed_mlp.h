@@ -3,8 +3,8 @@
 // The renderer evaluates the T network (3-7-7-1) and the M network
 // (6-21-21-21-3 by default) once per BSDF query, one direction pair at a
 // time; Mlp<float>::forward (Eigen, whole batches, heap matrices) costs more
-// than the rest of the BSDF there. FixedMlp copies the weights of an
-// Mlp<float> once into one contiguous std::array and evaluates the same
+// than the rest of the BSDF there. FixedMlp copies the weights of a
+// NetworkWeights (network.h) once into one contiguous std::array and evaluates the same
 // function y = out(W_L ... prelu(W_1 x + b_1) ... + b_L) without touching the
 // heap:
 //   - widths are run-time values up to MaxWidth (the architecture is a fit
@@ -27,7 +27,9 @@
 #include <string>
 
 #include "weft/core/error.h"
-#include "weft/fit/mlp.h"
+#include "weft/core/rgb.h"
+#include "weft/core/vec.h"
+#include "weft/yarn/network.h"
 
 namespace weft {
 
@@ -42,8 +44,8 @@ class FixedMlp {
 
     // Copies `net`; InputError starting with `name` ("m_net") when it is wider,
     // deeper or larger than this evaluator supports.
-    FixedMlp(const Mlp<float>& net, const std::string& name) : output_(net.output()) {
-        const auto& layers = net.layers();
+    FixedMlp(const NetworkWeights& net, const std::string& name) : output_(net.output) {
+        const auto& layers = net.layers;
         if (layers.empty() || layers.size() > static_cast<size_t>(kMaxLayers))
             throw InputError(name + ": " + std::to_string(layers.size()) +
                              " layers; the renderer's network evaluator supports 1 to " +
@@ -51,7 +53,7 @@ class FixedMlp {
         int offset = 0;
         layerCount_ = static_cast<int>(layers.size());
         for (int l = 0; l < layerCount_; ++l) {
-            const auto& src = layers[l];
+            const NetworkLayer& src = layers[l];
             if (src.in > MaxWidth || src.out > MaxWidth)
                 throw InputError(name + ": layers[" + std::to_string(l) + "] is " +
                                  std::to_string(src.out) + " x " + std::to_string(src.in) +
@@ -61,24 +63,21 @@ class FixedMlp {
             dst.in = src.in;
             dst.out = src.out;
             dst.outPadded = (src.out + kLanes - 1) / kLanes * kLanes;
-            dst.prelu = src.prelu;
+            dst.prelu = src.hasPrelu();
             dst.offset = offset;
             offset += dst.outPadded * (dst.in + 1 + (dst.prelu ? 1 : 0));
             if (offset > Capacity)
-                throw InputError(name + ": " + std::to_string(net.parameters().size()) +
+                throw InputError(name + ": " + std::to_string(net.parameterCount()) +
                                  " parameters need more than the " + std::to_string(Capacity) +
                                  " (after padding to blocks of " + std::to_string(kLanes) +
                                  ") that the renderer's network evaluator holds");
-            const auto weight = net.weight(l);
-            const auto bias = net.bias(l);
-            const auto slopes = net.preluSlopes(l);
             float* p = params_.data() + dst.offset;
             for (int j = 0; j < dst.in; ++j)
-                for (int o = 0; o < dst.out; ++o) p[j * dst.outPadded + o] = weight(o, j);
+                for (int o = 0; o < dst.out; ++o) p[j * dst.outPadded + o] = src.w(o, j);
             float* b = p + dst.in * dst.outPadded;
-            for (int o = 0; o < dst.out; ++o) b[o] = bias(o);
+            for (int o = 0; o < dst.out; ++o) b[o] = src.bias[o];
             if (dst.prelu)
-                for (int o = 0; o < dst.out; ++o) b[dst.outPadded + o] = slopes(o);
+                for (int o = 0; o < dst.out; ++o) b[dst.outPadded + o] = src.prelu[o];
         }
     }
 
@@ -166,5 +165,27 @@ class FixedMlp {
     OutputFunction output_ = OutputFunction::Identity;
     alignas(32) std::array<float, Capacity> params_{};
 };
+
+// The yarn model's two evaluators (yarn_bsdf.h) and their inputs: float
+// copies of yarn-frame unit vectors, wi for the T network, (wi, wo) for M.
+using TransmissionMlp = FixedMlp<32, 2048>;
+using ScatteringMlp = FixedMlp<64, 8192>;
+
+inline double evalTransmission(const TransmissionMlp& net, const Vec3& wi) {
+    const float x[3] = {static_cast<float>(wi.x), static_cast<float>(wi.y),
+                        static_cast<float>(wi.z)};
+    float y;
+    net.forward(x, &y);
+    return y;
+}
+
+inline Rgb evalScattering(const ScatteringMlp& net, const Vec3& wi, const Vec3& wo) {
+    const float x[6] = {static_cast<float>(wi.x), static_cast<float>(wi.y),
+                        static_cast<float>(wi.z), static_cast<float>(wo.x),
+                        static_cast<float>(wo.y), static_cast<float>(wo.z)};
+    float y[3];
+    net.forward(x, y);
+    return {y[0], y[1], y[2]};
+}
 
 }  // namespace weft

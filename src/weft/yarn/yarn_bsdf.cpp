@@ -8,42 +8,19 @@
 
 #include "weft/core/error.h"
 #include "weft/core/math.h"
-#include "weft/gather/rdm.h"
 #include "weft/core/quadrature.h"
 
 namespace weft {
 
 namespace {
 
-std::string widthsText(const Mlp<float>& net) {
-    std::string text;
-    for (int w : net.widths()) {
-        if (!text.empty()) text += '-';
-        text += std::to_string(w);
-    }
-    return text;
-}
-
-void checkNetwork(const Mlp<float>& net, const std::string& name, int inputs, int outputs,
-                  OutputFunction output, const char* why, const std::string& source) {
-    if (net.layers().empty())
-        throw InputError(source + ": " + name + ": the network has no layers");
-    if (net.inputs() != inputs || net.outputs() != outputs)
-        throw InputError(source + ": " + name + ": expected " + std::to_string(inputs) +
-                         " inputs and " + std::to_string(outputs) + " output" +
-                         (outputs == 1 ? "" : "s") + ", got " + widthsText(net));
-    if (net.output() != output)
-        throw InputError(source + ": " + name + ".output: the yarn BSDF needs \"" +
-                         toString(output) + "\" (" + why + "), got \"" + toString(net.output()) +
-                         "\"");
-}
-
-// The networks' shapes and output functions, checked before any member is built.
+// The model's own checks (yarn_model.h), before any member is built.
 const YarnModel& validated(const YarnModel& model, const std::string& source) {
-    checkNetwork(model.tNet, "t_net", 3, 1, OutputFunction::Sigmoid, "P(T|wi) must lie in [0, 1]",
-                 source);
-    checkNetwork(model.mNet, "m_net", 6, 3, OutputFunction::Exp, "S_M must be non-negative",
-                 source);
+    try {
+        model.validate();
+    } catch (const InputError& e) {
+        throw InputError(source + ": " + e.what());
+    }
     return model;
 }
 
@@ -272,12 +249,7 @@ Rgb YarnBsdf::multipleScatteringScale(const Vec3& wi) const {
 // -------------------------------------------------------------- the BSDF --
 
 double YarnBsdf::transmissionUpper(const Vec3& wi) const {
-    if (!hasTransmission_) return 0.0;
-    const float x[3] = {static_cast<float>(wi.x), static_cast<float>(wi.y),
-                        static_cast<float>(wi.z)};
-    float y;
-    tNet_.forward(x, &y);
-    return y;
+    return hasTransmission_ ? evalTransmission(tNet_, wi) : 0.0;
 }
 
 double YarnBsdf::transmission(const Vec3& wi) const {
@@ -290,14 +262,7 @@ YarnBsdf::Incident YarnBsdf::incident(const Vec3& wi, double pT) const {
     return {pT, s.r * g.r, s.m * g.m};
 }
 
-Rgb YarnBsdf::evalM(const Vec3& wi, const Vec3& wo) const {
-    const float x[6] = {static_cast<float>(wi.x), static_cast<float>(wi.y),
-                        static_cast<float>(wi.z), static_cast<float>(wo.x),
-                        static_cast<float>(wo.y), static_cast<float>(wo.z)};
-    float y[3];
-    mNet_.forward(x, y);
-    return {y[0], y[1], y[2]};
-}
+Rgb YarnBsdf::evalM(const Vec3& wi, const Vec3& wo) const { return evalScattering(mNet_, wi, wo); }
 
 YarnBsdf::LobeProbabilities YarnBsdf::lobeProbabilities(const Vec3& wi) const {
     const double pT = transmission(wi);

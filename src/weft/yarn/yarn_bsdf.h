@@ -6,7 +6,7 @@
 //                                          with the fitted masking m (yarn_lobes.h)
 //   S_M = exp(M network(wi, wo))            6-21-21-21-3 by default, RGB
 // and, when the model has one, S_R and S_M times the fit's energy calibration
-// s_R(wi), s_M(wi) (fit/energy_calibration.h).
+// s_R(wi), s_M(wi) (energy_calibration.h).
 // Directions are unit vectors in the yarn shading frame of the ply hit:
 // t = +x (ply tangent), b = +y, n = +z (outward normal), DESIGN.md 2; the
 // caller converts world directions with Frame(t, b, n). The BSDF contract is
@@ -59,7 +59,7 @@
 // `weft yarn check` reports the raw model's albedo against the RDM, since
 // that is what the fit must get right.
 //
-// Ablated models (the model's "ablation", paper Fig. 5; fit/yarn_model.h):
+// Ablated models (the model's "ablation", paper Fig. 5; yarn/yarn_model.h):
 // naive has P(T) = 0 and S_R = 0 everywhere (eval, pdf, sample,
 // transmission()), so S = S_M; no_r_lobe has S_R = 0, so S = S_T + S_M. For
 // both, the lobe selection uses kappa_R = 0 whatever the file says, so R is
@@ -85,8 +85,8 @@
 
 #include "weft/core/bsdf.h"
 #include "weft/core/rng.h"
-#include "weft/fit/yarn_lobes.h"
-#include "weft/fit/yarn_model.h"
+#include "weft/yarn/yarn_lobes.h"
+#include "weft/yarn/yarn_model.h"
 #include "weft/yarn/fixed_mlp.h"
 
 namespace weft {
@@ -208,8 +208,8 @@ class YarnBsdf {
                            const EnergyCalibration::Scales& calibration) const;
     void buildEnergyGuard();
 
-    FixedMlp<32, 2048> tNet_;
-    FixedMlp<64, 8192> mNet_;
+    TransmissionMlp tNet_;
+    ScatteringMlp mNet_;
     RLobe rLobe_;
     SamplingLobes lobes_;
     YarnAblation ablation_;

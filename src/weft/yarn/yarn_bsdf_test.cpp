@@ -13,8 +13,6 @@
 #include "weft/core/file.h"
 #include "weft/core/math.h"
 #include "weft/core/test_util.h"
-#include "weft/fit/fit.h"
-#include "weft/gather/rdm.h"
 #include "weft/yarn/yarn_integrals.h"
 
 namespace weft {
@@ -292,29 +290,6 @@ TEST(YarnBsdf, EnergyCalibrationScalesTheLobes) {
     }
 }
 
-TEST(YarnBsdf, ComponentsMatchTheFitsModelMaps) {
-    const RdmBins bins{3, 5, 6, 8};
-    for (const char* name : kModels)
-        for (const YarnModel& model : {testModel(name), withCalibration(testModel(name))}) {
-            const YarnBsdf bsdf(model, name, YarnBsdfOptions{false});
-            const std::vector<double> pT = modelTransmissionMap(model, bins);
-            const std::vector<float> r = modelReflectionMap(model, bins);
-            const std::vector<float> m = modelMultipleScatteringMap(model, bins);
-            for (size_t i = 0; i < bins.incidentCount(); ++i) {
-                const Vec3 wi = bins.incidentCentre(i);
-                EXPECT_NEAR(bsdf.transmission(wi), pT[i], 1e-6);
-                for (size_t o = 0; o < bins.outgoingCount(); ++o) {
-                    const YarnBsdf::Components c = bsdf.components(wi, bins.outgoingCentre(o));
-                    for (int k = 0; k < 3; ++k) {
-                        const size_t index = (i * bins.outgoingCount() + o) * 3 + k;
-                        EXPECT_NEAR(c.m[k], m[index], 1e-5 * m[index]);
-                        EXPECT_NEAR(c.r[k], r[index], 1e-5 * r[index] + 1e-7);
-                    }
-                }
-            }
-        }
-}
-
 // --------------------------------------------------------- integrals / energy --
 
 TEST(YarnIntegrals, QuadratureConvergedAndPdfIntegratesToOneMinusPT) {
@@ -470,18 +445,18 @@ TEST(YarnBsdf, ShippedModelsArePresetsAndConserveEnergy) {
 TEST(YarnBsdf, RejectsModelsTheRendererCannotUse) {
     const YarnModel good = testModel("fleece-small");
     YarnModel m = good;
-    m.tNet = Mlp<float>({3, 7, 1}, OutputFunction::Exp, 1);
+    m.tNet = NetworkWeights::initialised({3, 7, 1}, OutputFunction::Exp, 1);
     testing::expectInputError([&] { YarnBsdf(m, "a.json"); },
                               {"a.json: t_net.output", "\"sigmoid\"", "got \"exp\""});
     m = good;
-    m.mNet = Mlp<float>({6, 21, 3}, OutputFunction::Sigmoid, 1);
+    m.mNet = NetworkWeights::initialised({6, 21, 3}, OutputFunction::Sigmoid, 1);
     testing::expectInputError([&] { YarnBsdf(m, "a.json"); }, {"a.json: m_net.output", "\"exp\""});
     m = good;
-    m.tNet = Mlp<float>({4, 7, 1}, OutputFunction::Sigmoid, 1);
+    m.tNet = NetworkWeights::initialised({4, 7, 1}, OutputFunction::Sigmoid, 1);
     testing::expectInputError([&] { YarnBsdf(m, "a.json"); },
                               {"a.json: t_net", "3 inputs and 1 output", "got 4-7-1"});
     m = good;
-    m.mNet = Mlp<float>({6, 100, 3}, OutputFunction::Exp, 1);
+    m.mNet = NetworkWeights::initialised({6, 100, 3}, OutputFunction::Exp, 1);
     testing::expectInputError([&] { YarnBsdf(m, "a.json"); }, {"a.json: m_net", "widths up to 64"});
     m = good;
     m.sampling.kappaM = 1.5;

@@ -13,7 +13,8 @@ SphereRule yarnSphereRule(const YarnBsdf& bsdf, const Vec3& wi, int refinement) 
                                   radians(bsdf.rLobe().fiber().params().betaRDeg), wi, refinement);
 }
 
-DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, int refinement) {
+DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, int refinement,
+                                         bool secondMoments) {
     const SphereRule rule = yarnSphereRule(bsdf, wi, refinement);
     DirectionalIntegrals out;
     out.pT = bsdf.transmission(wi);
@@ -25,6 +26,7 @@ DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, i
         const YarnBsdf::Components c = bsdf.components(wi, wo);
         out.r += c.r * w;
         out.m += c.m * w;
+        if (!secondMoments) continue;
         const double f = (c.r + c.m).average();
         if (f == 0) continue;
         integral += f * w;

@@ -1,16 +1,16 @@
 // weft/yarn/yarn_integrals.h — integrals of the yarn BSDF over outgoing directions.
 //
 // For one incident direction wi, by the product Gauss-Legendre rule of
-// fit/sphere_rule.h (about 12,000 nodes; `refinement` divides every panel
-// width: the tests check that 1 agrees with 3). Used by `weft yarn check` and
-// the energy tests.
+// yarn/sphere_rule.h (about 12,000 nodes; `refinement` divides every panel
+// width: the tests check that 1 agrees with 3). Used by `weft yarn check`, the
+// fit's energy calibration and the energy tests.
 #pragma once
 
 #include <vector>
 
 #include "weft/core/rgb.h"
 #include "weft/core/vec.h"
-#include "weft/fit/sphere_rule.h"
+#include "weft/yarn/sphere_rule.h"
 #include "weft/yarn/yarn_bsdf.h"
 
 namespace weft {
@@ -30,7 +30,10 @@ struct DirectionalIntegrals {
                                      // hemisphere, each picked with probability 1/2
 };
 
-DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, int refinement = 1);
+// `secondMoments` false leaves the variance proxies at 0 (and skips the pdf):
+// the energies alone, as the fit's energy calibration needs them.
+DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, int refinement = 1,
+                                         bool secondMoments = true);
 
 // The nodes of that rule (yarn-frame directions) and their weights, for tests.
 SphereRule yarnSphereRule(const YarnBsdf& bsdf, const Vec3& wi, int refinement = 1);

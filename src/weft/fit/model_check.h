@@ -1,4 +1,4 @@
-// weft/yarn/yarn_check.h — checks a fitted yarn BSDF against a gathered RDM (weft yarn check).
+// weft/fit/model_check.h — checks a fitted yarn BSDF against a gathered RDM (weft yarn check).
 //
 // For every incident bin of the RDM, at the bin's centre direction wi:
 //   model albedo  P(T|wi) + integral of (R + M)(wi, wo) dwo   (yarn_integrals.h),
@@ -30,7 +30,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "weft/fit/yarn_model.h"
+#include "weft/yarn/yarn_model.h"
 #include "weft/gather/rdm_io.h"
 
 namespace weft {

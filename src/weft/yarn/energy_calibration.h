@@ -1,4 +1,4 @@
-// weft/fit/energy_calibration.h — per-direction energy calibration of the R
+// weft/yarn/energy_calibration.h — per-direction energy calibration of the R
 // lobe and the M network (a weft addition to the paper's model).
 //
 // Why: the analytic R lobe (eq. 8 with masking) has the right shape but not
@@ -47,11 +47,5 @@ struct EnergyCalibration {
     // Scales at an upper-hemisphere wi (all 1 when empty()).
     Scales scales(const Vec3& wi) const;
 };
-
-// Weighted least squares for one channel: coefficients minimising
-// sum_i weight_i (sum_k c_k basis_k(wi_i) - logRatio_i)^2 (column-pivoted QR).
-std::vector<double> fitLogPolynomial(const std::vector<Vec3>& wi,
-                                     const std::vector<double>& logRatio,
-                                     const std::vector<double>& weight, int degree);
 
 }  // namespace weft

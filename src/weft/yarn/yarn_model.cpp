@@ -1,4 +1,4 @@
-#include "weft/fit/yarn_model.h"
+#include "weft/yarn/yarn_model.h"
 
 #include <algorithm>
 #include <array>
@@ -13,7 +13,7 @@
 #include "weft/core/file.h"
 #include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
-#include "weft/fit/yarn_lobes.h"
+#include "weft/yarn/yarn_lobes.h"
 
 namespace weft {
 
@@ -87,15 +87,6 @@ class Reader {
     const std::string& source_;
 };
 
-// The rows of a network: a layer's weight, bias and optional PReLU slopes as read.
-struct LayerData {
-    int in = 0, out = 0;
-    std::vector<float> weight;  // row-major, out x in
-    std::vector<float> bias;
-    std::vector<float> prelu;  // empty: no PReLU
-    bool hasPrelu = false;
-};
-
 std::vector<float> readVector(const Reader& r, const json& v, const std::string& path, int expected,
                               const std::string& why) {
     if (!v.is_array() || v.size() != static_cast<size_t>(expected))
@@ -108,8 +99,8 @@ std::vector<float> readVector(const Reader& r, const json& v, const std::string&
 
 // Reads a network {"layers": [...], "output": name} of `inputs` inputs and
 // `outputs` outputs; `name` is its key ("t_net").
-Mlp<float> readNetwork(const Reader& r, const json& j, const std::string& name, int inputs,
-                       int outputs) {
+NetworkWeights readNetwork(const Reader& r, const json& j, const std::string& name, int inputs,
+                           int outputs) {
     r.expectKeys(j, name, {"layers", "output"});
     const std::string layersPath = jsonChildPath(name, "layers");
     const json& layers = j.at("layers");
@@ -119,7 +110,8 @@ Mlp<float> readNetwork(const Reader& r, const json& j, const std::string& name, 
         r.fail(layersPath, "a network has at most " + std::to_string(kMaxNetworkLayers) +
                                " layers, got " + std::to_string(layers.size()));
 
-    std::vector<LayerData> data;
+    NetworkWeights net;
+    std::vector<NetworkLayer>& data = net.layers;
     for (size_t l = 0; l < layers.size(); ++l) {
         const std::string path = jsonIndexPath(layersPath, l);
         const json& layer = layers[l];
@@ -148,7 +140,7 @@ Mlp<float> readNetwork(const Reader& r, const json& j, const std::string& name, 
             if (!w[row].is_array() || w[row].size() != static_cast<size_t>(in))
                 r.fail(weightPath, shape + " (" + inWhy + "), got row " + std::to_string(row) +
                                        " = " + describeJson(w[row]));
-        LayerData d;
+        NetworkLayer d;
         d.in = in;
         d.out = out;
         d.weight.reserve(static_cast<size_t>(in) * out);
@@ -159,8 +151,7 @@ Mlp<float> readNetwork(const Reader& r, const json& j, const std::string& name, 
         const std::string outWhy = "one per row of weight";
         d.bias = readVector(r, layer.at("bias"), jsonChildPath(path, "bias"), out, outWhy);
         const json& prelu = layer.at("prelu");
-        d.hasPrelu = !prelu.is_null();
-        if (d.hasPrelu)
+        if (!prelu.is_null())
             d.prelu = readVector(r, prelu, jsonChildPath(path, "prelu"), out, outWhy + ", or null");
         data.push_back(std::move(d));
     }
@@ -170,62 +161,35 @@ Mlp<float> readNetwork(const Reader& r, const json& j, const std::string& name, 
     if (!outputName.is_string())
         r.fail(outputPath,
                "expected a string (sigmoid, exp or identity), got " + describeJson(outputName));
-    OutputFunction output = OutputFunction::Identity;
     try {
-        output = outputFunctionFromString(outputName.get<std::string>());
+        net.output = outputFunctionFromString(outputName.get<std::string>());
     } catch (const InputError& e) {
         r.fail(outputPath, e.what());
-    }
-
-    std::vector<int> widths = {inputs};
-    std::vector<bool> preluFlags;
-    for (const LayerData& d : data) {
-        widths.push_back(d.out);
-        preluFlags.push_back(d.hasPrelu);
-    }
-    Mlp<float> net(widths, preluFlags, output, 0);
-    for (size_t l = 0; l < data.size(); ++l) {
-        const int li = static_cast<int>(l);
-        const LayerData& d = data[l];
-        auto weight = net.weight(li);
-        for (int row = 0; row < d.out; ++row)
-            for (int col = 0; col < d.in; ++col)
-                weight(row, col) = d.weight[static_cast<size_t>(row) * d.in + col];
-        auto bias = net.bias(li);
-        for (int k = 0; k < d.out; ++k) bias(k) = d.bias[k];
-        auto slopes = net.preluSlopes(li);
-        for (int k = 0; k < static_cast<int>(d.prelu.size()); ++k) slopes(k) = d.prelu[k];
     }
     return net;
 }
 
-json networkToJson(const Mlp<float>& net) {
+json networkToJson(const NetworkWeights& net) {
+    // Each float written as the double of the same value: the shortest
+    // decimal form of that double parses back to it, and it to the float.
+    auto numbers = [](const float* begin, size_t count) {
+        json values = json::array();
+        for (size_t k = 0; k < count; ++k) values.push_back(static_cast<double>(begin[k]));
+        return values;
+    };
     json layers = json::array();
-    for (size_t l = 0; l < net.layers().size(); ++l) {
-        const int li = static_cast<int>(l);
-        const auto weight = net.weight(li);
-        const auto bias = net.bias(li);
-        const auto slopes = net.preluSlopes(li);
-        // Each float written as the double of the same value: the shortest
-        // decimal form of that double parses back to it, and it to the float.
+    for (const NetworkLayer& layer : net.layers) {
         json rows = json::array();
-        for (Eigen::Index row = 0; row < weight.rows(); ++row) {
-            json values = json::array();
-            for (Eigen::Index col = 0; col < weight.cols(); ++col)
-                values.push_back(static_cast<double>(weight(row, col)));
-            rows.push_back(std::move(values));
-        }
-        json b = json::array();
-        for (Eigen::Index k = 0; k < bias.size(); ++k) b.push_back(static_cast<double>(bias(k)));
-        json prelu = nullptr;
-        if (net.layers()[l].prelu) {
-            prelu = json::array();
-            for (Eigen::Index k = 0; k < slopes.size(); ++k)
-                prelu.push_back(static_cast<double>(slopes(k)));
-        }
-        layers.push_back({{"weight", std::move(rows)}, {"bias", std::move(b)}, {"prelu", prelu}});
+        for (int row = 0; row < layer.out; ++row)
+            rows.push_back(numbers(layer.weight.data() + static_cast<size_t>(row) * layer.in,
+                                   static_cast<size_t>(layer.in)));
+        layers.push_back({{"weight", std::move(rows)},
+                          {"bias", numbers(layer.bias.data(), layer.bias.size())},
+                          {"prelu", layer.hasPrelu()
+                                        ? numbers(layer.prelu.data(), layer.prelu.size())
+                                        : json(nullptr)}});
     }
-    return {{"layers", std::move(layers)}, {"output", toString(net.output())}};
+    return {{"layers", std::move(layers)}, {"output", toString(net.output)}};
 }
 
 PlyParams readPly(const Reader& r, const json& j) {
@@ -396,6 +360,40 @@ YarnAblation readAblation(const Reader& r, const json& j) {
 }
 
 }  // namespace
+
+namespace {
+
+void checkRange(double v, bool ok, const std::string& key, const char* range) {
+    if (!ok || !std::isfinite(v))
+        throw InputError(key + " = " + formatNumber(v) + " is out of range: allowed " + range);
+}
+
+}  // namespace
+
+void RLobeParams::validate() const {
+    checkRange(tiltDeg, tiltDeg >= 0 && tiltDeg < 90, "r_lobe.tilt_deg", "[0, 90) degrees");
+    if (!masking.empty() && masking.size() != kMaskingCoefficients)
+        throw InputError("r_lobe.masking: expected " + std::to_string(kMaskingCoefficients) +
+                         " coefficients, got " + std::to_string(masking.size()));
+    for (size_t k = 0; k < masking.size(); ++k)
+        checkRange(masking[k], true, "r_lobe.masking.coefficients[" + std::to_string(k) + "]",
+                   "finite numbers");
+}
+
+void SamplingParams::validate() const {
+    checkRange(kappaR, kappaR >= 0 && kappaR <= 1, "sampling.kappa_r", "[0, 1]");
+    checkRange(betaMDeg, betaMDeg > 0 && betaMDeg <= 90, "sampling.beta_m_deg", "(0, 90] degrees");
+    checkRange(gammaMDeg, gammaMDeg > 0 && gammaMDeg <= 180, "sampling.gamma_m_deg",
+               "(0, 180] degrees");
+    checkRange(kappaM, kappaM >= 0 && kappaM <= 1, "sampling.kappa_m", "[0, 1]");
+}
+
+void YarnModel::validate() const {
+    tNet.validate("t_net", 3, 1, OutputFunction::Sigmoid, "P(T|wi) must lie in [0, 1]");
+    mNet.validate("m_net", 6, 3, OutputFunction::Exp, "S_M must be non-negative");
+    rLobe.validate();
+    sampling.validate();
+}
 
 const char* yarnAblationName(YarnAblation ablation) {
     switch (ablation) {

@@ -1,4 +1,4 @@
-#include "weft/fit/yarn_model.h"
+#include "weft/yarn/yarn_model.h"
 
 #include <gtest/gtest.h>
 
@@ -29,14 +29,13 @@ YarnModel sampleModel() {
     YarnModel m;
     m.fiber = findMaterialPreset("fleece").fiber;
     m.ply = {300, 0.3, 0.24};
-    m.tNet = Mlp<float>({3, 7, 7, 1}, OutputFunction::Sigmoid, 11);
-    m.mNet = Mlp<float>({6, 21, 21, 21, 3}, OutputFunction::Exp, 12);
+    m.tNet = NetworkWeights::initialised({3, 7, 7, 1}, OutputFunction::Sigmoid, 11);
+    m.mNet = NetworkWeights::initialised({6, 21, 21, 21, 3}, OutputFunction::Exp, 12);
     Rng rng(3, 4);
-    for (Mlp<float>* net : {&m.tNet, &m.mNet})
-        for (size_t l = 0; l + 1 < net->layers().size(); ++l)
-            for (Eigen::Index k = 0; k < net->preluSlopes(static_cast<int>(l)).size(); ++k)
-                net->preluSlopes(static_cast<int>(l))(k) = static_cast<float>(rng.uniform() - 0.2);
-    auto& p = m.mNet.parameters();
+    for (NetworkWeights* net : {&m.tNet, &m.mNet})
+        for (NetworkLayer& layer : net->layers)
+            for (float& slope : layer.prelu) slope = static_cast<float>(rng.uniform() - 0.2);
+    auto& p = m.mNet.layers[0].weight;
     p[0] = -0.0f;
     p[1] = std::numeric_limits<float>::denorm_min();
     p[2] = std::numeric_limits<float>::max();
@@ -60,32 +59,23 @@ YarnModel sampleModel() {
     return m;
 }
 
-Mlp<float>::Matrix randomDirections(int rows, int cols, Rng& rng) {
-    Mlp<float>::Matrix x(rows, cols);
-    for (int c = 0; c < cols; ++c)
-        for (int r = 0; r < rows; ++r) x(r, c) = static_cast<float>(2.0 * rng.uniform() - 1.0);
-    return x;
-}
-
-void expectSameNetwork(const Mlp<float>& a, const Mlp<float>& b, int inputs) {
+// Bit for bit: the same shapes, PReLU flags, output function and parameters.
+void expectSameNetwork(const NetworkWeights& a, const NetworkWeights& b) {
     ASSERT_EQ(a.widths(), b.widths());
-    ASSERT_EQ(a.output(), b.output());
-    ASSERT_EQ(a.parameters().size(), b.parameters().size());
-    for (size_t l = 0; l < a.layers().size(); ++l) {
-        EXPECT_EQ(a.layers()[l].prelu, b.layers()[l].prelu) << "layer " << l;
-        EXPECT_EQ(a.layers()[l].weightOffset, b.layers()[l].weightOffset) << "layer " << l;
+    ASSERT_EQ(a.output, b.output);
+    for (size_t l = 0; l < a.layers.size(); ++l) {
+        const NetworkLayer &la = a.layers[l], &lb = b.layers[l];
+        EXPECT_EQ(la.hasPrelu(), lb.hasPrelu()) << "layer " << l;
+        for (const auto& [va, vb] : {std::pair{&la.weight, &lb.weight},
+                                     std::pair{&la.bias, &lb.bias},
+                                     std::pair{&la.prelu, &lb.prelu}}) {
+            ASSERT_EQ(va->size(), vb->size()) << "layer " << l;
+            for (size_t k = 0; k < va->size(); ++k)
+                ASSERT_EQ(std::bit_cast<uint32_t>((*va)[k]), std::bit_cast<uint32_t>((*vb)[k]))
+                    << "layer " << l << " parameter " << k << ": " << (*va)[k] << " vs "
+                    << (*vb)[k];
+        }
     }
-    for (size_t k = 0; k < a.parameters().size(); ++k)
-        ASSERT_EQ(std::bit_cast<uint32_t>(a.parameters()[k]),
-                  std::bit_cast<uint32_t>(b.parameters()[k]))
-            << "parameter " << k << ": " << a.parameters()[k] << " vs " << b.parameters()[k];
-    Rng rng(5, static_cast<uint64_t>(inputs));
-    const Mlp<float>::Matrix x = randomDirections(inputs, 257, rng);
-    const Mlp<float>::Matrix ya = a.forward(x), yb = b.forward(x);
-    ASSERT_EQ(ya.rows(), yb.rows());
-    for (Eigen::Index c = 0; c < ya.cols(); ++c)
-        for (Eigen::Index r = 0; r < ya.rows(); ++r)
-            ASSERT_EQ(std::bit_cast<uint32_t>(ya(r, c)), std::bit_cast<uint32_t>(yb(r, c)));
 }
 
 void expectSameModel(const YarnModel& a, const YarnModel& b) {
@@ -93,8 +83,8 @@ void expectSameModel(const YarnModel& a, const YarnModel& b) {
     EXPECT_EQ(a.ply.fibers, b.ply.fibers);
     EXPECT_EQ(a.ply.density, b.ply.density);
     EXPECT_EQ(a.ply.twist, b.ply.twist);
-    expectSameNetwork(a.tNet, b.tNet, 3);
-    expectSameNetwork(a.mNet, b.mNet, 6);
+    expectSameNetwork(a.tNet, b.tNet);
+    expectSameNetwork(a.mNet, b.mNet);
     EXPECT_EQ(a.rLobe.tiltDeg, b.rLobe.tiltDeg);
     EXPECT_EQ(a.rLobe.masking, b.rLobe.masking);
     EXPECT_EQ(a.sampling.kappaR, b.sampling.kappaR);
@@ -294,7 +284,7 @@ TEST(YarnModel, NonFiniteWeight) {
 
 TEST_F(YarnModelFile, SaveRefusesNonFiniteWeight) {
     YarnModel model = sampleModel();
-    model.tNet.parameters()[4] = std::numeric_limits<float>::quiet_NaN();
+    model.tNet.layers[0].weight[4] = std::numeric_limits<float>::quiet_NaN();
     expectInputError([&] { saveYarnModel(model, path("model.json")); },
                      {path("model.json"), "t_net.layers[0].weight[1][1]", "finite"});
     EXPECT_FALSE(std::filesystem::exists(path("model.json")));
@@ -382,7 +372,7 @@ TEST(YarnModel, OutputFunction) {
     // A valid name is kept.
     j = yarnModelToJson(sampleModel());
     j["m_net"]["output"] = "identity";
-    EXPECT_EQ(yarnModelFromJson(j, "model.json").mNet.output(), OutputFunction::Identity);
+    EXPECT_EQ(yarnModelFromJson(j, "model.json").mNet.output, OutputFunction::Identity);
 }
 
 TEST(YarnModel, SizeLimits) {

@@ -1,4 +1,4 @@
-// weft/fit/yarn_lobes.h — the analytic parts of the yarn model: the R lobe
+// weft/yarn/yarn_lobes.h — the analytic parts of the yarn model: the R lobe
 // (paper eq. 8) and the sampling densities (paper eq. 9-10).
 //
 // Directions are local to the yarn frame (t, b, n) = (+x, +y, +z), as in the
@@ -17,7 +17,7 @@
 #include "weft/core/vec.h"
 #include "weft/fiber/fiber_bcsdf.h"
 #include "weft/fiber/von_mises.h"
-#include "weft/fit/yarn_model.h"
+#include "weft/yarn/yarn_model.h"
 
 namespace weft {
 

@@ -1,4 +1,4 @@
-#include "weft/fit/yarn_lobes.h"
+#include "weft/yarn/yarn_lobes.h"
 
 #include <algorithm>
 #include <cmath>
@@ -18,15 +18,20 @@ std::array<double, kMaskingCoefficients> maskingBasis(double muI, double muO) {
     return {1.0, muI + muO, muI * muO, muI * muI + muO * muO};
 }
 
-RLobe::RLobe(const FiberParams& fiber, const RLobeParams& params)
-    : params_(params), frame_(SurfaceFiberFrame::fromTiltDeg(params.tiltDeg)), fiber_(fiber) {
-    if (!(params.tiltDeg >= 0 && params.tiltDeg < 90))
-        throw InputError("r_lobe.tilt_deg = " + std::to_string(params.tiltDeg) +
-                         " is out of range: allowed [0, 90)");
-    if (!params.masking.empty() && params.masking.size() != kMaskingCoefficients)
-        throw InputError("r_lobe.masking: expected " + std::to_string(kMaskingCoefficients) +
-                         " coefficients");
+namespace {
+
+template <typename Params>
+const Params& validated(const Params& p) {
+    p.validate();
+    return p;
 }
+
+}  // namespace
+
+RLobe::RLobe(const FiberParams& fiber, const RLobeParams& params)
+    : params_(validated(params)),
+      frame_(SurfaceFiberFrame::fromTiltDeg(params.tiltDeg)),
+      fiber_(fiber) {}
 
 double RLobe::masking(const Vec3& wi, const Vec3& wo) const {
     if (params_.masking.empty()) return 1.0;
@@ -83,27 +88,6 @@ double TruncatedGaussian::sample(double mu, double u) const {
     const double theta = mu + beta_ * std::sqrt(2.0) * erfInv(b.lo + u * (b.hi - b.lo));
     return std::clamp(theta, -kPi / 2, kPi / 2);
 }
-
-namespace {
-
-void validateSampling(const SamplingParams& p) {
-    auto check = [](double v, bool ok, const char* name, const char* range) {
-        if (!ok || !std::isfinite(v))
-            throw InputError(std::string("sampling.") + name + " = " + std::to_string(v) +
-                             " is out of range: allowed " + range);
-    };
-    check(p.kappaR, p.kappaR >= 0 && p.kappaR <= 1, "kappa_r", "[0, 1]");
-    check(p.betaMDeg, p.betaMDeg > 0 && p.betaMDeg <= 90, "beta_m_deg", "(0, 90]");
-    check(p.gammaMDeg, p.gammaMDeg > 0 && p.gammaMDeg <= 180, "gamma_m_deg", "(0, 180]");
-    check(p.kappaM, p.kappaM >= 0 && p.kappaM <= 1, "kappa_m", "[0, 1]");
-}
-
-const SamplingParams& validated(const SamplingParams& p) {
-    validateSampling(p);
-    return p;
-}
-
-}  // namespace
 
 SamplingLobes::SamplingLobes(const FiberParams& fiber, double tiltDeg, const SamplingParams& params)
     : params_(validated(params)),

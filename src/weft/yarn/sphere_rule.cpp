@@ -1,4 +1,4 @@
-#include "weft/fit/sphere_rule.h"
+#include "weft/yarn/sphere_rule.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// weft/fit/sphere_rule.h — a quadrature rule over the sphere of outgoing
+// weft/yarn/sphere_rule.h — a quadrature rule over the sphere of outgoing
 // directions for the yarn BSDF's lobes, in the surface fiber frame.
 //
 // Product Gauss-Legendre rule in the surface fiber frame (longitudinal angle
@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "weft/core/vec.h"
-#include "weft/fit/yarn_lobes.h"
+#include "weft/yarn/yarn_lobes.h"
 
 namespace weft {
 

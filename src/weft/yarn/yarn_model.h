@@ -1,4 +1,4 @@
-// weft/fit/yarn_model.h — the fitted neural yarn model and its model.json file.
+// weft/yarn/yarn_model.h — the fitted neural yarn model and its model.json file.
 //
 // One self-describing file per ply material (DESIGN.md 6, issue 5), format
 // "weft-yarn-model" version 1, documented key by key in docs/model-format.md:
@@ -24,8 +24,8 @@
 #include <vector>
 
 #include "weft/fiber/fiber_params.h"
-#include "weft/fit/energy_calibration.h"
-#include "weft/fit/mlp.h"
+#include "weft/yarn/energy_calibration.h"
+#include "weft/yarn/network.h"
 #include "weft/ply/ply.h"
 
 namespace weft {
@@ -40,6 +40,9 @@ inline constexpr int kYarnModelVersion = 1;
 struct RLobeParams {
     double tiltDeg = 0;           // in [0, 90)
     std::vector<double> masking;  // empty: plain eq. 8 (JSON null); else kMaskingCoefficients numbers
+
+    // InputError naming the model.json key ("r_lobe.tilt_deg") and its range.
+    void validate() const;
 };
 
 // Lobe selection and the M sampling lobe (paper eq. 9-11, DESIGN.md 7).
@@ -48,6 +51,9 @@ struct SamplingParams {
     double betaMDeg = 20;  // longitudinal width of the M lobe, degrees in (0, 90]
     double gammaMDeg = 40; // azimuthal width of the M lobe (von Mises kappa = 1/gamma^2), degrees in (0, 180]
     double kappaM = 0.5;   // weight of the cone lobe against the uniform sphere, in [0, 1]
+
+    // InputError naming the model.json key ("sampling.kappa_r") and its range.
+    void validate() const;
 };
 
 // Which model of paper Fig. 5 a file holds (docs/fit.md, "Ablations").
@@ -69,13 +75,20 @@ YarnAblation parseYarnAblation(const std::string& name, const std::string& what)
 struct YarnModel {
     FiberParams fiber;
     PlyParams ply;
-    Mlp<float> tNet;  // 3 inputs, 1 output
-    Mlp<float> mNet;  // 6 inputs, 3 outputs
+    NetworkWeights tNet;  // 3 inputs, 1 output
+    NetworkWeights mNet;  // 6 inputs, 3 outputs
     RLobeParams rLobe;
     SamplingParams sampling;
     EnergyCalibration calibration;  // empty: none
     nlohmann::json fit = nlohmann::json::object();  // errors and provenance, written as is
     YarnAblation ablation = YarnAblation::None;
+
+    // What the renderer needs beyond the file's syntax (InputError naming the
+    // key): the networks' shapes (t_net 3 -> 1, m_net 6 -> 3) and output
+    // functions (sigmoid, so that P(T) is a probability; exp, so that S_M >= 0),
+    // and the R lobe and sampling parameters' ranges. The reader and YarnBsdf
+    // both call it.
+    void validate() const;
 
     // Whether S_T (the T network) and S_R (the analytic lobe) are part of the BSDF.
     bool hasTransmissionLobe() const { return ablation != YarnAblation::Naive; }

@@ -1,5 +1,3 @@
-#include "weft/yarn/fixed_mlp.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,7 +8,9 @@
 
 #include "weft/core/rng.h"
 #include "weft/core/test_util.h"
-#include "weft/fit/yarn_model.h"
+#include "weft/fit/mlp.h"
+#include "weft/yarn/fixed_mlp.h"
+#include "weft/yarn/yarn_model.h"
 
 namespace weft {
 namespace {
@@ -65,7 +65,7 @@ TEST(FixedMlp, MatchesMlpForward) {
         {{6, 1, 9, 3}, OutputFunction::Identity}, {{6, 3}, OutputFunction::Exp}};
     for (size_t k = 0; k < cases.size(); ++k) {
         const Mlp<float> net = randomNetwork(cases[k].widths, cases[k].output, 10 + k);
-        const FixedMlp<64, 8192> fixed(net, "net");
+        const FixedMlp<64, 8192> fixed(net.weights(), "net");
         EXPECT_EQ(fixed.inputs(), cases[k].widths.front());
         EXPECT_EQ(fixed.outputs(), cases[k].widths.back());
         const double worst = largestRelativeDifference(net, fixed, 2000);
@@ -78,11 +78,13 @@ TEST(FixedMlp, MatchesMlpForwardOnCommittedModels) {
     for (const char* name : {"fleece-small", "gabardine-small"}) {
         const YarnModel model =
             loadYarnModel(std::string(WEFT_SOURCE_DIR) + "/tests/data/" + name + ".json");
-        EXPECT_LE(largestRelativeDifference(model.tNet, FixedMlp<32, 2048>(model.tNet, "t"), 2000),
+        EXPECT_LE(largestRelativeDifference(Mlp<float>(model.tNet),
+                                            TransmissionMlp(model.tNet, "t"), 2000),
                   1e-5)
             << name;
-        EXPECT_LE(largestRelativeDifference(model.mNet, FixedMlp<64, 8192>(model.mNet, "m"), 2000),
-                  1e-5)
+        EXPECT_LE(
+            largestRelativeDifference(Mlp<float>(model.mNet), ScatteringMlp(model.mNet, "m"), 2000),
+            1e-5)
             << name;
     }
 }
@@ -91,7 +93,7 @@ TEST(FixedMlp, ExpOutputNeverOverflows) {
     Mlp<float> net({1, 1}, {false}, OutputFunction::Exp, 1);
     net.weight(0)(0, 0) = 1e30f;
     net.bias(0)(0) = 0;
-    const FixedMlp<8, 64> fixed(net, "net");
+    const FixedMlp<8, 64> fixed(net.weights(), "net");
     const float x = 1;
     float y = 0;
     fixed.forward(&x, &y);
@@ -102,19 +104,21 @@ TEST(FixedMlp, ExpOutputNeverOverflows) {
 TEST(FixedMlp, RejectsNetworksThatDoNotFit) {
     testing::expectInputError(
         [] {
-            FixedMlp<32, 4096>(Mlp<float>({6, 40, 3}, OutputFunction::Exp, 1), "model.json: m_net");
+            FixedMlp<32, 4096>(NetworkWeights::initialised({6, 40, 3}, OutputFunction::Exp, 1),
+                               "model.json: m_net");
         },
         {"model.json: m_net", "layers[0] is 40 x 6", "widths up to 32"});
     testing::expectInputError(
         [] {
-            FixedMlp<32, 1024>(Mlp<float>({6, 32, 32, 3}, OutputFunction::Exp, 1),
+            FixedMlp<32, 1024>(NetworkWeights::initialised({6, 32, 32, 3}, OutputFunction::Exp, 1),
                                "model.json: m_net");
         },
         {"model.json: m_net", "parameters", "1024"});
     testing::expectInputError(
         [] {
-            FixedMlp<32, 8192>(
-                Mlp<float>({3, 4, 4, 4, 4, 4, 4, 4, 4, 1}, OutputFunction::Sigmoid, 1), "t_net");
+            FixedMlp<32, 8192>(NetworkWeights::initialised({3, 4, 4, 4, 4, 4, 4, 4, 4, 1},
+                                                           OutputFunction::Sigmoid, 1),
+                               "t_net");
         },
         {"t_net", "9 layers", "1 to 8"});
 }

@@ -1,4 +1,4 @@
-#include "weft/fit/energy_calibration.h"
+#include "weft/fit/calibration.h"
 
 #include <gtest/gtest.h>
 
@@ -6,10 +6,10 @@
 
 #include "weft/core/math.h"
 #include "weft/core/rng.h"
-#include "weft/fiber/fiber_params.h"
 #include "weft/fit/fit.h"
 #include "weft/fit/metrics.h"
-#include "weft/fit/yarn_lobes.h"
+#include "weft/fiber/fiber_params.h"
+#include "weft/yarn/yarn_lobes.h"
 
 namespace weft {
 namespace {
@@ -61,19 +61,6 @@ TEST(EnergyCalibration, BasisSpansPolynomialsOnTheSphere) {
     }
 }
 
-TEST(EnergyCalibration, EmptyIsOneAndLogScaleIsClamped) {
-    EnergyCalibration cal;
-    EXPECT_TRUE(cal.empty());
-    EXPECT_EQ(cal.scales({0, 0, 1}).r.r, 1.0);
-    cal.degree = 0;
-    cal.r = {std::vector<double>{10.0}, std::vector<double>{-10.0}, std::vector<double>{0.5}};
-    cal.m = {std::vector<double>{0.0}, std::vector<double>{0.0}, std::vector<double>{0.0}};
-    const EnergyCalibration::Scales s = cal.scales({0.6, 0, 0.8});
-    EXPECT_DOUBLE_EQ(s.r.r, 4.0);
-    EXPECT_DOUBLE_EQ(s.r.g, 0.25);
-    EXPECT_NEAR(s.r.b, std::exp(0.5), 1e-15);
-}
-
 // fitEnergyCalibration against an RDM made from a model times known scales.
 // (1) With no scale, the fitted scales are 1 up to the difference between the
 // synthetic RDM's bin sums of point values and the quadrature integral (up to
@@ -89,8 +76,8 @@ TEST(EnergyCalibration, FitRecoversKnownScales) {
     rdm.count.assign(bins.incidentCount(), 1000);
     YarnModel model;
     model.fiber = fleece.fiber;
-    model.tNet = Mlp<float>({3, 3, 1}, OutputFunction::Sigmoid, 2);
-    model.mNet = Mlp<float>({6, 5, 3}, OutputFunction::Exp, 3);
+    model.tNet = NetworkWeights::initialised({3, 3, 1}, OutputFunction::Sigmoid, 2);
+    model.mNet = NetworkWeights::initialised({6, 5, 3}, OutputFunction::Exp, 3);
     model.rLobe.tiltDeg = SurfaceFiberFrame::tiltDegOfTwist(fleece.ply.twist);
     rdm.pT = modelTransmissionMap(model, bins);
     rdm.rdmR = modelReflectionMap(model, bins);

@@ -1,4 +1,4 @@
-#include "weft/fit/yarn_lobes.h"
+#include "weft/yarn/yarn_lobes.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "weft/yarn/yarn_check.h"
+#include "weft/fit/model_check.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "weft/core/file.h"
+#include "weft/core/json_message.h"
 #include "weft/core/image.h"
 #include "weft/core/math.h"
 #include "weft/core/npy.h"
@@ -33,7 +34,6 @@ constexpr SliceDirection kSliceDirections[] = {{10, 0}, {45, 0}, {45, 90}, {75, 
 
 constexpr double kAlbedoTolerance = 0.03;  // the target, reported as a fraction
 
-nlohmann::json rgbJson(const Rgb& c) { return nlohmann::json::array({c.r, c.g, c.b}); }
 
 // Polar and azimuthal angle (degrees) of an incident bin's centre.
 std::pair<double, double> binAngles(const RdmBins& bins, size_t i) {
@@ -54,7 +54,7 @@ nlohmann::json checkYarnModel(const YarnModel& model, const std::string& modelPa
                               const std::string& outDir) {
     const auto start = std::chrono::steady_clock::now();
     const RdmBins& bins = rdm.bins;
-    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    const size_t nIn = bins.incidentCount();
     TempDirCommit out(outDir);
     tbb::task_arena arena(options.threads > 0 ? options.threads
                                               : tbb::this_task_arena::max_concurrency());
@@ -74,16 +74,8 @@ nlohmann::json checkYarnModel(const YarnModel& model, const std::string& modelPa
     });
 
     // RDM side: energy of each component per incident bin.
-    std::vector<Rgb> rdmR(nIn), rdmM(nIn);
-    for (size_t i = 0; i < nIn; ++i)
-        for (size_t o = 0; o < nOut; ++o) {
-            const double omega = bins.outgoingSolidAngle(o);
-            const size_t at = (i * nOut + o) * 3;
-            for (int c = 0; c < 3; ++c) {
-                rdmR[i][c] += rdm.rdmR[at + c] * omega;
-                rdmM[i][c] += rdm.rdmM[at + c] * omega;
-            }
-        }
+    const std::vector<Rgb> rdmR = incidentEnergies(rdm.rdmR, bins);
+    const std::vector<Rgb> rdmM = incidentEnergies(rdm.rdmM, bins);
 
     std::vector<double> albedoModel(nIn * 3), albedoRdm(nIn * 3), moments(nIn * 3);
     std::vector<double> componentsModel(nIn * 9), componentsRdm(nIn * 9);
@@ -186,11 +178,6 @@ nlohmann::json checkYarnModel(const YarnModel& model, const std::string& modelPa
         rMap = modelReflectionMap(model, bins);
         pT = modelTransmissionMap(model, bins);
     });
-    double se = 0, weight = 0;
-    for (size_t i = 0; i < nIn; ++i) {
-        se += static_cast<double>(rdm.count[i]) * sqr(pT[i] - rdm.pT[i]);
-        weight += static_cast<double>(rdm.count[i]);
-    }
 
     const size_t ti = static_cast<size_t>(bins.thetaI), pi = static_cast<size_t>(bins.phiI);
     writeNpy(out.path() + "/albedo_model.npy", albedoModel.data(), {ti, pi, 3});
@@ -277,7 +264,7 @@ nlohmann::json checkYarnModel(const YarnModel& model, const std::string& modelPa
     guard["relative_error_mean_abs"] = meanOrNull(sumAbsGuarded);
     guard["relative_error_worst"] = orNull(checked, rgbJson(worstGuarded));
 
-    summary["t_rmse"] = weight > 0 ? std::sqrt(se / weight) : 0.0;
+    summary["t_rmse"] = transmissionError(pT, rdm).weighted;
     summary["m_rel_l2"] = coarseRelativeL2(mMap, rdm.rdmM, bins);
     summary["r_rel_l2"] = coarseRelativeL2(rMap, rdm.rdmR, bins);
     summary["error_grid"] = kCoarseErrorBins.toString();

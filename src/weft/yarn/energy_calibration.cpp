@@ -1,6 +1,5 @@
-#include "weft/fit/energy_calibration.h"
+#include "weft/yarn/energy_calibration.h"
 
-#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 
@@ -38,23 +37,6 @@ EnergyCalibration::Scales EnergyCalibration::scales(const Vec3& wi) const {
         s.m[ch] = std::exp(std::clamp(lm, -kMaxLogScale, kMaxLogScale));
     }
     return s;
-}
-
-std::vector<double> fitLogPolynomial(const std::vector<Vec3>& wi,
-                                     const std::vector<double>& logRatio,
-                                     const std::vector<double>& weight, int degree) {
-    const int n = EnergyCalibration::termCount(degree);
-    Eigen::MatrixXd a(static_cast<Eigen::Index>(wi.size()), n);
-    Eigen::VectorXd b(static_cast<Eigen::Index>(wi.size()));
-    double f[EnergyCalibration::termCount(EnergyCalibration::kMaxDegree)];
-    for (size_t i = 0; i < wi.size(); ++i) {
-        const double s = std::sqrt(weight[i]);
-        EnergyCalibration::basis(wi[i], degree, f);
-        for (int k = 0; k < n; ++k) a(static_cast<Eigen::Index>(i), k) = s * f[k];
-        b(static_cast<Eigen::Index>(i)) = s * logRatio[i];
-    }
-    const Eigen::VectorXd c = a.colPivHouseholderQr().solve(b);
-    return std::vector<double>(c.data(), c.data() + n);
 }
 
 }  // namespace weft

@@ -1,0 +1,42 @@
+// weft/fit/fit_config.h — the configuration of weft fit (docs/fit.md).
+//
+// Network training (architecture, steps, batch, learning-rate schedule,
+// loss) per network, and the switches of the other steps. Read strictly from
+// JSON (unknown keys are errors naming the key; missing keys keep the
+// defaults below); `weft fit --print-config` writes toJson().
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "weft/fit/mlp.h"
+
+namespace weft {
+
+struct NetworkTraining {
+    std::vector<int> hidden;          // hidden layer widths
+    int64_t steps = 0;                // Adam steps
+    int restarts = 1;                 // independent trainings from different seeds; the best is kept (T only)
+    int batch = 0;                    // samples per step
+    double learningRate = 1e-3;       // at step 0
+    double finalLearningRate = 1e-5;  // at the last step (exponential decay in between)
+    Loss loss = Loss::Mse;
+};
+
+struct FitConfig {
+    NetworkTraining t{{7, 7}, 60000, 4, 512, 3e-2, 1e-5, Loss::Mse};
+    NetworkTraining m{{21, 21, 21}, 150000, 1, 1024, 3e-3, 3e-5, Loss::Mse};
+    bool jitter = true;     // train on random directions inside the bins (else bin centres)
+    bool masking = true;    // fit the R masking term (else plain eq. 8)
+    int calibrationDegree = 8;  // energy calibration polynomial degree; -1: none
+    int threads = 0;        // 0: all cores; never changes the result
+
+    // Strict reading (unknown keys are errors naming the key); missing keys keep the defaults.
+    static FitConfig fromJson(const nlohmann::json& j, const std::string& source);
+    static FitConfig fromJsonFile(const std::string& path);
+    nlohmann::json toJson() const;
+};
+
+}  // namespace weft

@@ -1,0 +1,62 @@
+#include "weft/fit/model_maps.h"
+
+#include <tbb/parallel_for.h>
+
+#include "weft/fit/mlp.h"
+#include "weft/yarn/fixed_mlp.h"
+#include "weft/yarn/yarn_lobes.h"
+
+namespace weft {
+
+std::vector<double> transmissionMap(const NetworkWeights& tNet, const RdmBins& bins) {
+    const TransmissionMlp net(tNet, "t_net");
+    std::vector<double> pT(bins.incidentCount());
+    for (size_t i = 0; i < pT.size(); ++i) pT[i] = evalTransmission(net, bins.incidentCentre(i));
+    return pT;
+}
+
+std::vector<double> modelTransmissionMap(const YarnModel& model, const RdmBins& bins) {
+    if (!model.hasTransmissionLobe()) return std::vector<double>(bins.incidentCount(), 0.0);
+    return transmissionMap(model.tNet, bins);
+}
+
+std::vector<float> modelReflectionMap(const YarnModel& model, const RdmBins& bins) {
+    if (!model.hasReflectionLobe())
+        return std::vector<float>(bins.incidentCount() * bins.outgoingCount() * 3, 0.0f);
+    const std::vector<double> pT = modelTransmissionMap(model, bins);
+    const RLobe lobe(model.fiber, model.rLobe);
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    std::vector<float> map(nIn * nOut * 3);
+    tbb::parallel_for(size_t(0), nIn, [&](size_t i) {
+        const Vec3 wi = bins.incidentCentre(i);
+        const Rgb scale = model.calibration.scales(wi).r;
+        for (size_t o = 0; o < nOut; ++o) {
+            const Rgb v = lobe.eval(wi, bins.outgoingCentre(o), pT[i]) * scale;
+            for (int c = 0; c < 3; ++c) map[(i * nOut + o) * 3 + c] = static_cast<float>(v[c]);
+        }
+    });
+    return map;
+}
+
+std::vector<float> modelMultipleScatteringMap(const YarnModel& model, const RdmBins& bins) {
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    const Mlp<float> net(model.mNet);
+    std::vector<Vec3> outgoing(nOut);
+    for (size_t o = 0; o < nOut; ++o) outgoing[o] = bins.outgoingCentre(o);
+    std::vector<float> map(nIn * nOut * 3);
+    tbb::parallel_for(size_t(0), nIn, [&](size_t i) {
+        Mlp<float>::Matrix x(6, static_cast<Eigen::Index>(nOut));
+        const Vec3 wi = bins.incidentCentre(i);
+        for (size_t o = 0; o < nOut; ++o)
+            setInputColumn(x, static_cast<Eigen::Index>(o), wi, outgoing[o]);
+        const Mlp<float>::Matrix y = net.forward(x);
+        const Rgb scale = model.calibration.scales(wi).m;
+        for (size_t o = 0; o < nOut; ++o)
+            for (int c = 0; c < 3; ++c)
+                map[(i * nOut + o) * 3 + c] =
+                    static_cast<float>(y(c, static_cast<Eigen::Index>(o)) * scale[c]);
+    });
+    return map;
+}
+
+}  // namespace weft

@@ -1,0 +1,55 @@
+#include "weft/fit/model_maps.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "weft/yarn/yarn_bsdf.h"
+
+namespace weft {
+namespace {
+
+const char* const kModels[] = {"fleece-small", "gabardine-small"};
+
+YarnModel testModel(const std::string& name) {
+    return loadYarnModel(std::string(WEFT_SOURCE_DIR) + "/tests/data/" + name + ".json");
+}
+
+// A calibration that scales R by 1/2 and M by 2 exp(0.3 x).
+YarnModel withCalibration(YarnModel model) {
+    model.calibration.degree = 1;
+    for (int c = 0; c < 3; ++c) {
+        model.calibration.r[c] = {-std::log(2.0), 0, 0, 0};
+        model.calibration.m[c] = {std::log(2.0), 0, 0, 0.3};  // 1, z, y, x
+    }
+    return model;
+}
+
+// The maps evaluate the model's parts on their own (model_maps.h): they must
+// agree with the renderer's BSDF without the energy guard.
+TEST(ModelMaps, MatchTheYarnBsdfComponents) {
+    const RdmBins bins{3, 5, 6, 8};
+    for (const char* name : kModels)
+        for (const YarnModel& model : {testModel(name), withCalibration(testModel(name))}) {
+            const YarnBsdf bsdf(model, name, YarnBsdfOptions{false});
+            const std::vector<double> pT = modelTransmissionMap(model, bins);
+            const std::vector<float> r = modelReflectionMap(model, bins);
+            const std::vector<float> m = modelMultipleScatteringMap(model, bins);
+            for (size_t i = 0; i < bins.incidentCount(); ++i) {
+                const Vec3 wi = bins.incidentCentre(i);
+                EXPECT_NEAR(bsdf.transmission(wi), pT[i], 1e-6);
+                for (size_t o = 0; o < bins.outgoingCount(); ++o) {
+                    const YarnBsdf::Components c = bsdf.components(wi, bins.outgoingCentre(o));
+                    for (int k = 0; k < 3; ++k) {
+                        const size_t index = (i * bins.outgoingCount() + o) * 3 + k;
+                        EXPECT_NEAR(c.m[k], m[index], 1e-5 * m[index]);
+                        EXPECT_NEAR(c.r[k], r[index], 1e-5 * r[index] + 1e-7);
+                    }
+                }
+            }
+        }
+}
+
+}  // namespace
+}  // namespace weft

@@ -1,0 +1,185 @@
+// Training the T and M networks (train.h): Adam on mini-batches drawn from the RDM.
+#include "weft/fit/train.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "weft/core/error.h"
+#include "weft/core/progress.h"
+#include "weft/core/rng.h"
+#include "weft/fit/metrics.h"
+#include "weft/fit/mlp.h"
+#include "weft/fit/model_maps.h"
+
+namespace weft {
+
+namespace {
+
+// Every batch is split into this many chunks, whatever the thread count, and
+// their gradients are summed in chunk order: the fit depends on the seed only.
+constexpr int kChunks = 8;
+
+double learningRateAt(const NetworkTraining& t, int64_t step) {
+    if (t.steps <= 1) return t.learningRate;
+    const double f = static_cast<double>(step) / static_cast<double>(t.steps - 1);
+    return t.learningRate * std::pow(t.finalLearningRate / t.learningRate, f);
+}
+
+std::string formatLoss(double loss) {
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "loss %.3e", loss);
+    return buf;
+}
+
+// Trains `net` with Adam. fill(rng, x, target) writes one chunk of samples
+// (columns) drawn with rng. The chunks of a step run in parallel in `arena`,
+// or one after the other when it is null. Returns the loss curve.
+template <typename Fill>
+LossCurve train(Mlp<float>& net, const NetworkTraining& cfg, uint64_t seed, uint64_t netId,
+                tbb::task_arena* arena, Progress& progress, bool parallelRestarts,
+                const Fill& fill) {
+    using Matrix = Mlp<float>::Matrix;
+    std::vector<int> chunkSize(kChunks, cfg.batch / kChunks);
+    for (int c = 0; c < cfg.batch % kChunks; ++c) ++chunkSize[c];
+    std::vector<Matrix> x(kChunks), target(kChunks);
+    std::vector<std::vector<float>> gradient(kChunks);
+    std::vector<float> chunkLoss(kChunks), total(net.parameters().size());
+    for (int c = 0; c < kChunks; ++c) {
+        x[c].resize(net.inputs(), chunkSize[c]);
+        target[c].resize(net.outputs(), chunkSize[c]);
+    }
+    Adam<float> adam(net.parameters().size(), cfg.learningRate);
+    const Mlp<float>::Vector noWeights;
+    const int64_t logEvery = std::max<int64_t>(1, cfg.steps / 200);
+    LossCurve curve;
+    double intervalLoss = 0;
+    int64_t intervalSteps = 0;
+    for (int64_t step = 0; step < cfg.steps; ++step) {
+        auto chunk = [&](int c) {
+            if (chunkSize[c] == 0) return;
+            Rng rng((netId << 48) ^ (static_cast<uint64_t>(step) * kChunks + c), seed);
+            fill(rng, x[c], target[c]);
+            chunkLoss[c] = net.lossAndGradient(x[c], target[c], cfg.loss, noWeights, gradient[c]);
+        };
+        if (arena) arena->execute([&] { tbb::parallel_for(0, kChunks, chunk); });
+        else for (int c = 0; c < kChunks; ++c) chunk(c);
+        std::fill(total.begin(), total.end(), 0.0f);
+        double loss = 0;
+        for (int c = 0; c < kChunks; ++c) {
+            if (chunkSize[c] == 0) continue;
+            const float share = static_cast<float>(chunkSize[c]) / static_cast<float>(cfg.batch);
+            for (size_t k = 0; k < total.size(); ++k) total[k] += share * gradient[c][k];
+            loss += share * chunkLoss[c];
+        }
+        adam.setLearningRate(learningRateAt(cfg, step));
+        adam.step(net.parameters(), total);
+        intervalLoss += loss;
+        ++intervalSteps;
+        if (intervalSteps == logEvery || step + 1 == cfg.steps) {
+            curve.step.push_back(static_cast<double>(step + 1));
+            curve.loss.push_back(intervalLoss / static_cast<double>(intervalSteps));
+            if (!parallelRestarts) progress.setStatus(formatLoss(curve.loss.back()));
+            intervalLoss = 0;
+            intervalSteps = 0;
+        }
+        progress.add(1);
+    }
+    return curve;
+}
+
+// Index drawn from a cumulative table (last entry = total) with u in [0, 1).
+size_t drawFromCdf(const std::vector<double>& cdf, double u) {
+    const double target = u * cdf.back();
+    const size_t k = std::upper_bound(cdf.begin(), cdf.end(), target) - cdf.begin();
+    return std::min(k, cdf.size() - 1);
+}
+
+std::vector<int> widthsOf(int inputs, const std::vector<int>& hidden, int outputs) {
+    std::vector<int> w = {inputs};
+    w.insert(w.end(), hidden.begin(), hidden.end());
+    w.push_back(outputs);
+    return w;
+}
+
+// The 3-7-7-1 network is small for the sharp grazing-angle edge of P(T | wi)
+// and its result depends on the initialisation: train `restarts` networks
+// from different seeds (in parallel, each on one thread) and keep the best.
+}  // namespace
+
+NetworkWeights fitTransmissionNetwork(const RdmData& rdm, const FitConfig& config, uint64_t seed,
+                                      tbb::task_arena& arena, bool quiet, LossCurve* curve) {
+    const RdmBins& bins = rdm.bins;
+    std::vector<double> cdf(bins.incidentCount());
+    double sum = 0;
+    for (size_t i = 0; i < cdf.size(); ++i) cdf[i] = sum += static_cast<double>(rdm.count[i]);
+    if (sum <= 0) throw InputError(rdm.dir + ": the gather has no paths (count.npy is all zero)");
+    const int restarts = config.t.restarts;
+    std::vector<Mlp<float>> nets(restarts);
+    std::vector<LossCurve> curves(restarts);
+    std::vector<double> rmse(restarts);
+    Progress progress("fit T", static_cast<uint64_t>(config.t.steps) * restarts, quiet);
+    arena.execute([&] {
+        tbb::parallel_for(0, restarts, [&](int r) {
+            const uint64_t netSeed = mixBits(seed + 0x9e3779b97f4a7c15ULL * static_cast<uint64_t>(r));
+            nets[r] = Mlp<float>(widthsOf(3, config.t.hidden, 1), OutputFunction::Sigmoid, netSeed);
+            curves[r] = train(nets[r], config.t, netSeed, 1, nullptr, progress, restarts > 1,
+                              [&](Rng& rng, Mlp<float>::Matrix& x, Mlp<float>::Matrix& target) {
+                                  for (Eigen::Index k = 0; k < x.cols(); ++k) {
+                                      const size_t i = drawFromCdf(cdf, rng.uniform());
+                                      const double u1 = rng.uniform(), u2 = rng.uniform();
+                                      setInputColumn(x, k,
+                                                config.jitter ? bins.incidentDirectionIn(i, u1, u2)
+                                                              : bins.incidentCentre(i));
+                                      target(0, k) = static_cast<float>(rdm.pT[i]);
+                                  }
+                              });
+            rmse[r] = transmissionError(transmissionMap(nets[r].weights(), bins), rdm).weighted;
+        });
+    });
+    const int best = static_cast<int>(std::min_element(rmse.begin(), rmse.end()) - rmse.begin());
+    progress.setStatus("best rmse " + std::to_string(rmse[best]));
+    progress.finish();
+    *curve = curves[best];
+    return nets[best].weights();
+}
+
+NetworkWeights fitMultipleScatteringNetwork(const RdmData& rdm, const FitConfig& config,
+                                           uint64_t seed, tbb::task_arena& arena, bool quiet,
+                                           LossCurve* curve) {
+    const RdmBins& bins = rdm.bins;
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    // Outgoing theta rows in proportion to their solid angle (the metric's weight).
+    std::vector<double> rowCdf(bins.thetaO);
+    double sum = 0;
+    for (int t = 0; t < bins.thetaO; ++t)
+        rowCdf[t] = sum += bins.outgoingSolidAngle(static_cast<size_t>(t) * bins.phiO);
+    Mlp<float> net(widthsOf(6, config.m.hidden, 3), OutputFunction::Exp, seed);
+    Progress progress("fit M", static_cast<uint64_t>(config.m.steps), quiet);
+    *curve = train(net, config.m, seed, 2, &arena, progress, false,
+                   [&](Rng& rng, Mlp<float>::Matrix& x, Mlp<float>::Matrix& target) {
+                       for (Eigen::Index k = 0; k < x.cols(); ++k) {
+                           const size_t i = std::min<size_t>(nIn - 1, rng.uniform() * nIn);
+                           const size_t row = drawFromCdf(rowCdf, rng.uniform());
+                           const size_t o =
+                               row * bins.phiO +
+                               std::min<size_t>(bins.phiO - 1, rng.uniform() * bins.phiO);
+                           const double u1 = rng.uniform(), u2 = rng.uniform();
+                           const double u3 = rng.uniform(), u4 = rng.uniform();
+                           const Vec3 wi = config.jitter ? bins.incidentDirectionIn(i, u1, u2)
+                                                         : bins.incidentCentre(i);
+                           const Vec3 wo = config.jitter ? bins.outgoingDirectionIn(o, u3, u4)
+                                                         : bins.outgoingCentre(o);
+                           setInputColumn(x, k, wi, wo);
+                           const float* t = &rdm.rdmM[(i * nOut + o) * 3];
+                           target(0, k) = t[0], target(1, k) = t[1], target(2, k) = t[2];
+                       }
+                   });
+    progress.finish();
+    return net.weights();
+}
+
+
+}  // namespace weft

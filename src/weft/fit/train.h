@@ -1,0 +1,35 @@
+// weft/fit/train.h — steps 1 and 3 of the fit: the T and M networks (fit.h).
+//
+// Adam on mini-batches drawn from the RDM. Every batch is split into a fixed
+// number of chunks whose gradients are summed in order, so a network depends
+// on the seed only, not on the thread count.
+//   T: incident bins drawn in proportion to their path counts, wi uniform in
+//      solid angle inside the bin (config.jitter), MSE on P(T | wi);
+//      `restarts` trainings from different seeds, the best (path-count-weighted
+//      RMS error) is kept.
+//   M: incident bins uniform, outgoing bins in proportion to their solid angle,
+//      directions jittered inside the bins; the configured loss on RDM_M.
+#pragma once
+
+#include <tbb/task_arena.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "weft/fit/fit_config.h"
+#include "weft/gather/rdm_io.h"
+#include "weft/yarn/network.h"
+
+namespace weft {
+
+struct LossCurve {
+    std::vector<double> step, loss;  // mean batch loss over each logging interval
+};
+
+NetworkWeights fitTransmissionNetwork(const RdmData& rdm, const FitConfig& config, uint64_t seed,
+                                      tbb::task_arena& arena, bool quiet, LossCurve* curve);
+NetworkWeights fitMultipleScatteringNetwork(const RdmData& rdm, const FitConfig& config,
+                                           uint64_t seed, tbb::task_arena& arena, bool quiet,
+                                           LossCurve* curve);
+
+}  // namespace weft

@@ -1,0 +1,65 @@
+// weft/yarn/network.h — the weights of the yarn model's small networks, as plain data.
+//
+// Paper 5.2-5.3, DESIGN.md 6: fully connected layers y = W x + b, a
+// channel-wise PReLU y = max(z, 0) + a min(z, 0) after every hidden layer, and
+// an output function on the last layer: sigmoid (T network, P(T | wi)) or exp
+// (M network, RGB radiance). NetworkWeights is what model.json stores
+// (yarn_model.h) and what both the renderer's float inference (FixedMlp,
+// fixed_mlp.h) and the trainer's Mlp (fit/mlp.h) are built from, so the
+// runtime never depends on the trainer. Parameters are float32, as trained.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace weft {
+
+enum class OutputFunction { Identity, Sigmoid, Exp };
+
+std::string toString(OutputFunction f);
+OutputFunction outputFunctionFromString(const std::string& name);  // InputError if unknown
+
+struct NetworkLayer {
+    int in = 0, out = 0;
+    std::vector<float> weight;  // out x in, row-major: weight[o * in + j]
+    std::vector<float> bias;    // out
+    std::vector<float> prelu;   // out slopes, or empty: no PReLU after this layer
+
+    bool hasPrelu() const { return !prelu.empty(); }
+    float w(int o, int j) const { return weight[static_cast<size_t>(o) * in + j]; }
+    bool operator==(const NetworkLayer&) const = default;
+};
+
+struct NetworkWeights {
+    std::vector<NetworkLayer> layers;
+    OutputFunction output = OutputFunction::Identity;
+
+    bool operator==(const NetworkWeights&) const = default;
+    bool empty() const { return layers.empty(); }
+    int inputs() const { return layers.empty() ? 0 : layers.front().in; }
+    int outputs() const { return layers.empty() ? 0 : layers.back().out; }
+    // {inputs, hidden widths..., outputs}; "6-21-21-21-3" as text.
+    std::vector<int> widths() const;
+    std::string widthsText() const;
+    size_t parameterCount() const;
+
+    // InputError starting with `name` ("t_net") unless the network has layers,
+    // `inputs` inputs, `outputs` outputs, consistent layer shapes and vector
+    // sizes, and the output function `output` (`why` says what needs it).
+    void validate(const std::string& name, int inputs, int outputs, OutputFunction output,
+                  const char* why) const;
+
+    // The trainer's initialisation (PyTorch's Linear default): weights and
+    // biases U(-1/sqrt(in), 1/sqrt(in)), PReLU slopes 0.25, from `seed`;
+    // `prelu` has one flag per layer (widths.size() - 1). InputError for fewer
+    // than two widths or a width outside [1, 4096].
+    static NetworkWeights initialised(const std::vector<int>& widths,
+                                      const std::vector<bool>& prelu, OutputFunction output,
+                                      uint64_t seed);
+    // The same with a PReLU after every hidden layer (the paper's networks).
+    static NetworkWeights initialised(const std::vector<int>& widths, OutputFunction output,
+                                      uint64_t seed);
+};
+
+}  // namespace weft

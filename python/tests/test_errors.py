@@ -31,7 +31,7 @@ def test_bad_fiber_parameters(key, value, message):
 def test_missing_and_unknown_fiber_keys():
     with pytest.raises(ValueError, match="gamma_tt_deg"):
         weft.FiberBcsdf({k: v for k, v in FLEECE.items() if k != "gamma_tt_deg"})
-    with pytest.raises(ValueError, match='unknown field "colour"'):
+    with pytest.raises(ValueError, match='unknown key "colour"'):
         weft.FiberBcsdf(dict(FLEECE, colour=1))
 
 

@@ -1,7 +1,8 @@
 // weft/core/json_message.h — pieces of error messages about JSON input.
 //
-// Shared by the readers of model.json (yarn/yarn_model.cpp) and scene.json
-// (render/scene_file.cpp), so that both name values and keys the same way:
+// Used by the strict reader (json_reader.h) and by the shape checks that the
+// readers of model.json and scene.json keep beside it, so that all name values
+// and keys the same way:
 //   `yarns[1].plies = 0 is out of range`, `got the string "x"`, `got an array of 2`.
 #pragma once
 

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "weft/core/chi2.h"
@@ -251,19 +252,43 @@ TEST(FiberParams, JsonIsStrict) {
     };
     nlohmann::json j = good;
     j["colour"] = 1;
-    expectError(j, "x.json: unknown field \"colour\"");
+    expectError(j,
+                "x.json: unknown key \"colour\" (allowed: c_r, c_tt, beta_r_deg, beta_tt_deg, "
+                "gamma_tt_deg)");
     j = good;
     j.erase("beta_tt_deg");
-    expectError(j, "missing field \"beta_tt_deg\"");
+    expectError(j, "x.json: missing key \"beta_tt_deg\"");
     j = good;
     j["c_r"] = {0.1, 0.2};
-    expectError(j, "\"c_r\" must be an array of 3 numbers");
+    expectError(j,
+                "x.json: c_r: expected an array of 3 numbers in [0, 1] (r, g, b; or one number "
+                "for all three), got an array of 2");
     j = good;
     j["gamma_tt_deg"] = "wide";
-    expectError(j, "\"gamma_tt_deg\" must be a number");
+    expectError(j,
+                "x.json: gamma_tt_deg: expected a number in (0, 90] degrees, got the string "
+                "\"wide\"");
     j = good;
     j["c_tt"] = {0.1, -0.2, 0.3};
-    expectError(j, "c_tt[1] = -0.2");
+    expectError(j, "x.json: c_tt[1] = -0.2 is out of range: allowed [0, 1]");
+    j = good;
+    j["beta_r_deg"] = std::numeric_limits<double>::quiet_NaN();
+    expectError(j, "x.json: beta_r_deg: expected a finite number in (0, 90] degrees, got nan");
+    j = good;
+    j["beta_tt_deg"] = 90.5;
+    expectError(j, "x.json: beta_tt_deg = 90.5 is out of range: allowed (0, 90] degrees");
+    // One number stands for all three channels; the path names the object in a larger file.
+    j = good;
+    j["c_r"] = 0.25;
+    EXPECT_EQ(FiberParams::fromJson(j, "x.json").cR, Rgb(0.25));
+    j["c_r"] = 1.5;
+    expectError(j, "x.json: c_r = 1.5 is out of range: allowed [0, 1]");
+    try {
+        FiberParams::fromJson(j, "model.json", "fiber");
+        ADD_FAILURE() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_STREQ(e.what(), "model.json: fiber.c_r = 1.5 is out of range: allowed [0, 1]");
+    }
     EXPECT_THROW(findMaterialPreset("wool"), InputError);
 }
 

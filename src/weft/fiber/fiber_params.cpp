@@ -2,54 +2,39 @@
 
 #include <cmath>
 #include <nlohmann/json.hpp>
-#include <set>
-#include <sstream>
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/json_file.h"
+#include "weft/core/json_message.h"
+#include "weft/core/json_reader.h"
 
 namespace weft {
 
 namespace {
 
+// The allowed values, shared by validate() and the JSON reader.
+const NumberRange kAttenuationRange = NumberRange::closed(0, 1);
+const NumberRange kAngleRange = NumberRange::openClosed(0, 90).with("degrees");
+
 void checkAngle(double deg, const char* field, const std::string& source) {
-    if (!std::isfinite(deg) || !(deg > 0.0) || !(deg <= 90.0)) {
-        std::ostringstream msg;
-        msg << source << ": " << field << " = " << deg
-            << " is out of range: allowed (0, 90] degrees";
-        throw InputError(msg.str());
-    }
+    if (!std::isfinite(deg) || !kAngleRange.contains(deg))
+        throwJsonOutOfRange(source, field, formatNumber(deg), kAngleRange.text());
 }
 
 void checkAttenuation(const Rgb& c, const char* field, const std::string& source) {
-    for (int i = 0; i < 3; ++i) {
-        if (!std::isfinite(c[i]) || c[i] < 0.0 || c[i] > 1.0) {
-            std::ostringstream msg;
-            msg << source << ": " << field << "[" << i << "] = " << c[i]
-                << " is out of range: allowed [0, 1]";
-            throw InputError(msg.str());
-        }
-    }
+    for (int i = 0; i < 3; ++i)
+        if (!std::isfinite(c[i]) || !kAttenuationRange.contains(c[i]))
+            throwJsonOutOfRange(source, std::string(field) + "[" + std::to_string(i) + "]",
+                                formatNumber(c[i]), kAttenuationRange.text());
 }
 
-double readNumber(const nlohmann::json& j, const char* field, const std::string& source) {
-    if (!j.contains(field)) throw InputError(source + ": missing field \"" + field + "\"");
-    const auto& v = j.at(field);
-    if (!v.is_number())
-        throw InputError(source + ": field \"" + field + "\" must be a number, got " + v.dump());
-    return v.get<double>();
-}
-
-Rgb readRgb(const nlohmann::json& j, const char* field, const std::string& source) {
-    if (!j.contains(field)) throw InputError(source + ": missing field \"" + field + "\"");
-    const auto& v = j.at(field);
-    if (v.is_number()) return Rgb(v.get<double>());
-    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() ||
-        !v[2].is_number())
-        throw InputError(source + ": field \"" + field +
-                         "\" must be an array of 3 numbers [r, g, b], got " + v.dump());
-    return {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+// [r, g, b], or one number for all three.
+Rgb readRgb(const JsonObjectReader& r, const char* key) {
+    if (r.value(key).is_number()) return Rgb(r.number(key, kAttenuationRange));
+    const std::vector<double> c =
+        r.numbers(key, 3, kAttenuationRange, "(r, g, b; or one number for all three)");
+    return {c[0], c[1], c[2]};
 }
 
 }  // namespace
@@ -62,22 +47,16 @@ void FiberParams::validate(const std::string& source) const {
     checkAngle(gammaTTDeg, "gamma_tt_deg", source);
 }
 
-FiberParams FiberParams::fromJson(const nlohmann::json& j, const std::string& source) {
-    if (!j.is_object()) throw InputError(source + ": fiber parameters must be a JSON object");
-    static const std::set<std::string> known = {"c_r", "c_tt", "beta_r_deg", "beta_tt_deg",
-                                                "gamma_tt_deg"};
-    for (const auto& item : j.items()) {
-        if (!known.count(item.key()))
-            throw InputError(source + ": unknown field \"" + item.key() +
-                             "\" (allowed: c_r, c_tt, beta_r_deg, beta_tt_deg, gamma_tt_deg)");
-    }
+FiberParams FiberParams::fromJson(const nlohmann::json& j, const std::string& source,
+                                  const std::string& path) {
+    JsonObjectReader r(j, source, path);
+    r.allowKeys({"c_r", "c_tt", "beta_r_deg", "beta_tt_deg", "gamma_tt_deg"});
     FiberParams p;
-    p.cR = readRgb(j, "c_r", source);
-    p.cTT = readRgb(j, "c_tt", source);
-    p.betaRDeg = readNumber(j, "beta_r_deg", source);
-    p.betaTTDeg = readNumber(j, "beta_tt_deg", source);
-    p.gammaTTDeg = readNumber(j, "gamma_tt_deg", source);
-    p.validate(source);
+    p.cR = readRgb(r, "c_r");
+    p.cTT = readRgb(r, "c_tt");
+    p.betaRDeg = r.number("beta_r_deg", kAngleRange);
+    p.betaTTDeg = r.number("beta_tt_deg", kAngleRange);
+    p.gammaTTDeg = r.number("gamma_tt_deg", kAngleRange);
     return p;
 }
 

@@ -29,8 +29,11 @@ struct FiberParams {
     // Throws InputError naming `source` (a file or "preset NAME") and the field.
     void validate(const std::string& source = "fiber parameters") const;
 
-    // Strict JSON reading: every key required, unknown keys rejected, values validated.
-    static FiberParams fromJson(const nlohmann::json& j, const std::string& source);
+    // Strict JSON reading (core/json_reader.h): every key required, unknown keys
+    // rejected, values validated; errors name `source` and the JSON path under
+    // `path` (the object's own path, "fiber" inside model.json).
+    static FiberParams fromJson(const nlohmann::json& j, const std::string& source,
+                                const std::string& path = "");
     static FiberParams fromJsonFile(const std::string& path);
     nlohmann::json toJson() const;
 };

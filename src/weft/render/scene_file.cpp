@@ -15,6 +15,7 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/json_message.h"
+#include "weft/core/json_reader.h"
 
 namespace weft::render {
 
@@ -41,11 +42,6 @@ std::string joinNames(std::initializer_list<const char*> names) {
     std::string out;
     for (const char* n : names) out += (out.empty() ? "" : ", ") + std::string(n);
     return out;
-}
-
-const json* find(const json& object, const char* key) {
-    const auto it = object.find(key);
-    return it == object.end() ? nullptr : &*it;
 }
 
 // "FILE:LINE:COLUMN" of the byte at `index` (1-based line and column; the
@@ -124,8 +120,7 @@ class StrictSax final : public nlohmann::json_sax<json> {
         auto& object = top.container->get_ref<json::object_t&>();
         if (object.count(k) != 0) {
             duplicate_ = "duplicate key " + jsonString(k);
-            const std::string where = openPath();
-            if (!where.empty()) duplicate_ += " in " + where;
+            duplicatePath_ = openPath();
             return false;
         }
         top.slot = &object[k];
@@ -145,7 +140,9 @@ class StrictSax final : public nlohmann::json_sax<json> {
     }
 
     json& root() { return root_; }
+    // "duplicate key \"k\"" ("" for none), and the JSON path of its object.
     const std::string& duplicate() const { return duplicate_; }
+    const std::string& duplicatePath() const { return duplicatePath_; }
     size_t errorIndex() const { return errorIndex_; }
     const std::string& errorDetail() const { return errorDetail_; }
 
@@ -194,150 +191,45 @@ class StrictSax final : public nlohmann::json_sax<json> {
 
     json root_;
     std::vector<Frame> stack_;
-    std::string duplicate_;
+    std::string duplicate_, duplicatePath_;
     size_t errorIndex_ = 0;
     std::string errorDetail_;
 };
 
-// Validating reader: every error names the scene file, then the JSON path.
-class Reader {
-  public:
-    Reader(const std::string& source, const std::string& baseDir)
-        : source_(source.empty() ? "scene" : source), baseDir_(baseDir) {}
+// Scene value kinds over the shared strict reader (core/json_reader.h).
 
-    [[noreturn]] void fail(const std::string& message) const {
-        throw InputError(source_ + ": " + message);
-    }
-    [[noreturn]] void failAt(const std::string& path, const std::string& message) const {
-        fail(path + ": " + message);
-    }
-    [[noreturn]] void outOfRange(const std::string& path, const std::string& value,
-                                 const std::string& allowed) const {
-        fail(path + " = " + value + " is out of range: allowed " + allowed);
-    }
+Vec3 readVec3(const JsonObjectReader& r, std::string_view key) {
+    const std::vector<double> v = r.numbers(key, 3);
+    return {v[0], v[1], v[2]};
+}
 
-    // An object with only `allowed` keys and every `required` one. Unknown keys
-    // come first: a misspelt required key is reported as the typo it is.
-    void checkObject(const json& j, const std::string& path,
-                     std::initializer_list<const char*> allowed,
-                     std::initializer_list<const char*> required) const {
-        if (!j.is_object()) {
-            if (path.empty())
-                fail("expected a JSON object at the top level, got " + describeJson(j));
-            failAt(path, "expected an object, got " + describeJson(j));
-        }
-        const std::string in = path.empty() ? "" : " in " + path;
-        for (const auto& item : j.items()) {
-            const bool known = std::any_of(allowed.begin(), allowed.end(),
-                                           [&](const char* k) { return item.key() == k; });
-            if (!known)
-                fail("unknown key " + jsonString(item.key()) + in +
-                     " (allowed: " + joinNames(allowed) + ")");
-        }
-        for (const char* k : required)
-            if (!j.contains(k)) fail("missing required key \"" + std::string(k) + "\"" + in);
+// Linear RGB radiance, each channel >= 0.
+Rgb readRadiance(const JsonObjectReader& r, std::string_view key) {
+    const std::vector<double> v = r.numbers(key, 3, NumberRange::atLeast(0), "(r, g, b)");
+    return {v[0], v[1], v[2]};
+}
+
+// A file name, resolved against baseDir unless absolute; `extensions`
+// (lowercase, with the dot) lists the accepted ones, empty: any.
+std::string readFileName(const JsonObjectReader& r, std::string_view key,
+                         const std::string& baseDir,
+                         std::initializer_list<const char*> extensions) {
+    const json& v = r.value(key);
+    if (!v.is_string()) r.fail(key, "expected a file name, got " + describeJson(v));
+    const std::string& name = v.get_ref<const std::string&>();
+    if (name.empty()) r.fail(key, "expected a file name, got the empty string");
+    // The C library would stop at the NUL and open some other file.
+    if (name.find('\0') != std::string::npos)
+        r.fail(key, "a file name cannot contain a NUL character");
+    if (extensions.size() != 0) {
+        const std::string ext = lowercaseExtension(name);
+        if (std::none_of(extensions.begin(), extensions.end(),
+                         [&](const char* e) { return ext == e; }))
+            r.fail(key, jsonString(name) + " has an unsupported extension (allowed: " +
+                            joinNames(extensions) + ")");
     }
-
-    double number(const json& v, const std::string& path) const {
-        if (!v.is_number()) failAt(path, "expected a number, got " + describeJson(v));
-        const double x = v.get<double>();
-        if (!std::isfinite(x)) failAt(path, "expected a finite number, got " + formatNumber(x));
-        return x;
-    }
-
-    double numberIn(const json& v, const std::string& path, bool ok(double),
-                    const char* allowed) const {
-        const double x = number(v, path);
-        if (!ok(x)) outOfRange(path, formatNumber(x), allowed);
-        return x;
-    }
-
-    // An integer in [lo, hi] (0 <= hi). A number with no fractional part
-    // counts (64.0, 1e3); 2.5 does not.
-    int64_t integer(const json& v, const std::string& path, int64_t lo, int64_t hi) const {
-        const std::string allowed = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
-        // The JSON parser reads every non-negative integer as unsigned.
-        if (v.is_number_unsigned()) {
-            const uint64_t u = v.get<uint64_t>();
-            if (u > static_cast<uint64_t>(hi) || static_cast<int64_t>(u) < lo)
-                outOfRange(path, std::to_string(u), allowed);
-            return static_cast<int64_t>(u);
-        }
-        if (v.is_number_integer()) {
-            const int64_t x = v.get<int64_t>();
-            if (x < lo || x > hi) outOfRange(path, std::to_string(x), allowed);
-            return x;
-        }
-        const double x = integral(v, path);
-        if (x < static_cast<double>(lo) || x > static_cast<double>(hi))
-            outOfRange(path, formatNumber(x), allowed);
-        return static_cast<int64_t>(x);
-    }
-
-    uint64_t seed(const json& v, const std::string& path) const {
-        const char* allowed = "[0, 18446744073709551615]";
-        if (v.is_number_unsigned()) return v.get<uint64_t>();
-        if (v.is_number_integer()) {
-            const int64_t x = v.get<int64_t>();
-            if (x < 0) outOfRange(path, std::to_string(x), allowed);
-            return static_cast<uint64_t>(x);
-        }
-        const double x = integral(v, path);
-        if (x < 0 || x >= 0x1p64) outOfRange(path, formatNumber(x), allowed);
-        return static_cast<uint64_t>(x);
-    }
-
-    Vec3 vec3(const json& v, const std::string& path) const {
-        if (!v.is_array() || v.size() != 3)
-            failAt(path, "expected an array of 3 numbers, got " + describeJson(v));
-        return {number(v[0], jsonIndexPath(path, 0)), number(v[1], jsonIndexPath(path, 1)),
-                number(v[2], jsonIndexPath(path, 2))};
-    }
-
-    Rgb radiance(const json& v, const std::string& path) const {
-        if (!v.is_array() || v.size() != 3)
-            failAt(path, "expected an array of 3 numbers (r, g, b), got " + describeJson(v));
-        Rgb c;
-        for (int k = 0; k < 3; ++k)
-            c[k] = numberIn(
-                v[k], jsonIndexPath(path, k), [](double x) { return x >= 0; }, ">= 0");
-        return c;
-    }
-
-    // A file name, resolved against baseDir unless absolute; `extensions`
-    // (lowercase, with the dot) lists the accepted ones, empty: any.
-    std::string file(const json& v, const std::string& path,
-                     std::initializer_list<const char*> extensions) const {
-        if (!v.is_string()) failAt(path, "expected a file name, got " + describeJson(v));
-        const std::string& name = v.get_ref<const std::string&>();
-        if (name.empty()) failAt(path, "expected a file name, got the empty string");
-        // The C library would stop at the NUL and open some other file.
-        if (name.find('\0') != std::string::npos)
-            failAt(path, "a file name cannot contain a NUL character");
-        if (extensions.size() != 0) {
-            const std::string ext = lowercaseExtension(name);
-            if (std::none_of(extensions.begin(), extensions.end(),
-                             [&](const char* e) { return ext == e; }))
-                failAt(path, jsonString(name) + " has an unsupported extension (allowed: " +
-                                 joinNames(extensions) + ")");
-        }
-        return (std::filesystem::path(baseDir_) / name).string();
-    }
-
-  private:
-    // A finite number with no fractional part.
-    double integral(const json& v, const std::string& path) const {
-        const double x = number(v, path);
-        if (x != std::floor(x)) failAt(path, "expected an integer, got " + formatNumber(x));
-        return x;
-    }
-
-    std::string source_;
-    std::string baseDir_;
-};
-
-bool isNonNegative(double x) { return x >= 0; }
-bool isPositive(double x) { return x > 0; }
+    return (std::filesystem::path(baseDir) / name).string();
+}
 
 // v / its largest component: a direction whose length neither overflows nor
 // underflows (from and to may be huge or a denormal apart). Zero stays zero.
@@ -346,15 +238,13 @@ Vec3 scaledDirection(const Vec3& v) {
     return m > 0 ? v / m : v;
 }
 
-CameraDesc readCamera(const Reader& r, const json& j) {
-    r.checkObject(j, "camera", {"from", "to", "up", "fov_deg"}, {"from", "to"});
+CameraDesc readCamera(const JsonObjectReader& scene) {
+    const JsonObjectReader r = scene.object("camera", {"from", "to", "up", "fov_deg"});
     CameraDesc c;
-    c.from = r.vec3(j.at("from"), "camera.from");
-    c.to = r.vec3(j.at("to"), "camera.to");
-    if (const json* up = find(j, "up")) c.up = r.vec3(*up, "camera.up");
-    if (const json* fov = find(j, "fov_deg"))
-        c.fovDeg = r.numberIn(
-            *fov, "camera.fov_deg", [](double x) { return x > 0 && x < 180; }, "(0, 180)");
+    c.from = readVec3(r, "from");
+    c.to = readVec3(r, "to");
+    if (r.has("up")) c.up = readVec3(r, "up");
+    if (r.has("fov_deg")) c.fovDeg = r.number("fov_deg", NumberRange::open(0, 180));
 
     const auto vectorText = [](const Vec3& v) {
         // Appended piecewise: GCC 12 warns falsely (-Wrestrict) on "[" + string.
@@ -364,39 +254,34 @@ CameraDesc readCamera(const Reader& r, const json& j) {
     };
     const Vec3 view = c.to - c.from;
     if (c.from == c.to)
-        r.fail("camera.to = " + vectorText(c.to) +
-               " is out of range: allowed any point other than camera.from");
+        r.failOutOfRange("to", vectorText(c.to), "any point other than camera.from");
     if (!isFinite(view))
-        r.fail(
-            "camera.to - camera.from overflows (the points are too far apart): allowed a "
-            "difference within the double range");
+        throwJsonError(r.source(), "",
+                       "camera.to - camera.from overflows (the points are too far apart): "
+                       "allowed a difference within the double range");
     const Vec3 d = normalize(scaledDirection(view));
     const Vec3 up = scaledDirection(c.up);
     const double upLength = length(up);
     if (upLength == 0 || length(cross(d, up)) < kMinUpSine * upLength)
-        r.fail("camera.up = " + vectorText(c.up) +
-               " is out of range: allowed any vector not parallel to camera.to - camera.from");
+        r.failOutOfRange("up", vectorText(c.up),
+                         "any vector not parallel to camera.to - camera.from");
     return c;
 }
 
-FilmDesc readFilm(const Reader& r, const json& j) {
-    r.checkObject(j, "film", {"width", "height"}, {});
+FilmDesc readFilm(const JsonObjectReader& scene) {
+    const JsonObjectReader r = scene.object("film", {"width", "height"});
     FilmDesc f;
-    if (const json* w = find(j, "width"))
-        f.width = static_cast<int>(r.integer(*w, "film.width", 1, kMaxFilmSide));
-    if (const json* h = find(j, "height"))
-        f.height = static_cast<int>(r.integer(*h, "film.height", 1, kMaxFilmSide));
+    if (r.has("width")) f.width = static_cast<int>(r.integer("width", {1, kMaxFilmSide}));
+    if (r.has("height")) f.height = static_cast<int>(r.integer("height", {1, kMaxFilmSide}));
     return f;
 }
 
-RenderDesc readRender(const Reader& r, const json& j) {
-    r.checkObject(j, "render", {"spp", "max_depth", "seed"}, {});
+RenderDesc readRender(const JsonObjectReader& scene) {
+    const JsonObjectReader r = scene.object("render", {"spp", "max_depth", "seed"});
     RenderDesc d;
-    if (const json* spp = find(j, "spp"))
-        d.spp = static_cast<int>(r.integer(*spp, "render.spp", 1, kMaxSpp));
-    if (const json* depth = find(j, "max_depth"))
-        d.maxDepth = static_cast<int>(r.integer(*depth, "render.max_depth", 1, kMaxDepth));
-    if (const json* seed = find(j, "seed")) d.seed = r.seed(*seed, "render.seed");
+    if (r.has("spp")) d.spp = static_cast<int>(r.integer("spp", {1, kMaxSpp}));
+    if (r.has("max_depth")) d.maxDepth = static_cast<int>(r.integer("max_depth", {1, kMaxDepth}));
+    if (r.has("seed")) d.seed = r.unsignedInteger("seed");
     return d;
 }
 
@@ -414,62 +299,49 @@ const char* typeName(LightDesc::Type t) {
     return "sky";
 }
 
-LightDesc readLight(const Reader& r, const json& j, const std::string& path) {
-    if (!j.is_object()) r.failAt(path, "expected an object, got " + describeJson(j));
-    const json* type = find(j, "type");
-    if (type == nullptr) r.fail("missing required key \"type\" in " + path);
-    const std::string typePath = jsonChildPath(path, "type");
-    const char* allowedTypes = "sky, envmap, sphere, constant";
-    if (!type->is_string())
-        r.failAt(typePath, std::string("expected a string (") + allowedTypes + "), got " +
-                               describeJson(*type));
-    const std::string& name = type->get_ref<const std::string&>();
+// The type decides the other keys: it is read before they are checked.
+LightDesc readLight(JsonObjectReader r, const std::string& baseDir) {
+    using Type = LightDesc::Type;
+    constexpr Type kTypes[] = {Type::Sky, Type::Envmap, Type::Sphere, Type::Constant};
     LightDesc l;
-    if (name == "sky") {
-        l.type = LightDesc::Type::Sky;
-        r.checkObject(j, path, {"type", "scale"}, {});
-    } else if (name == "envmap") {
-        l.type = LightDesc::Type::Envmap;
-        r.checkObject(j, path, {"type", "file", "scale", "rotate_deg"}, {"file"});
-        l.file = r.file(j.at("file"), jsonChildPath(path, "file"), {".exr", ".hdr"});
-        if (const json* rot = find(j, "rotate_deg"))
-            l.rotateDeg = r.number(*rot, jsonChildPath(path, "rotate_deg"));
-    } else if (name == "sphere") {
-        l.type = LightDesc::Type::Sphere;
-        r.checkObject(j, path, {"type", "center", "radius", "radiance"},
-                      {"center", "radius", "radiance"});
-        l.center = r.vec3(j.at("center"), jsonChildPath(path, "center"));
-        l.radius = r.numberIn(j.at("radius"), jsonChildPath(path, "radius"), isPositive, "> 0");
-    } else if (name == "constant") {
-        l.type = LightDesc::Type::Constant;
-        r.checkObject(j, path, {"type", "radiance"}, {"radiance"});
-    } else {
-        r.failAt(typePath,
-                 "unknown light type " + jsonString(name) + " (allowed: " + allowedTypes + ")");
+    l.type = kTypes[r.oneOf("type", {typeName(kTypes[0]), typeName(kTypes[1]), typeName(kTypes[2]),
+                                     typeName(kTypes[3])})];
+    const NumberRange scale = NumberRange::atLeast(0);
+    switch (l.type) {
+        case Type::Sky:
+            r.allowKeys({"type", "scale"});
+            if (r.has("scale")) l.scale = r.number("scale", scale);
+            break;
+        case Type::Envmap:
+            r.allowKeys({"type", "file", "scale", "rotate_deg"});
+            l.file = readFileName(r, "file", baseDir, {".exr", ".hdr"});
+            if (r.has("rotate_deg")) l.rotateDeg = r.number("rotate_deg");
+            if (r.has("scale")) l.scale = r.number("scale", scale);
+            break;
+        case Type::Sphere:
+            r.allowKeys({"type", "center", "radius", "radiance"});
+            l.center = readVec3(r, "center");
+            l.radius = r.number("radius", NumberRange::greaterThan(0));
+            l.radiance = readRadiance(r, "radiance");
+            break;
+        case Type::Constant:
+            r.allowKeys({"type", "radiance"});
+            l.radiance = readRadiance(r, "radiance");
+            break;
     }
-    if (const json* scale = find(j, "scale"))
-        l.scale = r.numberIn(*scale, jsonChildPath(path, "scale"), isNonNegative, ">= 0");
-    if (const json* radiance = find(j, "radiance"))
-        l.radiance = r.radiance(*radiance, jsonChildPath(path, "radiance"));
     return l;
 }
 
-YarnDesc readYarn(const Reader& r, const json& j, const std::string& path) {
-    r.checkObject(j, path, {"curves", "scale", "radius", "plies", "ply_twist", "model"},
-                  {"curves", "model"});
+YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
+    r.allowKeys({"curves", "scale", "radius", "plies", "ply_twist", "model"});
     YarnDesc y;
-    y.curves = r.file(j.at("curves"), jsonChildPath(path, "curves"), {".bcc", ".txt", ".obj"});
-    y.model = r.file(j.at("model"), jsonChildPath(path, "model"), {});
-    if (const json* scale = find(j, "scale"))
-        y.scale = r.numberIn(*scale, jsonChildPath(path, "scale"), isPositive, "> 0");
-    if (const json* radius = find(j, "radius"))
-        y.radius = r.numberIn(*radius, jsonChildPath(path, "radius"), isPositive, "> 0");
-    if (const json* plies = find(j, "plies"))
-        y.plies = static_cast<int>(r.integer(*plies, jsonChildPath(path, "plies"), 1, kMaxPlies));
-    if (const json* twist = find(j, "ply_twist"))
-        y.plyTwist = r.numberIn(
-            *twist, jsonChildPath(path, "ply_twist"),
-            [](double x) { return std::fabs(x) <= kMaxPlyTwist; }, "[-100, 100]");
+    y.curves = readFileName(r, "curves", baseDir, {".bcc", ".txt", ".obj"});
+    y.model = readFileName(r, "model", baseDir, {});
+    if (r.has("scale")) y.scale = r.number("scale", NumberRange::greaterThan(0));
+    if (r.has("radius")) y.radius = r.number("radius", NumberRange::greaterThan(0));
+    if (r.has("plies")) y.plies = static_cast<int>(r.integer("plies", {1, kMaxPlies}));
+    if (r.has("ply_twist"))
+        y.plyTwist = r.number("ply_twist", NumberRange::closed(-kMaxPlyTwist, kMaxPlyTwist));
     return y;
 }
 
@@ -494,26 +366,21 @@ std::string hex16(uint64_t v) {
 }  // namespace
 
 SceneDesc parseScene(const json& j, const std::string& pathForErrors, const std::string& baseDir) {
-    const Reader r(pathForErrors, baseDir);
-    r.checkObject(j, "", {"camera", "film", "render", "lights", "yarns"}, {"camera"});
+    JsonObjectReader r(j, pathForErrors.empty() ? "scene" : pathForErrors, "",
+                       JsonIntegers::WholeNumbers);
+    r.allowKeys({"camera", "film", "render", "lights", "yarns"});
     SceneDesc s;
     s.path = pathForErrors;
     s.baseDir = baseDir;
-    s.camera = readCamera(r, j.at("camera"));
-    if (const json* film = find(j, "film")) s.film = readFilm(r, *film);
-    if (const json* render = find(j, "render")) s.render = readRender(r, *render);
-    if (const json* lights = find(j, "lights")) {
-        if (!lights->is_array())
-            r.failAt("lights", "expected an array of lights, got " + describeJson(*lights));
-        for (size_t i = 0; i < lights->size(); ++i)
-            s.lights.push_back(readLight(r, (*lights)[i], jsonIndexPath("lights", i)));
-    }
-    if (const json* yarns = find(j, "yarns")) {
-        if (!yarns->is_array())
-            r.failAt("yarns", "expected an array of yarns, got " + describeJson(*yarns));
-        for (size_t i = 0; i < yarns->size(); ++i)
-            s.yarns.push_back(readYarn(r, (*yarns)[i], jsonIndexPath("yarns", i)));
-    }
+    s.camera = readCamera(r);
+    if (r.has("film")) s.film = readFilm(r);
+    if (r.has("render")) s.render = readRender(r);
+    if (r.has("lights"))
+        for (JsonObjectReader& light : r.objects("lights"))
+            s.lights.push_back(readLight(std::move(light), baseDir));
+    if (r.has("yarns"))
+        for (JsonObjectReader& yarn : r.objects("yarns"))
+            s.yarns.push_back(readYarn(std::move(yarn), baseDir));
     return s;
 }
 
@@ -523,7 +390,7 @@ SceneDesc parseSceneText(std::string_view text, const std::string& pathForErrors
     checkNesting(text, source);
     StrictSax sax;
     if (!json::sax_parse(text.begin(), text.end(), &sax)) {
-        if (!sax.duplicate().empty()) throw InputError(source + ": " + sax.duplicate());
+        if (!sax.duplicate().empty()) throwJsonError(source, sax.duplicatePath(), sax.duplicate());
         throw InputError(textPosition(text, source, sax.errorIndex()) +
                          ": malformed JSON: " + sax.errorDetail());
     }

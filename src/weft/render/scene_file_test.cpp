@@ -205,17 +205,17 @@ TEST(SceneFile, DefaultsFillEveryOptionalKey) {
 
 TEST(SceneFile, EveryMissingRequiredKeyIsNamed) {
     const std::vector<std::pair<std::string, std::string>> cases = {
-        {"/camera", "missing required key \"camera\""},
-        {"/camera/from", "missing required key \"from\" in camera"},
-        {"/camera/to", "missing required key \"to\" in camera"},
-        {"/lights/0/type", "missing required key \"type\" in lights[0]"},
-        {"/lights/1/file", "missing required key \"file\" in lights[1]"},
-        {"/lights/2/center", "missing required key \"center\" in lights[2]"},
-        {"/lights/2/radius", "missing required key \"radius\" in lights[2]"},
-        {"/lights/2/radiance", "missing required key \"radiance\" in lights[2]"},
-        {"/lights/3/radiance", "missing required key \"radiance\" in lights[3]"},
-        {"/yarns/0/curves", "missing required key \"curves\" in yarns[0]"},
-        {"/yarns/1/model", "missing required key \"model\" in yarns[1]"},
+        {"/camera", "missing key \"camera\""},
+        {"/camera/from", "camera: missing key \"from\""},
+        {"/camera/to", "camera: missing key \"to\""},
+        {"/lights/0/type", "lights[0]: missing key \"type\""},
+        {"/lights/1/file", "lights[1]: missing key \"file\""},
+        {"/lights/2/center", "lights[2]: missing key \"center\""},
+        {"/lights/2/radius", "lights[2]: missing key \"radius\""},
+        {"/lights/2/radiance", "lights[2]: missing key \"radiance\""},
+        {"/lights/3/radiance", "lights[3]: missing key \"radiance\""},
+        {"/yarns/0/curves", "yarns[0]: missing key \"curves\""},
+        {"/yarns/1/model", "yarns[1]: missing key \"model\""},
     };
     for (const auto& [pointer, message] : cases) {
         SCOPED_TRACE(pointer);
@@ -228,33 +228,33 @@ TEST(SceneFile, EveryMissingRequiredKeyIsNamed) {
 
 TEST(SceneFile, UnknownKeysAreNamedWithTheirPath) {
     expectInputError([] { parseJson(fullWith("/camera/fov", 30)); },
-                     {"scene.json: unknown key \"fov\" in camera (allowed: from, to, up, "
+                     {"scene.json: camera: unknown key \"fov\" (allowed: from, to, up, "
                       "fov_deg)"});
     expectInputError([] { parseJson(fullWith("/cameras", json::object())); },
                      {"scene.json: unknown key \"cameras\" (allowed: camera, film, render, "
                       "lights, yarns)"});
     expectInputError([] { parseJson(fullWith("/film/depth", 8)); },
-                     {"unknown key \"depth\" in film (allowed: width, height)"});
+                     {"film: unknown key \"depth\" (allowed: width, height)"});
     expectInputError([] { parseJson(fullWith("/render/samples", 8)); },
-                     {"unknown key \"samples\" in render (allowed: spp, max_depth, seed)"});
+                     {"render: unknown key \"samples\" (allowed: spp, max_depth, seed)"});
     // Keys of another light type are unknown for this one.
     expectInputError([] { parseJson(fullWith("/lights/0/radius", 1)); },
-                     {"unknown key \"radius\" in lights[0] (allowed: type, scale)"});
+                     {"lights[0]: unknown key \"radius\" (allowed: type, scale)"});
     expectInputError([] { parseJson(fullWith("/lights/3/scale", 1)); },
-                     {"unknown key \"scale\" in lights[3] (allowed: type, radiance)"});
+                     {"lights[3]: unknown key \"scale\" (allowed: type, radiance)"});
     expectInputError(
         [] { parseJson(fullWith("/yarns/1/twist", 1)); },
-        {"unknown key \"twist\" in yarns[1] (allowed: curves, scale, radius, plies, ply_twist, "
+        {"yarns[1]: unknown key \"twist\" (allowed: curves, scale, radius, plies, ply_twist, "
          "model)"});
     // A scene parsed from memory without a name is called "scene".
     expectInputError([] { parseScene(fullWith("/film/depth", 8), "", ""); },
-                     {"scene: unknown key \"depth\" in film"});
+                     {"scene: film: unknown key \"depth\""});
     // A misspelt required key reads as the typo, not as a missing key.
     expectInputError(
         [] {
             parseJson(fullWith("/camera/From", json::array({1, 2, 3})));
         },
-        {"unknown key \"From\" in camera"});
+        {"camera: unknown key \"From\""});
 }
 
 struct RangeCase {
@@ -272,9 +272,12 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
         {"/camera/fov_deg", 0, {"camera.fov_deg = 0 is out of range"}, 1e-6},
         {"/camera/fov_deg",
          "30",
-         {"camera.fov_deg: expected a number, got the string \"30\""},
+         {"camera.fov_deg: expected a number in (0, 180), got the string \"30\""},
          nullptr},
-        {"/camera/fov_deg", nan, {"camera.fov_deg: expected a finite number, got nan"}, nullptr},
+        {"/camera/fov_deg",
+         nan,
+         {"camera.fov_deg: expected a finite number in (0, 180), got nan"},
+         nullptr},
         {"/camera/from",
          json::array({0, 1}),
          {"camera.from: expected an array of 3 numbers, got an array of 2"},
@@ -290,10 +293,10 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
         {"/camera", json::array(), {"camera: expected an object, got an array of 0"}, nullptr},
         {"/film/width", 0, {"film.width = 0 is out of range: allowed [1, 16384]"}, 1},
         {"/film/height", 16385, {"film.height = 16385 is out of range: allowed [1, 16384]"}, 16384},
-        {"/film/width", 2.5, {"film.width: expected an integer, got 2.5"}, 64.0},
+        {"/film/width", 2.5, {"film.width: expected an integer in [1, 16384], got 2.5"}, 64.0},
         {"/render/spp", 0, {"render.spp = 0 is out of range: allowed [1, 1048576]"}, 1},
         {"/render/spp", 1048577, {"render.spp = 1048577 is out of range"}, 1048576},
-        {"/render/spp", 2.5, {"render.spp: expected an integer, got 2.5"}, 1e3},
+        {"/render/spp", 2.5, {"render.spp: expected an integer in [1, 1048576], got 2.5"}, 1e3},
         {"/render/spp",
          uint64_t{1} << 63,
          {"render.spp = 9223372036854775808 is out of range"},
@@ -309,18 +312,24 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
           "18446744073709551615]"},
          std::numeric_limits<uint64_t>::max()},
         {"/render/seed", 0x1p64, {"render.seed = 18446744073709551616 is out of range"}, 0},
-        {"/render/seed", 0.5, {"render.seed: expected an integer, got 0.5"}, nullptr},
+        {"/render/seed",
+         0.5,
+         {"render.seed: expected an integer in [0, 18446744073709551615], got 0.5"},
+         nullptr},
         {"/lights",
          json::object(),
-         {"lights: expected an array of lights, got an object"},
+         {"lights: expected an array of objects, got an object"},
          json::array()},
         {"/lights/0", 3, {"lights[0]: expected an object, got 3"}, nullptr},
         {"/lights/0/type",
          "area",
-         {"lights[0].type: unknown light type \"area\" (allowed: sky, "
-          "envmap, sphere, constant)"},
+         {"lights[0].type: expected one of \"sky\", \"envmap\", \"sphere\", \"constant\", got "
+          "the string \"area\""},
          nullptr},
-        {"/lights/0/type", 1, {"lights[0].type: expected a string"}, nullptr},
+        {"/lights/0/type",
+         1,
+         {"lights[0].type: expected one of \"sky\", \"envmap\", \"sphere\", \"constant\", got 1"},
+         nullptr},
         {"/lights/0/scale", -0.5, {"lights[0].scale = -0.5 is out of range: allowed >= 0"}, 0},
         {"/lights/1/scale", -1e-300, {"lights[1].scale = -1e-300 is out of range"}, 0},
         {"/lights/1/rotate_deg", nan, {"lights[1].rotate_deg: expected a finite number"}, 1e6},
@@ -349,9 +358,9 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
          json::array({0, 0, 0})},
         {"/lights/3/radiance",
          json::array({1, 1}),
-         {"lights[3].radiance: expected an array of 3 numbers (r, g, b), got an array of 2"},
+         {"lights[3].radiance: expected an array of 3 numbers >= 0 (r, g, b), got an array of 2"},
          nullptr},
-        {"/yarns", "knit.bcc", {"yarns: expected an array of yarns, got the string"}, nullptr},
+        {"/yarns", "knit.bcc", {"yarns: expected an array of objects, got the string"}, nullptr},
         {"/yarns/0", json::array(), {"yarns[0]: expected an object, got an array of 0"}, nullptr},
         {"/yarns/0/curves",
          "knit.ply",
@@ -362,10 +371,10 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
         {"/yarns/0/model", nullptr, {"yarns[0].model: expected a file name, got null"}, nullptr},
         {"/yarns/0/scale", 0, {"yarns[0].scale = 0 is out of range: allowed > 0"}, 1e-9},
         {"/yarns/0/radius", -0.02, {"yarns[0].radius = -0.02 is out of range: allowed > 0"}, 1e-9},
-        {"/yarns/0/radius", nullptr, {"yarns[0].radius: expected a number, got null"}, nullptr},
+        {"/yarns/0/radius", nullptr, {"yarns[0].radius: expected a number > 0, got null"}, nullptr},
         {"/yarns/0/plies", 17, {"yarns[0].plies = 17 is out of range: allowed [1, 16]"}, 16},
         {"/yarns/1/plies", 0, {"yarns[1].plies = 0 is out of range: allowed [1, 16]"}, 1},
-        {"/yarns/0/plies", 3.5, {"yarns[0].plies: expected an integer, got 3.5"}, 3.0},
+        {"/yarns/0/plies", 3.5, {"yarns[0].plies: expected an integer in [1, 16], got 3.5"}, 3.0},
         {"/yarns/0/ply_twist",
          100.5,
          {"yarns[0].ply_twist = 100.5 is out of range: allowed "
@@ -418,7 +427,7 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
                            "s.json", "");
         },
         {"s.json: render.seed = 18446744073709551616 is out of range"});
-    expectRejected(json::array({1}), {"scene.json: expected a JSON object at the top level"});
+    expectRejected(json::array({1}), {"scene.json: expected an object, got an array of 1"});
 }
 
 TEST(SceneFile, CameraGeometryIsChecked) {
@@ -471,14 +480,14 @@ TEST(SceneFile, DuplicateKeysAreErrorsNamingThePath) {
                                "render": {"spp": 4, "spp": 8}})",
                            "dup.json", "");
         },
-        {"dup.json: duplicate key \"spp\" in render"});
+        {"dup.json: render: duplicate key \"spp\""});
     expectInputError(
         [] {
             parseSceneText(R"({"camera": {}, "lights": [{}, {"type": "sky", "type": "sky"}],
                                "camera": {}})",
                            "dup.json", "");
         },
-        {"dup.json: duplicate key \"type\" in lights[1]"});
+        {"dup.json: lights[1]: duplicate key \"type\""});
     expectInputError([] { parseSceneText(R"({"camera": 1, "camera": 2})", "dup.json", ""); },
                      {"dup.json: duplicate key \"camera\""});
 }

@@ -13,6 +13,7 @@
 #include "weft/core/file.h"
 #include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
+#include "weft/core/json_reader.h"
 #include "weft/yarn/yarn_lobes.h"
 
 namespace weft {
@@ -24,6 +25,11 @@ using nlohmann::json;
 // Guards against absurd files (memory and time); far above the paper's 6-21-21-21-3.
 constexpr int kMaxNetworkLayers = 16;
 constexpr int kMaxNetworkWidth = 4096;
+// The allowed parameter values, shared by the reader and validate().
+const NumberRange kTiltRange = NumberRange::closedOpen(0, 90).with("degrees");
+const NumberRange kUnitRange = NumberRange::closed(0, 1);
+const NumberRange kBetaMRange = NumberRange::openClosed(0, 90).with("degrees");
+const NumberRange kGammaMRange = NumberRange::openClosed(0, 180).with("degrees");
 constexpr const char* kMaskingForm = "symmetric-quadratic";
 constexpr const char* kCalibrationForm = "log-polynomial-sphere";
 
@@ -32,90 +38,46 @@ std::string plural(int n, const std::string& noun) {
     return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
 }
 
+// A number read by readJsonNumber that is also a finite float (network
+// parameters are float32).
+float floatNumber(double x, const std::string& source, const std::string& path) {
+    if (std::fabs(x) > std::numeric_limits<float>::max())
+        throwJsonError(
+            source, path,
+            "expected a finite 32-bit float, got " + formatNumber(x) + " (beyond +-3.4e38)");
+    return static_cast<float>(x);
+}
+float floatNumber(const json& v, const std::string& source, const std::string& path) {
+    return floatNumber(readJsonNumber(v, source, path), source, path);
+}
 
-// Validating reader state: every error names the source, then the JSON path.
-class Reader {
-  public:
-    explicit Reader(const std::string& source) : source_(source) {}
-
-    [[noreturn]] void fail(const std::string& path, const std::string& message) const {
-        throw InputError(source_ + ": " + (path.empty() ? "" : path + ": ") + message);
-    }
-
-    const std::string& source() const { return source_; }
-
-    // An object whose keys are exactly `keys`: unknown keys and missing keys are errors.
-    void expectKeys(const json& j, const std::string& path,
-                    std::initializer_list<const char*> keys) const {
-        if (!j.is_object()) fail(path, "expected an object, got " + describeJson(j));
-        std::string allowed;
-        for (const char* k : keys) allowed += (allowed.empty() ? "" : ", ") + std::string(k);
-        for (const auto& item : j.items()) {
-            bool known = false;
-            for (const char* k : keys) known = known || item.key() == k;
-            if (!known) fail(path, "unknown key \"" + item.key() + "\" (allowed: " + allowed + ")");
-        }
-        for (const char* k : keys)
-            if (!j.contains(k)) fail(path, "missing key \"" + std::string(k) + "\"");
-    }
-
-    // A finite number (any JSON number type).
-    double number(const json& v, const std::string& path) const {
-        if (!v.is_number()) fail(path, "expected a number, got " + describeJson(v));
-        const double x = v.get<double>();
-        if (!std::isfinite(x)) fail(path, "expected a finite number, got " + formatNumber(x));
-        return x;
-    }
-
-    // A finite number that is also a finite float (network parameters are float32).
-    float floatNumber(const json& v, const std::string& path) const {
-        const double x = number(v, path);
-        if (std::fabs(x) > std::numeric_limits<float>::max())
-            fail(path,
-                 "expected a finite 32-bit float, got " + formatNumber(x) + " (beyond +-3.4e38)");
-        return static_cast<float>(x);
-    }
-
-    double numberIn(const json& v, const std::string& path, bool ok(double),
-                    const char* range) const {
-        const double x = number(v, path);
-        if (!ok(x)) fail(path, formatNumber(x) + " is out of range: allowed " + range);
-        return x;
-    }
-
-  private:
-    const std::string& source_;
-};
-
-std::vector<float> readVector(const Reader& r, const json& v, const std::string& path, int expected,
+std::vector<float> readVector(const JsonObjectReader& r, std::string_view key, int expected,
                               const std::string& why) {
-    if (!v.is_array() || v.size() != static_cast<size_t>(expected))
-        r.fail(path, "expected " + std::to_string(expected) + " numbers (" + why + "), got " +
-                         describeJson(v));
+    const std::vector<double> values = r.numbers(key, expected, {}, "(" + why + ")");
     std::vector<float> out(expected);
-    for (int k = 0; k < expected; ++k) out[k] = r.floatNumber(v[k], jsonIndexPath(path, k));
+    for (int k = 0; k < expected; ++k)
+        out[k] = floatNumber(values[k], r.source(), jsonIndexPath(r.pathOf(key), k));
     return out;
 }
 
 // Reads a network {"layers": [...], "output": name} of `inputs` inputs and
-// `outputs` outputs; `name` is its key ("t_net").
-NetworkWeights readNetwork(const Reader& r, const json& j, const std::string& name, int inputs,
+// `outputs` outputs under the model's key `name` ("t_net").
+NetworkWeights readNetwork(const JsonObjectReader& model, const std::string& name, int inputs,
                            int outputs) {
-    r.expectKeys(j, name, {"layers", "output"});
-    const std::string layersPath = jsonChildPath(name, "layers");
-    const json& layers = j.at("layers");
+    const JsonObjectReader network = model.object(name, {"layers", "output"});
+    const json& layers = network.value("layers");
     if (!layers.is_array() || layers.empty())
-        r.fail(layersPath, "expected a non-empty array of layers, got " + describeJson(layers));
+        network.fail("layers", "expected a non-empty array of layers, got " + describeJson(layers));
     if (layers.size() > static_cast<size_t>(kMaxNetworkLayers))
-        r.fail(layersPath, "a network has at most " + std::to_string(kMaxNetworkLayers) +
-                               " layers, got " + std::to_string(layers.size()));
+        network.fail("layers", "a network has at most " + std::to_string(kMaxNetworkLayers) +
+                                   " layers, got " + std::to_string(layers.size()));
+    std::vector<JsonObjectReader> layerReaders = network.objects("layers");
 
     NetworkWeights net;
     std::vector<NetworkLayer>& data = net.layers;
     for (size_t l = 0; l < layers.size(); ++l) {
-        const std::string path = jsonIndexPath(layersPath, l);
-        const json& layer = layers[l];
-        r.expectKeys(layer, path, {"weight", "bias", "prelu"});
+        JsonObjectReader& layer = layerReaders[l];
+        layer.allowKeys({"weight", "bias", "prelu"});
         const bool last = l + 1 == layers.size();
         // Shape: columns chain from the previous layer (or the network inputs);
         // the last layer's rows are the network outputs, a hidden layer's rows its width.
@@ -123,49 +85,41 @@ NetworkWeights readNetwork(const Reader& r, const json& j, const std::string& na
         const std::string inWhy =
             l == 0 ? name + " has " + plural(inputs, "input")
                    : "layers[" + std::to_string(l - 1) + "] has " + plural(in, "output");
-        const std::string weightPath = jsonChildPath(path, "weight");
-        const json& w = layer.at("weight");
+        const std::string weightPath = layer.pathOf("weight");
+        const json& w = layer.value("weight");
         if (!w.is_array() || w.empty())
-            r.fail(weightPath, "expected a non-empty array of rows, got " + describeJson(w));
+            layer.fail("weight", "expected a non-empty array of rows, got " + describeJson(w));
         if (w.size() > static_cast<size_t>(kMaxNetworkWidth))
-            r.fail(weightPath, "a layer has at most " + std::to_string(kMaxNetworkWidth) +
-                                   " outputs, got " + std::to_string(w.size()) + " rows");
+            layer.fail("weight", "a layer has at most " + std::to_string(kMaxNetworkWidth) +
+                                     " outputs, got " + std::to_string(w.size()) + " rows");
         const int out = last ? outputs : static_cast<int>(w.size());
         const std::string shape =
             "expected " + std::to_string(out) + " rows of " + std::to_string(in) + " numbers";
         if (last && w.size() != static_cast<size_t>(outputs))
-            r.fail(weightPath, shape + " (" + name + " has " + plural(outputs, "output") +
-                                   "), got " + plural(static_cast<int>(w.size()), "row"));
+            layer.fail("weight", shape + " (" + name + " has " + plural(outputs, "output") +
+                                     "), got " + plural(static_cast<int>(w.size()), "row"));
         for (size_t row = 0; row < w.size(); ++row)
             if (!w[row].is_array() || w[row].size() != static_cast<size_t>(in))
-                r.fail(weightPath, shape + " (" + inWhy + "), got row " + std::to_string(row) +
-                                       " = " + describeJson(w[row]));
+                layer.fail("weight", shape + " (" + inWhy + "), got row " + std::to_string(row) +
+                                         " = " + describeJson(w[row]));
         NetworkLayer d;
         d.in = in;
         d.out = out;
         d.weight.reserve(static_cast<size_t>(in) * out);
         for (int row = 0; row < out; ++row)
             for (int col = 0; col < in; ++col)
-                d.weight.push_back(
-                    r.floatNumber(w[row][col], jsonIndexPath(jsonIndexPath(weightPath, row), col)));
+                d.weight.push_back(floatNumber(w[row][col], layer.source(),
+                                               jsonIndexPath(jsonIndexPath(weightPath, row), col)));
         const std::string outWhy = "one per row of weight";
-        d.bias = readVector(r, layer.at("bias"), jsonChildPath(path, "bias"), out, outWhy);
-        const json& prelu = layer.at("prelu");
-        if (!prelu.is_null())
-            d.prelu = readVector(r, prelu, jsonChildPath(path, "prelu"), out, outWhy + ", or null");
+        d.bias = readVector(layer, "bias", out, outWhy);
+        if (!layer.value("prelu").is_null()) d.prelu = readVector(layer, "prelu", out, outWhy + ", or null");
         data.push_back(std::move(d));
     }
 
-    const json& outputName = j.at("output");
-    const std::string outputPath = jsonChildPath(name, "output");
-    if (!outputName.is_string())
-        r.fail(outputPath,
-               "expected a string (sigmoid, exp or identity), got " + describeJson(outputName));
-    try {
-        net.output = outputFunctionFromString(outputName.get<std::string>());
-    } catch (const InputError& e) {
-        r.fail(outputPath, e.what());
-    }
+    constexpr OutputFunction kOutputs[] = {OutputFunction::Sigmoid, OutputFunction::Exp,
+                                           OutputFunction::Identity};
+    net.output = kOutputs[network.oneOf(
+        "output", {toString(kOutputs[0]), toString(kOutputs[1]), toString(kOutputs[2])})];
     return net;
 }
 
@@ -192,22 +146,12 @@ json networkToJson(const NetworkWeights& net) {
     return {{"layers", std::move(layers)}, {"output", toString(net.output)}};
 }
 
-PlyParams readPly(const Reader& r, const json& j) {
-    r.expectKeys(j, "ply", {"fibers", "density", "twist"});
+PlyParams readPly(const JsonObjectReader& model) {
+    const JsonObjectReader r = model.object("ply", {"fibers", "density", "twist"});
     PlyParams ply;
-    const json& fibers = j.at("fibers");
-    if (!fibers.is_number_integer())
-        r.fail("ply.fibers", "expected an integer, got " + describeJson(fibers));
-    const int64_t n =
-        fibers.is_number_unsigned()
-            ? static_cast<int64_t>(std::min<uint64_t>(fibers.get<uint64_t>(), uint64_t{1} << 62))
-            : fibers.get<int64_t>();
-    if (n < 1 || n > kMaxPlyFibers)
-        r.fail("ply.fibers", std::to_string(n) + " is out of range: allowed [1, " +
-                                 std::to_string(kMaxPlyFibers) + "]");
-    ply.fibers = static_cast<int>(n);
-    ply.density = r.number(j.at("density"), "ply.density");
-    ply.twist = r.number(j.at("twist"), "ply.twist");
+    ply.fibers = static_cast<int>(r.integer("fibers", {1, kMaxPlyFibers}));
+    ply.density = r.number("density");
+    ply.twist = r.number("twist");
     try {
         ply.validate();  // its messages start with "ply: "
     } catch (const InputError& e) {
@@ -216,72 +160,51 @@ PlyParams readPly(const Reader& r, const json& j) {
     return ply;
 }
 
-RLobeParams readRLobe(const Reader& r, const json& j) {
-    r.expectKeys(j, "r_lobe", {"tilt_deg", "masking"});
+RLobeParams readRLobe(const JsonObjectReader& model) {
+    const JsonObjectReader r = model.object("r_lobe", {"tilt_deg", "masking"});
     RLobeParams p;
-    p.tiltDeg = r.numberIn(
-        j.at("tilt_deg"), "r_lobe.tilt_deg", [](double x) { return x >= 0 && x < 90; },
-        "[0, 90) degrees");
-    const json& masking = j.at("masking");
-    if (masking.is_null()) return p;
-    r.expectKeys(masking, "r_lobe.masking", {"form", "coefficients"});
-    const json& form = masking.at("form");
-    if (!form.is_string() || form.get<std::string>() != kMaskingForm)
-        r.fail("r_lobe.masking.form",
-               std::string("expected \"") + kMaskingForm + "\", got " + describeJson(form));
-    const json& c = masking.at("coefficients");
-    const std::string path = "r_lobe.masking.coefficients";
-    if (!c.is_array() || c.size() != static_cast<size_t>(kMaskingCoefficients))
-        r.fail(path,
-               "expected " + std::to_string(kMaskingCoefficients) + " numbers, got " + describeJson(c));
-    for (size_t k = 0; k < c.size(); ++k) p.masking.push_back(r.number(c[k], jsonIndexPath(path, k)));
+    p.tiltDeg = r.number("tilt_deg", kTiltRange);
+    if (r.value("masking").is_null()) return p;
+    const JsonObjectReader masking = r.object("masking", {"form", "coefficients"});
+    masking.oneOf("form", {kMaskingForm});
+    p.masking = masking.numbers("coefficients", kMaskingCoefficients);
     return p;
 }
 
-SamplingParams readSampling(const Reader& r, const json& j) {
-    r.expectKeys(j, "sampling", {"kappa_r", "beta_m_deg", "gamma_m_deg", "kappa_m"});
+SamplingParams readSampling(const JsonObjectReader& model) {
+    const JsonObjectReader r =
+        model.object("sampling", {"kappa_r", "beta_m_deg", "gamma_m_deg", "kappa_m"});
     SamplingParams p;
-    const auto unit = [](double x) { return x >= 0 && x <= 1; };
-    p.kappaR = r.numberIn(j.at("kappa_r"), "sampling.kappa_r", unit, "[0, 1]");
-    p.betaMDeg = r.numberIn(
-        j.at("beta_m_deg"), "sampling.beta_m_deg", [](double x) { return x > 0 && x <= 90; },
-        "(0, 90] degrees");
-    p.gammaMDeg = r.numberIn(
-        j.at("gamma_m_deg"), "sampling.gamma_m_deg", [](double x) { return x > 0 && x <= 180; },
-        "(0, 180] degrees");
-    p.kappaM = r.numberIn(j.at("kappa_m"), "sampling.kappa_m", unit, "[0, 1]");
+    p.kappaR = r.number("kappa_r", kUnitRange);
+    p.betaMDeg = r.number("beta_m_deg", kBetaMRange);
+    p.gammaMDeg = r.number("gamma_m_deg", kGammaMRange);
+    p.kappaM = r.number("kappa_m", kUnitRange);
     return p;
 }
 
-EnergyCalibration readCalibration(const Reader& r, const json& j) {
+// null or absent (files written before it existed): none.
+EnergyCalibration readCalibration(const JsonObjectReader& model) {
     EnergyCalibration cal;
-    if (j.is_null()) return cal;
-    r.expectKeys(j, "energy_calibration", {"form", "degree", "r", "m"});
-    const json& form = j.at("form");
-    if (!form.is_string() || form.get<std::string>() != kCalibrationForm)
-        r.fail("energy_calibration.form",
-               std::string("expected \"") + kCalibrationForm + "\", got " + describeJson(form));
-    const json& degree = j.at("degree");
-    if (!degree.is_number_integer() || degree.get<int64_t>() < 0 ||
-        degree.get<int64_t>() > EnergyCalibration::kMaxDegree)
-        r.fail("energy_calibration.degree",
-               "expected an integer in [0, " + std::to_string(EnergyCalibration::kMaxDegree) +
-                   "], got " + describeJson(degree));
-    cal.degree = degree.get<int>();
+    if (!model.has("energy_calibration") || model.isNull("energy_calibration")) return cal;
+    const JsonObjectReader r = model.object("energy_calibration", {"form", "degree", "r", "m"});
+    r.oneOf("form", {kCalibrationForm});
+    cal.degree = static_cast<int>(r.integer("degree", {0, EnergyCalibration::kMaxDegree}));
     const size_t terms = static_cast<size_t>(EnergyCalibration::termCount(cal.degree));
     for (const auto& [key, target] : {std::pair{"r", &cal.r}, std::pair{"m", &cal.m}}) {
-        const std::string path = std::string("energy_calibration.") + key;
-        const json& rows = j.at(key);
+        const std::string path = r.pathOf(key);
+        const json& rows = r.value(key);
         if (!rows.is_array() || rows.size() != 3)
-            r.fail(path, "expected 3 rows (R, G, B) of " + std::to_string(terms) +
-                             " numbers, got " + describeJson(rows));
+            r.fail(key, "expected 3 rows (R, G, B) of " + std::to_string(terms) + " numbers, got " +
+                            describeJson(rows));
         for (size_t c = 0; c < 3; ++c) {
             const std::string rowPath = jsonIndexPath(path, c);
             if (!rows[c].is_array() || rows[c].size() != terms)
-                r.fail(rowPath, "expected " + std::to_string(terms) + " numbers ((degree + 1)^2), got " +
-                                    describeJson(rows[c]));
+                throwJsonError(r.source(), rowPath,
+                               "expected an array of " + std::to_string(terms) +
+                                   " numbers ((degree + 1)^2), got " + describeJson(rows[c]));
             for (size_t k = 0; k < terms; ++k)
-                (*target)[c].push_back(r.number(rows[c][k], jsonIndexPath(rowPath, k)));
+                (*target)[c].push_back(
+                    readJsonNumber(rows[c][k], r.source(), jsonIndexPath(rowPath, k)));
         }
     }
     return cal;
@@ -350,42 +273,38 @@ void writeValue(const json& v, int indent, bool layoutOrder, std::string& out) {
     }
 }
 
-YarnAblation readAblation(const Reader& r, const json& j) {
-    const std::string allowed = "(allowed: \"naive\", \"no_r_lobe\"; absent for the full model)";
-    if (!j.is_string())
-        r.fail("ablation", "expected a string " + allowed + ", got " + describeJson(j));
-    for (YarnAblation a : {YarnAblation::Naive, YarnAblation::NoRLobe})
-        if (j.get<std::string>() == yarnAblationName(a)) return a;
-    r.fail("ablation", "unknown value " + describeJson(j) + " " + allowed);
+YarnAblation readAblation(const JsonObjectReader& model) {
+    constexpr YarnAblation kAblations[] = {YarnAblation::Naive, YarnAblation::NoRLobe};
+    return kAblations[model.oneOf(
+        "ablation", {yarnAblationName(kAblations[0]), yarnAblationName(kAblations[1])})];
 }
 
 }  // namespace
 
 namespace {
 
-void checkRange(double v, bool ok, const std::string& key, const char* range) {
-    if (!ok || !std::isfinite(v))
-        throw InputError(key + " = " + formatNumber(v) + " is out of range: allowed " + range);
+void checkRange(double v, const NumberRange& range, const std::string& key) {
+    if (!std::isfinite(v) || !range.contains(v))
+        throw InputError(key + " = " + formatNumber(v) + " is out of range: allowed " +
+                         range.text());
 }
 
 }  // namespace
 
 void RLobeParams::validate() const {
-    checkRange(tiltDeg, tiltDeg >= 0 && tiltDeg < 90, "r_lobe.tilt_deg", "[0, 90) degrees");
+    checkRange(tiltDeg, kTiltRange, "r_lobe.tilt_deg");
     if (!masking.empty() && masking.size() != kMaskingCoefficients)
         throw InputError("r_lobe.masking: expected " + std::to_string(kMaskingCoefficients) +
                          " coefficients, got " + std::to_string(masking.size()));
     for (size_t k = 0; k < masking.size(); ++k)
-        checkRange(masking[k], true, "r_lobe.masking.coefficients[" + std::to_string(k) + "]",
-                   "finite numbers");
+        checkRange(masking[k], NumberRange{}, "r_lobe.masking.coefficients[" + std::to_string(k) + "]");
 }
 
 void SamplingParams::validate() const {
-    checkRange(kappaR, kappaR >= 0 && kappaR <= 1, "sampling.kappa_r", "[0, 1]");
-    checkRange(betaMDeg, betaMDeg > 0 && betaMDeg <= 90, "sampling.beta_m_deg", "(0, 90] degrees");
-    checkRange(gammaMDeg, gammaMDeg > 0 && gammaMDeg <= 180, "sampling.gamma_m_deg",
-               "(0, 180] degrees");
-    checkRange(kappaM, kappaM >= 0 && kappaM <= 1, "sampling.kappa_m", "[0, 1]");
+    checkRange(kappaR, kUnitRange, "sampling.kappa_r");
+    checkRange(betaMDeg, kBetaMRange, "sampling.beta_m_deg");
+    checkRange(gammaMDeg, kGammaMRange, "sampling.gamma_m_deg");
+    checkRange(kappaM, kUnitRange, "sampling.kappa_m");
 }
 
 void YarnModel::validate() const {
@@ -449,49 +368,36 @@ nlohmann::json yarnModelToJson(const YarnModel& model) {
 }
 
 YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) {
-    const Reader r(source);
     if (!j.is_object())
-        r.fail("", std::string("expected a JSON object (a ") + kYarnModelFormat + " file), got " +
-                       describeJson(j));
+        throwJsonError(source, "",
+                       std::string("expected an object (a ") + kYarnModelFormat + " file), got " +
+                           describeJson(j));
+    JsonObjectReader r(j, source);
     // Format and version first: a file of another kind or version gets that
     // message rather than a list of unknown keys.
-    if (!j.contains("format"))
-        r.fail("", std::string("missing key \"format\" (expected \"") + kYarnModelFormat +
-                       "\": not a weft yarn model?)");
-    const json& format = j.at("format");
-    if (!format.is_string() || format.get<std::string>() != kYarnModelFormat)
-        r.fail("format",
-               std::string("expected \"") + kYarnModelFormat + "\", got " + describeJson(format));
-    if (!j.contains("version")) r.fail("", "missing key \"version\"");
-    const json& version = j.at("version");
-    if (!version.is_number_integer())
-        r.fail("version", "expected an integer, got " + describeJson(version));
-    if (version.get<int64_t>() != kYarnModelVersion)
-        r.fail("version", "unsupported version " + describeJson(version) +
+    if (!r.has("format"))
+        r.fail(std::string("missing key \"format\" (expected \"") + kYarnModelFormat +
+               "\": not a weft yarn model?)");
+    r.oneOf("format", {kYarnModelFormat});
+    if (r.integer("version") != kYarnModelVersion)
+        r.fail("version", "unsupported version " + describeJson(r.value("version")) +
                               " (supported: " + std::to_string(kYarnModelVersion) + ")");
-    // energy_calibration may be absent (files written before it existed): null;
+    // energy_calibration may be absent (files written before it existed);
     // ablation is absent for the full model.
-    json keys = json::object();
-    for (const auto& item : j.items()) keys[item.key()] = nullptr;
-    keys["energy_calibration"] = nullptr;
-    keys["ablation"] = nullptr;
-    r.expectKeys(keys, "",
-                 {"format", "version", "ablation", "fiber", "ply", "t_net", "m_net", "r_lobe",
-                  "sampling", "energy_calibration", "fit"});
+    r.allowKeys({"format", "version", "ablation", "fiber", "ply", "t_net", "m_net", "r_lobe",
+                 "sampling", "energy_calibration", "fit"});
 
     YarnModel model;
-    model.fiber = FiberParams::fromJson(j.at("fiber"), source + ": fiber");
-    model.ply = readPly(r, j.at("ply"));
-    model.tNet = readNetwork(r, j.at("t_net"), "t_net", 3, 1);
-    model.mNet = readNetwork(r, j.at("m_net"), "m_net", 6, 3);
-    model.rLobe = readRLobe(r, j.at("r_lobe"));
-    model.sampling = readSampling(r, j.at("sampling"));
-    if (j.contains("energy_calibration"))
-        model.calibration = readCalibration(r, j.at("energy_calibration"));
-    const json& fit = j.at("fit");
-    if (!fit.is_object()) r.fail("fit", "expected an object, got " + describeJson(fit));
-    model.fit = fit;
-    if (j.contains("ablation")) model.ablation = readAblation(r, j.at("ablation"));
+    model.fiber = FiberParams::fromJson(r.value("fiber"), source, "fiber");
+    model.ply = readPly(r);
+    model.tNet = readNetwork(r, "t_net", 3, 1);
+    model.mNet = readNetwork(r, "m_net", 6, 3);
+    model.rLobe = readRLobe(r);
+    model.sampling = readSampling(r);
+    model.calibration = readCalibration(r);
+    r.object("fit");  // an object, written back as is
+    model.fit = r.value("fit");
+    if (r.has("ablation")) model.ablation = readAblation(r);
     return model;
 }
 

@@ -183,7 +183,8 @@ TEST(YarnModel, MissingKey) {
 TEST(YarnModel, UnknownKey) {
     json j = yarnModelToJson(sampleModel());
     j["colour"] = 1;
-    expectModelError(j, {"unknown key \"colour\"", "allowed: format, version"});
+    expectModelError(j, {"model.json: unknown key \"colour\" (allowed: format, version, ablation, "
+                         "fiber, ply, t_net, m_net, r_lobe, sampling, energy_calibration, fit)"});
     j = yarnModelToJson(sampleModel());
     j["r_lobe"]["tilt"] = 10;
     expectModelError(j, {"r_lobe: unknown key \"tilt\""});
@@ -195,7 +196,7 @@ TEST(YarnModel, UnknownKey) {
     expectModelError(j, {"ply: unknown key \"radius\""});
     j = yarnModelToJson(sampleModel());
     j["fiber"]["beta"] = 1;
-    expectModelError(j, {"model.json: fiber", "beta"});
+    expectModelError(j, {"model.json: fiber: unknown key \"beta\" (allowed: c_r, c_tt"});
     // The fit block is free-form.
     j = yarnModelToJson(sampleModel());
     j["fit"]["anything"] = {{"nested", {1, "two"}}};
@@ -205,23 +206,30 @@ TEST(YarnModel, UnknownKey) {
 TEST(YarnModel, WrongType) {
     json j = yarnModelToJson(sampleModel());
     j["version"] = "1";
-    expectModelError(j, {"version: expected an integer"});
+    expectModelError(j, {"model.json: version: expected an integer, got the string \"1\""});
     j = yarnModelToJson(sampleModel());
     j["r_lobe"]["tilt_deg"] = "30";
-    expectModelError(j, {"r_lobe.tilt_deg: expected a number"});
+    expectModelError(
+        j, {"r_lobe.tilt_deg: expected a number in [0, 90) degrees, got the string \"30\""});
     j = yarnModelToJson(sampleModel());
     j["m_net"]["layers"][0]["weight"][2][1] = "0.5";
     expectModelError(j, {"m_net.layers[0].weight[2][1]: expected a number"});
     j = yarnModelToJson(sampleModel());
     j["ply"]["fibers"] = 300.5;
-    expectModelError(j, {"ply.fibers: expected an integer"});
+    expectModelError(j, {"ply.fibers: expected an integer in [1, 1000000], got 300.5"});
+    j["ply"]["fibers"] = 300.0;  // an integer is written as one
+    expectModelError(j, {"ply.fibers: expected an integer in [1, 1000000], got 300 (written as a "
+                         "floating-point number)"});
     j = yarnModelToJson(sampleModel());
     j["fit"] = 3;
-    expectModelError(j, {"fit: expected an object"});
+    expectModelError(j, {"model.json: fit: expected an object, got 3"});
     j = yarnModelToJson(sampleModel());
     j["t_net"]["output"] = 1;
-    expectModelError(j, {"t_net.output: expected a string"});
-    expectModelError(json::array(), {"expected a JSON object"});
+    expectModelError(j,
+                     {"t_net.output: expected one of \"sigmoid\", \"exp\", \"identity\", got 1"});
+    expectModelError(
+        json::array(),
+        {"model.json: expected an object (a weft-yarn-model file), got an array of 0"});
 }
 
 TEST(YarnModel, WrongLayerShape) {
@@ -234,10 +242,14 @@ TEST(YarnModel, WrongLayerShape) {
                          "m_net has 3 outputs", "got 2 rows"});
     j = yarnModelToJson(sampleModel());
     j["m_net"]["layers"][1]["bias"].erase(0);
-    expectModelError(j, {"m_net.layers[1].bias: expected 21 numbers"});
+    expectModelError(j, {"m_net.layers[1].bias: expected an array of 21 numbers (one per row of "
+                         "weight), got an array of 20"});
     j = yarnModelToJson(sampleModel());
     j["t_net"]["layers"][0]["prelu"].push_back(0.25);
-    expectModelError(j, {"t_net.layers[0].prelu: expected 7 numbers"});
+    expectModelError(j, {"t_net.layers[0].prelu: expected an array of 7 numbers"});
+    j = yarnModelToJson(sampleModel());
+    j["t_net"]["layers"][1] = 3;
+    expectModelError(j, {"model.json: t_net.layers[1]: expected an object, got 3"});
     j = yarnModelToJson(sampleModel());
     j["t_net"]["layers"] = json::array();
     expectModelError(j, {"t_net.layers: expected a non-empty array"});
@@ -332,13 +344,15 @@ TEST(YarnModel, OutOfRange) {
 TEST(YarnModel, Masking) {
     json j = yarnModelToJson(sampleModel());
     j["r_lobe"]["masking"]["coefficients"].erase(3);
-    expectModelError(j, {"r_lobe.masking.coefficients: expected 4 numbers"});
+    expectModelError(j, {"r_lobe.masking.coefficients: expected an array of 4 numbers, got an "
+                         "array of 3"});
     j = yarnModelToJson(sampleModel());
     j["r_lobe"]["masking"]["form"] = "quadratic";
-    expectModelError(j, {"r_lobe.masking.form: expected \"symmetric-quadratic\""});
+    expectModelError(j, {"r_lobe.masking.form: expected \"symmetric-quadratic\", got the string "
+                         "\"quadratic\""});
     j = yarnModelToJson(sampleModel());
     j["r_lobe"]["masking"]["extra"] = 1;
-    expectModelError(j, {"r_lobe.masking: unknown key \"extra\""});
+    expectModelError(j, {"r_lobe.masking: unknown key \"extra\" (allowed: form, coefficients)"});
 }
 
 TEST(YarnModel, EnergyCalibration) {
@@ -350,16 +364,19 @@ TEST(YarnModel, EnergyCalibration) {
     EXPECT_TRUE(yarnModelFromJson(j, "model.json").calibration.empty());
     j = yarnModelToJson(sampleModel());
     j["energy_calibration"]["degree"] = 13;
-    expectModelError(j, {"energy_calibration.degree: expected an integer in [0, 12], got 13"});
+    expectModelError(j, {"energy_calibration.degree = 13 is out of range: allowed [0, 12]"});
+    j["energy_calibration"]["degree"] = 2.5;
+    expectModelError(j, {"energy_calibration.degree: expected an integer in [0, 12], got 2.5"});
     j = yarnModelToJson(sampleModel());
     j["energy_calibration"]["degree"] = 3;
-    expectModelError(j, {"energy_calibration.r[0]: expected 16 numbers"});
+    expectModelError(j, {"energy_calibration.r[0]: expected an array of 16 numbers ((degree + "
+                         "1)^2), got an array of"});
     j = yarnModelToJson(sampleModel());
     j["energy_calibration"]["m"].erase(2);
     expectModelError(j, {"energy_calibration.m: expected 3 rows"});
     j = yarnModelToJson(sampleModel());
     j["energy_calibration"]["r"][1][4] = "nan";
-    expectModelError(j, {"energy_calibration.r[1][4]: expected a number"});
+    expectModelError(j, {"energy_calibration.r[1][4]: expected a number, got the string"});
     j = yarnModelToJson(sampleModel());
     j["energy_calibration"]["form"] = "table";
     expectModelError(j, {"energy_calibration.form: expected \"log-polynomial-sphere\""});

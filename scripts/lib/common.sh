@@ -37,11 +37,17 @@ weft_install_deps() {
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 }
 
-# weft_build DIR [cmake args...]: configure and build one build tree.
+# weft_build DIR [cmake args...]: configure and build one build tree, every
+# target (library, weft, tests, benches, Python module) unless WEFT_TARGET
+# names the one to build (scripts/demo builds only `weft`).
 weft_build() {
     local dir="$1"
     shift
     # The Python module is built for Debian's interpreter (docs/python.md).
     cmake -S "$WEFT_ROOT" -B "$dir" -DPython3_EXECUTABLE="$WEFT_PYTHON" "$@" >/dev/null
-    cmake --build "$dir" -j"$WEFT_JOBS"
+    if [ -n "${WEFT_TARGET:-}" ]; then
+        cmake --build "$dir" -j"$WEFT_JOBS" --target "$WEFT_TARGET"
+    else
+        cmake --build "$dir" -j"$WEFT_JOBS"
+    fi
 }

@@ -10,7 +10,8 @@
 //   phi:   16 panels of 4 nodes, with edges at phi = 0, +-pi/2 (where R and
 //          pdf_R jump to zero: the surface plane) and +-pi.
 // About 12,000 nodes; `refinement` divides every panel width. Used by the
-// fit's energy calibration, `weft yarn check` and the energy tests.
+// fit's energy calibration, `weft yarn check` and the energy tests; the yarn
+// BSDF's energy guard builds its coarser rules with the same surfaceFiberRule.
 #pragma once
 
 #include <vector>
@@ -24,6 +25,13 @@ struct SphereRule {
     std::vector<Vec3> directions;  // yarn-frame unit vectors
     std::vector<double> weights;   // solid angle; they sum to 4 pi
 };
+
+// The product of the 4-point Gauss-Legendre rules on the panels between
+// consecutive `thetaEdges` (longitudinal angle, sorted, within [-pi/2, pi/2])
+// and `phiEdges` (azimuth from n), with the solid-angle weight cos(theta);
+// nodes in theta-major order, as yarn-frame directions.
+SphereRule surfaceFiberRule(const SurfaceFiberFrame& frame, const std::vector<double>& thetaEdges,
+                            const std::vector<double>& phiEdges);
 
 // `betaR`: the fiber's R lobe width (radians); wi in the yarn frame.
 SphereRule surfaceFiberSphereRule(const SurfaceFiberFrame& frame, double betaR, const Vec3& wi,

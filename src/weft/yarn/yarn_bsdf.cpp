@@ -9,6 +9,7 @@
 #include "weft/core/error.h"
 #include "weft/core/math.h"
 #include "weft/core/quadrature.h"
+#include "weft/yarn/sphere_rule.h"
 
 namespace weft {
 
@@ -87,27 +88,18 @@ void axisCell(double t, int count, int* i0, double* f) {
 }  // namespace
 
 void YarnBsdf::buildEnergyGuard() {
-    using quadrature::panelRule;
     using quadrature::uniformEdges;
     const SurfaceFiberFrame& frame = lobes_.frame();
     const double betaR = radians(rLobe_.fiber().params().betaRDeg);
-    // Outgoing rules in the surface fiber frame (yarn_integrals.h has the
-    // finer one of the checks): M is smooth, 8 x 8 panels over the sphere; R
-    // lives on the upper half cone |phi| < pi/2, within a few beta_R of
-    // theta = -theta_i for the fiber's R lobe, wider for its TT lobe.
-    std::vector<double> phiM, phiMW, phiR, phiRW, thetaM, thetaMW, edges;
-    uniformEdges(-kPi, kPi, 8, &edges);
-    panelRule(edges, &phiM, &phiMW);
-    edges.clear();
-    uniformEdges(-kHalfPi, kHalfPi, 4, &edges);
-    panelRule(edges, &phiR, &phiRW);
-    edges.clear();
-    uniformEdges(-kHalfPi, kHalfPi, 8, &edges);
-    panelRule(edges, &thetaM, &thetaMW);
-    auto direction = [&](double theta, double phi) {
-        const double c = std::cos(theta);
-        return frame.fromLocal({std::sin(theta), c * std::sin(phi), c * std::cos(phi)});
-    };
+    // Outgoing rules in the surface fiber frame (sphere_rule.h; yarn_integrals.h
+    // uses the finer one of the checks): M is smooth, 8 x 8 panels over the
+    // sphere; R lives on the upper half cone |phi| < pi/2, within a few beta_R
+    // of theta = -theta_i for the fiber's R lobe, wider for its TT lobe.
+    std::vector<double> thetaEdgesM, phiEdgesM, phiEdgesR;
+    uniformEdges(-kHalfPi, kHalfPi, 8, &thetaEdgesM);
+    uniformEdges(-kPi, kPi, 8, &phiEdgesM);
+    uniformEdges(-kHalfPi, kHalfPi, 4, &phiEdgesR);
+    const SphereRule ruleM = surfaceFiberRule(frame, thetaEdgesM, phiEdgesM);
 
     const size_t fiberNodes = static_cast<size_t>(kGuardFiber) * kGuardFiber;
     const size_t nodes = static_cast<size_t>(kGuardTheta) * kGuardPhi;
@@ -117,19 +109,18 @@ void YarnBsdf::buildEnergyGuard() {
     tbb::parallel_for(size_t(0), fiberNodes, [&](size_t node) {
         if (!hasReflection_) return;
         const double thetaI = guardFiberAngle(static_cast<int>(node / kGuardFiber));
-        const Vec3 wi = direction(thetaI, guardFiberAngle(static_cast<int>(node % kGuardFiber)));
+        const Vec3 wi =
+            frame.direction(thetaI, guardFiberAngle(static_cast<int>(node % kGuardFiber)));
         const double pT = transmissionUpper(wi);
-        std::vector<double> thetaEdges, thetaR, thetaRW;
+        std::vector<double> thetaEdges;
         uniformEdges(-kHalfPi, kHalfPi, 12, &thetaEdges);
         uniformEdges(std::max(-kHalfPi, -thetaI - 5 * betaR),
                      std::min(kHalfPi, -thetaI + 5 * betaR), 10, &thetaEdges);
         std::sort(thetaEdges.begin(), thetaEdges.end());
-        panelRule(thetaEdges, &thetaR, &thetaRW);
+        const SphereRule ruleR = surfaceFiberRule(frame, thetaEdges, phiEdgesR);
         Rgb energyR;
-        for (size_t i = 0; i < thetaR.size(); ++i)
-            for (size_t j = 0; j < phiR.size(); ++j)
-                energyR += rLobe_.eval(wi, direction(thetaR[i], phiR[j]), pT) *
-                           (thetaRW[i] * phiRW[j] * std::cos(thetaR[i]));
+        for (size_t k = 0; k < ruleR.directions.size(); ++k)
+            energyR += rLobe_.eval(wi, ruleR.directions[k], pT) * ruleR.weights[k];
         const Rgb af = fiberAlbedo(frame.toLocal(wi));
         for (int c = 0; c < 3; ++c) {
             const double full = (1.0 - pT) * af[c];
@@ -143,10 +134,8 @@ void YarnBsdf::buildEnergyGuard() {
             sphericalDirection(guardPolarAngle(static_cast<int>(node / kGuardPhi)),
                                -kPi + kTwoPi * static_cast<double>(node % kGuardPhi) / kGuardPhi);
         Rgb energy;
-        for (size_t i = 0; i < thetaM.size(); ++i)
-            for (size_t j = 0; j < phiM.size(); ++j)
-                energy += evalM(wi, direction(thetaM[i], phiM[j])) *
-                          (thetaMW[i] * phiMW[j] * std::cos(thetaM[i]));
+        for (size_t k = 0; k < ruleM.directions.size(); ++k)
+            energy += evalM(wi, ruleM.directions[k]) * ruleM.weights[k];
         energy = energy * calibration_.scales(wi).m;
         guardEnergyM_[node] = energy;
         const double pT = transmissionUpper(wi);

@@ -98,21 +98,10 @@ SamplingLobes::SamplingLobes(const FiberParams& fiber, double tiltDeg, const Sam
 
 double SamplingLobes::pdfR(const Vec3& wi, const Vec3& wo) const {
     if (wo.z <= 0) return 0.0;  // the upper half cone |phi_o| < pi/2
-    const Vec3 i = frame_.toLocal(wi), o = frame_.toLocal(wo);
-    const double thetaI = std::asin(std::clamp(i.x, -1.0, 1.0));
-    const double thetaO = std::asin(std::clamp(o.x, -1.0, 1.0));
-    const double cosThetaO = std::sqrt(std::max(0.0, 1.0 - o.x * o.x));
-    if (cosThetaO <= 0) return 0.0;
-    return gR_.pdf(thetaO, -thetaI) / (kPi * cosThetaO);
-}
-
-SamplingLobes::Angles SamplingLobes::anglesOf(const Vec3& w) const {
-    const Vec3 local = frame_.toLocal(w);
-    const double sinTheta = std::clamp(local.x, -1.0, 1.0);
-    const double cosTheta = std::sqrt(std::max(0.0, 1.0 - sinTheta * sinTheta));
-    // cos(phi) with phi measured from n in the (b~, n) plane.
-    const double cosPhi = cosTheta > 0 ? std::clamp(local.z / cosTheta, -1.0, 1.0) : 1.0;
-    return {std::asin(sinTheta), cosTheta, cosPhi};
+    const double thetaI = frame_.longitudinalAngle(wi);
+    const SurfaceFiberFrame::Angles out = frame_.angles(wo);
+    if (out.cosTheta <= 0) return 0.0;
+    return gR_.pdf(out.theta, -thetaI) / (kPi * out.cosTheta);
 }
 
 double SamplingLobes::pdfM(double thetaI, double inverseMass, const Angles& out,
@@ -124,27 +113,15 @@ double SamplingLobes::pdfM(double thetaI, double inverseMass, const Angles& out,
            uniform;
 }
 
-namespace {
-
-// Surface-fiber-local direction of longitudinal angle theta and azimuth phi from n.
-Vec3 coneDirection(double theta, double phi) {
-    const double cosTheta = std::cos(theta);
-    return {std::sin(theta), cosTheta * std::sin(phi), cosTheta * std::cos(phi)};
-}
-
-}  // namespace
-
 Vec3 SamplingLobes::sampleR(const Vec3& wi, double u1, double u2) const {
-    const double thetaI = anglesOf(wi).theta;
-    const double thetaO = gR_.sample(-thetaI, u1);
-    return frame_.fromLocal(coneDirection(thetaO, kPi * (u2 - 0.5)));
+    const double thetaO = gR_.sample(-frame_.longitudinalAngle(wi), u1);
+    return frame_.direction(thetaO, kPi * (u2 - 0.5));
 }
 
 Vec3 SamplingLobes::sampleM(const Vec3& wi, double uLobe, double u1, double u2, Rng& rng) const {
     if (uLobe < params_.kappaM) {
-        const double thetaI = anglesOf(wi).theta;
-        const double thetaO = gM_.sample(-thetaI, u1);
-        return frame_.fromLocal(coneDirection(thetaO, vonMisesM_.sample(u2, rng)));
+        const double thetaO = gM_.sample(-frame_.longitudinalAngle(wi), u1);
+        return frame_.direction(thetaO, vonMisesM_.sample(u2, rng));
     }
     // Uniform sphere: z uniform in [-1, 1], azimuth uniform (any frame).
     const double z = 1.0 - 2.0 * u1;
@@ -154,7 +131,7 @@ Vec3 SamplingLobes::sampleM(const Vec3& wi, double uLobe, double u1, double u2, 
 }
 
 double SamplingLobes::pdfM(const Vec3& wi, const Vec3& wo) const {
-    const double thetaI = anglesOf(wi).theta;
+    const double thetaI = frame_.longitudinalAngle(wi);
     const Angles out = anglesOf(wo);
     return pdfM(thetaI, gM_.inverseMass(-thetaI), out, vonMisesM_.pdfOfCos(out.cosPhi));
 }

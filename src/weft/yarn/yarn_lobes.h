@@ -11,7 +11,9 @@
 // upper half of the cone (paper 4.4).
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "weft/core/rgb.h"
 #include "weft/core/vec.h"
@@ -34,6 +36,33 @@ struct SurfaceFiberFrame {
     }
     Vec3 fromLocal(const Vec3& w) const {
         return {cosTilt * w.x - sinTilt * w.y, sinTilt * w.x + cosTilt * w.y, w.z};
+    }
+
+    // Surface-fiber-local direction of longitudinal angle theta and azimuth
+    // phi from n: (sin theta, cos theta sin phi, cos theta cos phi).
+    static Vec3 localDirection(double theta, double phi) {
+        const double cosTheta = std::cos(theta);
+        return {std::sin(theta), cosTheta * std::sin(phi), cosTheta * std::cos(phi)};
+    }
+    // The same as a yarn-local direction.
+    Vec3 direction(double theta, double phi) const { return fromLocal(localDirection(theta, phi)); }
+
+    // The angles of a yarn-local direction: theta = asin(w~.x), its cosine,
+    // and the cosine of the azimuth from n in the (b~, n) plane (1 on the
+    // fiber axis, where the azimuth is undefined).
+    struct Angles {
+        double theta, cosTheta, cosPhi;
+    };
+    Angles angles(const Vec3& w) const {
+        const Vec3 local = toLocal(w);
+        const double sinTheta = std::clamp(local.x, -1.0, 1.0);
+        const double cosTheta = std::sqrt(std::max(0.0, 1.0 - sinTheta * sinTheta));
+        const double cosPhi = cosTheta > 0 ? std::clamp(local.z / cosTheta, -1.0, 1.0) : 1.0;
+        return {std::asin(sinTheta), cosTheta, cosPhi};
+    }
+    // Its longitudinal angle alone.
+    double longitudinalAngle(const Vec3& w) const {
+        return std::asin(std::clamp(toLocal(w).x, -1.0, 1.0));
     }
 };
 
@@ -100,10 +129,8 @@ public:
     // The same pdf_M from precomputed angles (fitting loops): a direction's
     // longitudinal angle, its cosine and the cosine of its azimuth from n, all
     // in the surface fiber frame; `inverseMass` = longitudinalM().inverseMass(-thetaI).
-    struct Angles {
-        double theta, cosTheta, cosPhi;
-    };
-    Angles anglesOf(const Vec3& w) const;
+    using Angles = SurfaceFiberFrame::Angles;
+    Angles anglesOf(const Vec3& w) const { return frame_.angles(w); }
     const TruncatedGaussian& longitudinalM() const { return gM_; }
     double pdfM(double thetaI, double inverseMass, const Angles& out, double vonMisesDensity) const;
     double vonMisesM(double cosPhi) const { return vonMisesM_.pdfOfCos(cosPhi); }

@@ -6,7 +6,6 @@
 
 #include "weft/core/math.h"
 #include "weft/core/test_util.h"
-#include "weft/gather/rdm.h"
 
 namespace weft {
 namespace {

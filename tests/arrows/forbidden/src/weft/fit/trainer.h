@@ -1,0 +1,2 @@
+// The trainer may include the runtime.
+#include "weft/yarn/network.h"

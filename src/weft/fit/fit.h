@@ -102,5 +102,10 @@ FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& rdm, cons
 // ablated model pass ablationTarget() of both gathers.
 void writeFitReport(const FitResult& fit, const RdmData& rdm, const RdmData* reference,
                     const std::string& dir);
+// The slice pictures of that report (and of `weft yarn check`): for a few
+// incident directions, the RDM (left) against the model's map (right), one
+// PNG per component, slice-{m,r}-thetaTT-phiPPP.png in `dir`.
+void writeSliceComparisons(const std::string& dir, const RdmData& rdm,
+                           const std::vector<float>& rMap, const std::vector<float>& mMap);
 
 }  // namespace weft

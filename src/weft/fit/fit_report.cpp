@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <tuple>
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
@@ -16,7 +17,9 @@ namespace weft {
 
 namespace {
 
-nlohmann::json finiteOrNull(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+nlohmann::json finiteOrNull(double v) {
+    return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+}
 
 // Incident directions of the slice pictures: normal, oblique and grazing, along and across t.
 struct SliceDirection {
@@ -25,6 +28,24 @@ struct SliceDirection {
 constexpr SliceDirection kSliceDirections[] = {{10, 0}, {45, 0}, {45, 90}, {75, 0}, {75, 90}};
 
 }  // namespace
+
+void writeSliceComparisons(const std::string& dir, const RdmData& rdm,
+                           const std::vector<float>& rMap, const std::vector<float>& mMap) {
+    const RdmBins& bins = rdm.bins;
+    for (const SliceDirection& d : kSliceDirections) {
+        const size_t bin =
+            bins.incidentBin(sphericalDirection(radians(d.thetaDeg), radians(d.phiDeg)));
+        for (const auto& [name, rdmMap, modelMap] :
+             {std::tuple{"m", &rdm.rdmM, &mMap}, std::tuple{"r", &rdm.rdmR, &rMap}}) {
+            const Image exposureSource = rdmSliceImage(rdmMap->data(), bins, bin);
+            const Image image = rdmComparisonImage(rdmMap->data(), modelMap->data(), bins, bin);
+            char file[96];
+            std::snprintf(file, sizeof file, "/slice-%s-theta%02.0f-phi%03.0f.png", name,
+                          d.thetaDeg, d.phiDeg);
+            writePng(dir + file, image, quantileExposure(exposureSource));
+        }
+    }
+}
 
 void writeFitReport(const FitResult& fit, const RdmData& rdm, const RdmData* reference,
                     const std::string& dir) {
@@ -91,20 +112,7 @@ void writeFitReport(const FitResult& fit, const RdmData& rdm, const RdmData* ref
                                  plot);
     writePng(out.path() + "/loss.png", loss);
 
-    // RDM (left) against the fit (right), one PNG per component and direction.
-    for (const SliceDirection& d : kSliceDirections) {
-        const size_t bin =
-            bins.incidentBin(sphericalDirection(radians(d.thetaDeg), radians(d.phiDeg)));
-        for (const auto& [name, rdmMap, fitMap] :
-             {std::tuple{"m", &rdm.rdmM, &mFit}, std::tuple{"r", &rdm.rdmR, &rFit}}) {
-            const Image exposureSource = rdmSliceImage(rdmMap->data(), bins, bin);
-            const Image image = rdmComparisonImage(rdmMap->data(), fitMap->data(), bins, bin);
-            char file[96];
-            std::snprintf(file, sizeof file, "/slice-%s-theta%02.0f-phi%03.0f.png", name,
-                          d.thetaDeg, d.phiDeg);
-            writePng(out.path() + file, image, quantileExposure(exposureSource));
-        }
-    }
+    writeSliceComparisons(out.path(), rdm, rFit, mFit);
     out.commit();
 }
 

@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "weft/core/file.h"
-#include "weft/core/json_message.h"
 #include "weft/core/image.h"
+#include "weft/core/json_message.h"
 #include "weft/core/math.h"
 #include "weft/core/npy.h"
 #include "weft/fit/fit.h"
@@ -26,14 +26,7 @@ namespace weft {
 
 namespace {
 
-// Incident directions of the slice pictures (as in the fit report).
-struct SliceDirection {
-    double thetaDeg, phiDeg;
-};
-constexpr SliceDirection kSliceDirections[] = {{10, 0}, {45, 0}, {45, 90}, {75, 0}, {75, 90}};
-
 constexpr double kAlbedoTolerance = 0.03;  // the target, reported as a fraction
-
 
 // Polar and azimuthal angle (degrees) of an incident bin's centre.
 std::pair<double, double> binAngles(const RdmBins& bins, size_t i) {
@@ -49,13 +42,11 @@ double relativeError(double model, double rdm) {
 
 }  // namespace
 
-nlohmann::json checkYarnModel(const YarnModel& model, const std::string& modelPath,
-                              const RdmData& rdm, const YarnCheckOptions& options,
-                              const std::string& outDir) {
+YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& modelPath,
+                                 const RdmData& rdm, const YarnCheckOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     const RdmBins& bins = rdm.bins;
     const size_t nIn = bins.incidentCount();
-    TempDirCommit out(outDir);
     tbb::task_arena arena(options.threads > 0 ? options.threads
                                               : tbb::this_task_arena::max_concurrency());
 
@@ -179,37 +170,6 @@ nlohmann::json checkYarnModel(const YarnModel& model, const std::string& modelPa
         pT = modelTransmissionMap(model, bins);
     });
 
-    const size_t ti = static_cast<size_t>(bins.thetaI), pi = static_cast<size_t>(bins.phiI);
-    writeNpy(out.path() + "/albedo_model.npy", albedoModel.data(), {ti, pi, 3});
-    writeNpy(out.path() + "/albedo_rdm.npy", albedoRdm.data(), {ti, pi, 3});
-    writeNpy(out.path() + "/components_model.npy", componentsModel.data(), {ti, pi, 3, 3});
-    writeNpy(out.path() + "/components_rdm.npy", componentsRdm.data(), {ti, pi, 3, 3});
-    writeNpy(out.path() + "/second_moment.npy", moments.data(), {ti, pi, 3});
-
-    // Albedo maps as one (1, 1, TI, PI) "slice": RDM left, model right, same exposure.
-    {
-        const std::vector<float> a(albedoRdm.begin(), albedoRdm.end());
-        const std::vector<float> b(albedoModel.begin(), albedoModel.end());
-        const RdmBins albedoBins{1, 1, bins.thetaI, bins.phiI};
-        const int scale = std::max(1, 360 / std::max(bins.phiI, 1));
-        writePng(out.path() + "/albedo.png",
-                 rdmComparisonImage(a.data(), b.data(), albedoBins, 0, scale));
-    }
-    for (const SliceDirection& d : kSliceDirections) {
-        const size_t bin =
-            bins.incidentBin(sphericalDirection(radians(d.thetaDeg), radians(d.phiDeg)));
-        for (const auto& [name, rdmMap, modelMap] :
-             {std::tuple{"m", &rdm.rdmM, &mMap}, std::tuple{"r", &rdm.rdmR, &rMap}}) {
-            const Image exposureSource = rdmSliceImage(rdmMap->data(), bins, bin);
-            char file[96];
-            std::snprintf(file, sizeof file, "/slice-%s-theta%02.0f-phi%03.0f.png", name,
-                          d.thetaDeg, d.phiDeg);
-            writePng(out.path() + file,
-                     rdmComparisonImage(rdmMap->data(), modelMap->data(), bins, bin),
-                     quantileExposure(exposureSource));
-        }
-    }
-
     const double n = static_cast<double>(checked), nAll = static_cast<double>(nIn);
     auto meanOrNull = [&](const Rgb& sum) {
         return checked ? rgbJson(sum / n) : nlohmann::json(nullptr);
@@ -277,9 +237,45 @@ nlohmann::json checkYarnModel(const YarnModel& model, const std::string& modelPa
     proxy["bins_where_yarn_beats_uniform"] = static_cast<double>(beatsUniform) / nAll;
     summary["seconds"] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    writeFileAtomic(out.path() + "/check.json", summary.dump(2) + "\n");
+    YarnCheckResult result;
+    result.summary = std::move(summary);
+    result.albedoModel = std::move(albedoModel), result.albedoRdm = std::move(albedoRdm);
+    result.componentsModel = std::move(componentsModel);
+    result.componentsRdm = std::move(componentsRdm);
+    result.secondMoments = std::move(moments);
+    result.rMap = std::move(rMap), result.mMap = std::move(mMap);
+    return result;
+}
+
+void writeYarnCheck(const YarnCheckResult& check, const RdmData& rdm, const std::string& dir) {
+    const RdmBins& bins = rdm.bins;
+    const size_t ti = static_cast<size_t>(bins.thetaI), pi = static_cast<size_t>(bins.phiI);
+    writeNpy(dir + "/albedo_model.npy", check.albedoModel.data(), {ti, pi, 3});
+    writeNpy(dir + "/albedo_rdm.npy", check.albedoRdm.data(), {ti, pi, 3});
+    writeNpy(dir + "/components_model.npy", check.componentsModel.data(), {ti, pi, 3, 3});
+    writeNpy(dir + "/components_rdm.npy", check.componentsRdm.data(), {ti, pi, 3, 3});
+    writeNpy(dir + "/second_moment.npy", check.secondMoments.data(), {ti, pi, 3});
+
+    // Albedo maps as one (1, 1, TI, PI) "slice": RDM left, model right, same exposure.
+    {
+        const std::vector<float> a(check.albedoRdm.begin(), check.albedoRdm.end());
+        const std::vector<float> b(check.albedoModel.begin(), check.albedoModel.end());
+        const RdmBins albedoBins{1, 1, bins.thetaI, bins.phiI};
+        const int scale = std::max(1, 360 / std::max(bins.phiI, 1));
+        writePng(dir + "/albedo.png", rdmComparisonImage(a.data(), b.data(), albedoBins, 0, scale));
+    }
+    writeSliceComparisons(dir, rdm, check.rMap, check.mMap);
+    writeFileAtomic(dir + "/check.json", check.summary.dump(2) + "\n");
+}
+
+nlohmann::json checkYarnModel(const YarnModel& model, const std::string& modelPath,
+                              const RdmData& rdm, const YarnCheckOptions& options,
+                              const std::string& outDir) {
+    TempDirCommit out(outDir);  // an unwritable destination fails before the work
+    YarnCheckResult check = computeYarnCheck(model, modelPath, rdm, options);
+    writeYarnCheck(check, rdm, out.path());
     out.commit();
-    return summary;
+    return std::move(check.summary);
 }
 
 }  // namespace weft

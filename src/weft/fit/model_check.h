@@ -29,9 +29,10 @@
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
-#include "weft/yarn/yarn_model.h"
 #include "weft/gather/rdm_io.h"
+#include "weft/yarn/yarn_model.h"
 
 namespace weft {
 
@@ -40,7 +41,21 @@ struct YarnCheckOptions {
     int threads = 0;          // 0: all cores; never changes the result
 };
 
-// Writes the report to `outDir` and returns check.json's document.
+// The computation: check.json's document and the arrays of the report.
+struct YarnCheckResult {
+    nlohmann::json summary;
+    std::vector<double> albedoModel, albedoRdm;          // (TI, PI, 3)
+    std::vector<double> componentsModel, componentsRdm;  // (TI, PI, 3, 3): T, R, M rows
+    std::vector<double> secondMoments;                   // (TI, PI, 3)
+    std::vector<float> rMap, mMap;                       // the model's maps (model_maps.h)
+};
+YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& modelPath,
+                                 const RdmData& rdm, const YarnCheckOptions& options);
+// The writing: the report's files into the existing folder `dir`.
+void writeYarnCheck(const YarnCheckResult& check, const RdmData& rdm, const std::string& dir);
+
+// Both: writes the report to `outDir` (atomically: a temporary folder renamed
+// into place) and returns check.json's document.
 nlohmann::json checkYarnModel(const YarnModel& model, const std::string& modelPath,
                               const RdmData& rdm, const YarnCheckOptions& options,
                               const std::string& outDir);

@@ -51,7 +51,7 @@ class ShadingPoint {
     Frame frame_;
     Vec3 wi_;
     bool isYarn_ = false;
-    YarnBsdf::Slice yarn_;
+    BsdfSlice yarn_;
     const FiberBcsdf* fiber_ = nullptr;
 };
 

@@ -3,15 +3,37 @@
 // Directions follow Mitsuba/pbrt (DESIGN.md 2): wi points towards the previous
 // path vertex (camera side), wo towards the next one (light side), both unit
 // vectors in the model's local frame.
-//   eval(wi, wo)  -> Rgb  scattering value, foreshortening of wo included
-//   pdf(wi, wo)   -> solid-angle density of sample() for the continuous lobes
-//   sample(wi, u) -> BsdfSample with weight = eval / pdf computed in one place
+//   eval(wi, wo)    -> Rgb  scattering value, foreshortening of wo included
+//   pdf(wi, wo)     -> solid-angle density of sample() for the continuous lobes
+//   evalPdf(wi, wo) -> BsdfEval {eval, pdf} in one call, both exactly equal to
+//                      what eval and pdf return
+//   sample(wi, u)   -> BsdfSample with weight = eval / pdf, computed in one
+//                      place (BsdfSample::fromEval) from one evalPdf
 // A sample with pdf == 0 and a black weight is an invalid (absorbed) sample.
+//
+// class Bsdf is the interface the fiber BCSDF, the yarn BSDF (and any later
+// model) implement and the path tracer calls. What depends on wi alone (the
+// fiber's incident angles and Fresnel term; the yarn's P(T|wi), calibration
+// and energy guard) is computed once by prepare(wi) into a BsdfIncident, a
+// fixed-size, trivially copyable value that each BSDF fills with its own
+// state; the virtual eval, pdf, evalPdf and sample take that incident, so a
+// path tracer that evaluates (NEE) and samples at one vertex pays for it once.
+// A BsdfIncident may only be passed to the Bsdf that prepared it. BsdfSlice is
+// a Bsdf with wi fixed (the Bsdf and its incident); the (wi, wo) forms on Bsdf
+// are defined once below from the virtual ones, so all three ways of asking
+// give the same bits. pdf(wi, wo) alone is virtual as well, for a BSDF whose
+// density needs much less of wi than prepare() computes (the yarn's needs
+// P(T|wi) only, not the calibration and the energy guard: 2.6x faster); an
+// override must return exactly pdf(prepared incident, wo).
 #pragma once
 
 #include <array>
+#include <cstddef>
+#include <new>
+#include <type_traits>
 
 #include "weft/core/rgb.h"
+#include "weft/core/rng.h"
 #include "weft/core/vec.h"
 
 namespace weft {
@@ -21,6 +43,18 @@ namespace weft {
 // draw further numbers from a generator seeded by these three.
 using BsdfSampleInput = std::array<double, 3>;
 
+// The generator sample(wi, u) draws its rejection steps from: seeded by u, so
+// that the sample is a deterministic function of (wi, u).
+inline Rng bsdfSampleRng(const BsdfSampleInput& u) {
+    return Rng(hashDouble(u[0]) ^ (hashDouble(u[1]) >> 1), hashDouble(u[2]));
+}
+
+// eval and pdf at one (wi, wo).
+struct BsdfEval {
+    Rgb value;       // eval(wi, wo), cosine included
+    double pdf = 0;  // pdf(wi, wo)
+};
+
 struct BsdfSample {
     Vec3 wo;
     Rgb weight;        // eval(wi, wo) / pdf(wi, wo); for a delta lobe the lobe's weight
@@ -29,6 +63,126 @@ struct BsdfSample {
     bool isDelta = false;
 
     bool valid() const { return lobe >= 0; }
+
+    // The sample of a continuous lobe at wo: weight = value / pdf, the one
+    // place where it is computed; an invalid sample when pdf is not positive.
+    static BsdfSample fromEval(const Vec3& wo, const BsdfEval& e, int lobe) {
+        if (!(e.pdf > 0)) return BsdfSample{};
+        BsdfSample s;
+        s.wo = wo;
+        s.pdf = e.pdf;
+        s.lobe = lobe;
+        s.weight = e.value / e.pdf;
+        return s;
+    }
 };
+
+// wi and a BSDF's state for it (see above). The state is any trivially
+// copyable struct of up to kStateBytes bytes, written by emplace and read
+// back by get with the same type.
+class BsdfIncident {
+  public:
+    static constexpr size_t kStateBytes = 128;
+
+    const Vec3& wi() const { return wi_; }
+
+    template <typename T>
+    void emplace(const Vec3& wi, const T& state) {
+        checkState<T>();
+        wi_ = wi;
+        ::new (static_cast<void*>(state_)) T(state);
+    }
+    template <typename T>
+    const T& get() const {
+        checkState<T>();
+        return *std::launder(reinterpret_cast<const T*>(state_));
+    }
+
+  private:
+    template <typename T>
+    static constexpr void checkState() {
+        static_assert(std::is_trivially_copyable_v<T>, "a BSDF's incident state is copied as bytes");
+        static_assert(sizeof(T) <= kStateBytes, "raise BsdfIncident::kStateBytes");
+        static_assert(alignof(T) <= alignof(double), "the state is aligned as a double");
+    }
+
+    Vec3 wi_;
+    alignas(double) unsigned char state_[kStateBytes];
+};
+
+class BsdfSlice;
+
+class Bsdf {
+  public:
+    virtual ~Bsdf() = default;
+
+    // Fills `in` (wi and this BSDF's state, via in.emplace) for eval, pdf,
+    // evalPdf and sample below.
+    virtual void prepare(const Vec3& wi, BsdfIncident& in) const = 0;
+    virtual BsdfEval evalPdf(const BsdfIncident& in, const Vec3& wo) const = 0;
+    // The parts of evalPdf; a BSDF overrides them where one is cheaper alone.
+    virtual Rgb eval(const BsdfIncident& in, const Vec3& wo) const { return evalPdf(in, wo).value; }
+    virtual double pdf(const BsdfIncident& in, const Vec3& wo) const { return evalPdf(in, wo).pdf; }
+    // `rng` feeds the rejection steps (e.g. a random walk's own generator).
+    virtual BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u,
+                              Rng& rng) const = 0;
+
+    // The same for one (wi, wo): prepare, then the call above.
+    Rgb eval(const Vec3& wi, const Vec3& wo) const { return eval(prepared(wi), wo); }
+    virtual double pdf(const Vec3& wi, const Vec3& wo) const { return pdf(prepared(wi), wo); }
+    BsdfEval evalPdf(const Vec3& wi, const Vec3& wo) const { return evalPdf(prepared(wi), wo); }
+    BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) const {
+        return sample(prepared(wi), u, rng);
+    }
+    // With the generator bsdfSampleRng(u).
+    BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u) const {
+        Rng rng = bsdfSampleRng(u);
+        return sample(wi, u, rng);
+    }
+    // This BSDF with wi fixed.
+    BsdfSlice slice(const Vec3& wi) const;
+
+  protected:
+    Bsdf() = default;
+    Bsdf(const Bsdf&) = default;
+    Bsdf& operator=(const Bsdf&) = default;
+
+  private:
+    BsdfIncident prepared(const Vec3& wi) const {
+        BsdfIncident in;
+        prepare(wi, in);
+        return in;
+    }
+};
+
+// A Bsdf with wi fixed: what depends on wi is computed once, at construction.
+// Its results equal the Bsdf's (wi, wo) forms. Holds a pointer: the Bsdf must
+// outlive it.
+class BsdfSlice {
+  public:
+    BsdfSlice() = default;
+    BsdfSlice(const Bsdf& bsdf, const Vec3& wi) : bsdf_(&bsdf) { bsdf.prepare(wi, in_); }
+
+    const Vec3& wi() const { return in_.wi(); }
+    const Bsdf& bsdf() const { return *bsdf_; }
+    const BsdfIncident& incident() const { return in_; }
+
+    Rgb eval(const Vec3& wo) const { return bsdf_->eval(in_, wo); }
+    double pdf(const Vec3& wo) const { return bsdf_->pdf(in_, wo); }
+    BsdfEval evalPdf(const Vec3& wo) const { return bsdf_->evalPdf(in_, wo); }
+    BsdfSample sample(const BsdfSampleInput& u, Rng& rng) const {
+        return bsdf_->sample(in_, u, rng);
+    }
+    BsdfSample sample(const BsdfSampleInput& u) const {
+        Rng rng = bsdfSampleRng(u);
+        return sample(u, rng);
+    }
+
+  private:
+    const Bsdf* bsdf_ = nullptr;
+    BsdfIncident in_;
+};
+
+inline BsdfSlice Bsdf::slice(const Vec3& wi) const { return BsdfSlice(*this, wi); }
 
 }  // namespace weft

@@ -50,14 +50,21 @@ double FiberBcsdf::probabilityR(const Rgb& f) const {
     return total > 0 ? energyR / total : 0.5;
 }
 
-void FiberBcsdf::evalAndPdf(const Angles& in, const Angles& out, Rgb* value,
+void FiberBcsdf::prepare(const Vec3& wi, BsdfIncident& in) const {
+    const Angles a = anglesOf(wi);
+    const Rgb f = fresnel(a.cosTheta);
+    in.emplace(wi, Incident{a, f, probabilityR(f)});
+}
+
+void FiberBcsdf::evalAndPdf(const Incident& incident, const Angles& out, Rgb* value,
                             double* density) const {
     if (out.cosTheta <= 0) {
         if (value) *value = Rgb();
         if (density) *density = 0;
         return;
     }
-    const Rgb f = fresnel(in.cosTheta);
+    const Angles& in = incident.angles;
+    const Rgb& f = incident.fresnel;
     const double gR = gR_.eval(out.theta, -in.theta);
     const double gTT = gTT_.eval(out.theta, -in.theta);
     const double nR = 1.0 / kTwoPi;
@@ -74,40 +81,39 @@ void FiberBcsdf::evalAndPdf(const Angles& in, const Angles& out, Rgb* value,
     if (value) *value = (f * (gR * nR) + params_.cTT * (Rgb(1.0) - f) * (gTT * nTT)) * out.cosTheta;
     if (density) {
         // (theta, phi) density p_R gR cos^2 nR + p_TT gTT cos^2 nTT, over cos(theta_o).
-        const double pR = probabilityR(f);
+        const double pR = incident.probabilityR;
         *density = (pR * gR * nR + (1.0 - pR) * gTT * nTT) * out.cosTheta;
     }
 }
 
-Rgb FiberBcsdf::eval(const Vec3& wi, const Vec3& wo) const {
+BsdfEval FiberBcsdf::evalPdf(const BsdfIncident& in, const Vec3& wo) const {
+    BsdfEval e;
+    evalAndPdf(in.get<Incident>(), anglesOf(wo), &e.value, &e.pdf);
+    return e;
+}
+
+Rgb FiberBcsdf::eval(const BsdfIncident& in, const Vec3& wo) const {
     Rgb value;
-    evalAndPdf(anglesOf(wi), anglesOf(wo), &value, nullptr);
+    evalAndPdf(in.get<Incident>(), anglesOf(wo), &value, nullptr);
     return value;
 }
 
-double FiberBcsdf::pdf(const Vec3& wi, const Vec3& wo) const {
+double FiberBcsdf::pdf(const BsdfIncident& in, const Vec3& wo) const {
     double density;
-    evalAndPdf(anglesOf(wi), anglesOf(wo), nullptr, &density);
+    evalAndPdf(in.get<Incident>(), anglesOf(wo), nullptr, &density);
     return density;
 }
 
-BsdfSample FiberBcsdf::sample(const Vec3& wi, const BsdfSampleInput& u) const {
-    // Rejection steps draw from a generator seeded by the input numbers, so the
-    // result is a deterministic function of (wi, u).
-    Rng rng(hashDouble(u[0]) ^ (hashDouble(u[1]) >> 1), hashDouble(u[2]));
-    return sample(wi, u, rng);
-}
-
-BsdfSample FiberBcsdf::sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) const {
-    const Angles in = anglesOf(wi);
-    const double pR = probabilityR(fresnel(in.cosTheta));
-    BsdfSample s;
-    s.lobe = u[0] < pR ? kLobeR : kLobeTT;
-    const LongitudinalGaussian& g = s.lobe == kLobeR ? gR_ : gTT_;
+BsdfSample FiberBcsdf::sample(const BsdfIncident& incident, const BsdfSampleInput& u,
+                              Rng& rng) const {
+    const Incident& inc = incident.get<Incident>();
+    const Angles& in = inc.angles;
+    const int lobe = u[0] < inc.probabilityR ? kLobeR : kLobeTT;
+    const LongitudinalGaussian& g = lobe == kLobeR ? gR_ : gTT_;
     const double thetaO = g.sample(-in.theta, u[1], rng);
     // Azimuth as a unit vector (cos phi_o, sin phi_o) in the y-z plane.
     double cosPhiO, sinPhiO;
-    if (s.lobe == kLobeR) {
+    if (lobe == kLobeR) {
         const double phi = kTwoPi * u[2] - kPi;
         cosPhiO = std::cos(phi);
         sinPhiO = std::sin(phi);
@@ -121,14 +127,12 @@ BsdfSample FiberBcsdf::sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng
         sinPhiO = -(sinPhiI * cd + cosPhiI * sd);
     }
     const double cosThetaO = std::cos(thetaO), sinThetaO = std::sin(thetaO);
-    s.wo = {sinThetaO, cosThetaO * cosPhiO, cosThetaO * sinPhiO};
-    // The angles of wo are known: no need for anglesOf(s.wo).
-    const Angles out{sinThetaO, cosThetaO, thetaO, s.wo.y, s.wo.z};
-    Rgb value;
-    evalAndPdf(in, out, &value, &s.pdf);
-    if (!(s.pdf > 0)) return BsdfSample{};
-    s.weight = value / s.pdf;
-    return s;
+    const Vec3 wo = {sinThetaO, cosThetaO * cosPhiO, cosThetaO * sinPhiO};
+    // The angles of wo are known: no need for anglesOf(wo).
+    const Angles out{sinThetaO, cosThetaO, thetaO, wo.y, wo.z};
+    BsdfEval e;
+    evalAndPdf(inc, out, &e.value, &e.pdf);
+    return BsdfSample::fromEval(wo, e, lobe);
 }
 
 }  // namespace weft

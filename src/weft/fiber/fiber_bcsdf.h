@@ -23,8 +23,8 @@
 
 namespace weft {
 
-class FiberBcsdf {
-public:
+class FiberBcsdf final : public Bsdf {
+  public:
     static constexpr int kLobeR = 0;
     static constexpr int kLobeTT = 1;
 
@@ -33,18 +33,24 @@ public:
 
     const FiberParams& params() const { return params_; }
 
-    Rgb eval(const Vec3& wi, const Vec3& wo) const;
-    double pdf(const Vec3& wi, const Vec3& wo) const;
-    BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u) const;
-    // Same, with a caller-owned generator for the rejection steps (random walks).
-    BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) const;
+    // The Bsdf interface (core/bsdf.h); the incident state is wi's angles,
+    // F(theta_i) and the probability of the R lobe.
+    using Bsdf::eval;
+    using Bsdf::evalPdf;
+    using Bsdf::pdf;
+    using Bsdf::sample;
+    void prepare(const Vec3& wi, BsdfIncident& in) const override;
+    BsdfEval evalPdf(const BsdfIncident& in, const Vec3& wo) const override;
+    Rgb eval(const BsdfIncident& in, const Vec3& wo) const override;
+    double pdf(const BsdfIncident& in, const Vec3& wo) const override;
+    BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const override;
 
     // Analytic directional albedo F(theta_i) + (1 - F(theta_i)) C_TT.
     Rgb albedo(const Vec3& wi) const;
     // Schlick term F(theta) per channel (paper eq. 4).
     Rgb fresnel(double cosTheta) const;
 
-private:
+  private:
     // Longitudinal angle of a direction and its projection on the normal
     // plane (y, z); azimuth differences come from dot products of the
     // projections, so no atan2 for phi is needed.
@@ -52,10 +58,16 @@ private:
         double sinTheta, cosTheta, theta;
         double y, z;
     };
+    // What prepare() stores: all that depends on wi alone.
+    struct Incident {
+        Angles angles;
+        Rgb fresnel;          // F(theta_i)
+        double probabilityR;  // of picking the R lobe
+    };
     static Angles anglesOf(const Vec3& w);
     // Probability of picking the R lobe for this incident angle.
     double probabilityR(const Rgb& f) const;
-    void evalAndPdf(const Angles& in, const Angles& out, Rgb* value, double* density) const;
+    void evalAndPdf(const Incident& in, const Angles& out, Rgb* value, double* density) const;
 
     FiberParams params_;
     LongitudinalGaussian gR_, gTT_;

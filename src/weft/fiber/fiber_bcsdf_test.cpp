@@ -146,6 +146,45 @@ TEST(FiberBcsdf, SampleWeightIsEvalOverPdf) {
     }
 }
 
+TEST(FiberBcsdf, InterfaceCallsAgree) {
+    // Through the Bsdf interface: evalPdf is (eval, pdf) bit for bit, a slice
+    // gives the (wi, wo) results, and a sample's weight is eval / pdf at its
+    // wo (to rounding: the sample knows theta_o, eval recomputes it from wo).
+    Rng rng(7, 7);
+    for (const auto& preset : materialPresets()) {
+        const FiberBcsdf fiber(preset.fiber);
+        const Bsdf& bsdf = fiber;
+        for (int i = 0; i < 50; ++i) {
+            const Vec3 wi = fiberDirection(180 * rng.uniform() - 90, 360 * rng.uniform());
+            const BsdfSlice slice = bsdf.slice(wi);
+            for (int k = 0; k < 10; ++k) {
+                const Vec3 wo = fiberDirection(180 * rng.uniform() - 90, 360 * rng.uniform());
+                const BsdfEval e = bsdf.evalPdf(wi, wo);
+                ASSERT_EQ(e.value, bsdf.eval(wi, wo)) << preset.name;
+                ASSERT_EQ(e.pdf, bsdf.pdf(wi, wo)) << preset.name;
+                ASSERT_EQ(slice.evalPdf(wo).value, e.value) << preset.name;
+                ASSERT_EQ(slice.evalPdf(wo).pdf, e.pdf) << preset.name;
+                ASSERT_EQ(slice.eval(wo), e.value) << preset.name;
+                ASSERT_EQ(slice.pdf(wo), e.pdf) << preset.name;
+                const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
+                Rng a(k, 2), b(k, 2);
+                const BsdfSample s = slice.sample(u, a), t = bsdf.sample(wi, u, b);
+                ASSERT_EQ(s.wo, t.wo) << preset.name;
+                ASSERT_EQ(s.weight, t.weight) << preset.name;
+                ASSERT_EQ(s.pdf, t.pdf) << preset.name;
+                ASSERT_EQ(s.lobe, t.lobe) << preset.name;
+                ASSERT_TRUE(s.valid());
+                const BsdfEval at = bsdf.evalPdf(wi, s.wo);
+                EXPECT_NEAR(s.pdf, at.pdf, 1e-12 * at.pdf) << preset.name;
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_NEAR(s.weight[c], at.value[c] / at.pdf,
+                                1e-9 * (1 + at.value[c] / at.pdf))
+                        << preset.name;
+            }
+        }
+    }
+}
+
 TEST(FiberBcsdf, SamplingIsChiSquareConsistentWithPdf) {
     const std::vector<std::pair<double, double>> incident = {
         {0, 0}, {30, 70}, {-60, -150}, {85, 10}, {-89.5, 200}, {90, 0}};

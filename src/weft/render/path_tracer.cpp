@@ -16,43 +16,24 @@ double powerHeuristic(double a, double b) {
 }
 
 // The BSDF at one hit for the incident direction of the path, in its shading
-// frame, whichever the mode; world directions in and out.
+// frame; world directions in and out.
 class ShadingPoint {
   public:
-    ShadingPoint(const Scene& scene, const TubeHit& hit, const Vec3& wiWorld) {
-        if (scene.mode() == RenderMode::Neural) {
-            // DESIGN.md 2: local coordinates (w . t, w . b, w . n) with b = t x n.
-            frame_ = yarnFrame(hit.tangent, hit.normal);
-            wi_ = frame_.toLocal(wiWorld);
-            yarn_ = scene.yarnBsdf(hit.material).slice(wi_);
-            isYarn_ = true;
-        } else {
-            fiber_ = &scene.fiberBcsdf(hit.material);
-            frame_ = Frame::fromX(hit.tangent);
-            wi_ = frame_.toLocal(wiWorld);
-        }
-    }
-    Rgb eval(const Vec3& wo) const {
-        const Vec3 o = frame_.toLocal(wo);
-        return isYarn_ ? yarn_.eval(o) : fiber_->eval(wi_, o);
-    }
-    double pdf(const Vec3& wo) const {
-        const Vec3 o = frame_.toLocal(wo);
-        return isYarn_ ? yarn_.pdf(o) : fiber_->pdf(wi_, o);
-    }
+    ShadingPoint(const Scene& scene, const TubeHit& hit, const Vec3& wiWorld)
+        : frame_(scene.shadingFrame(hit)),
+          slice_(scene.bsdf(hit.material), frame_.toLocal(wiWorld)) {}
+    // eval and pdf at wo in one call.
+    BsdfEval evalPdf(const Vec3& wo) const { return slice_.evalPdf(frame_.toLocal(wo)); }
     // A sample with wo in world space.
     BsdfSample sample(const BsdfSampleInput& u, Rng& rng) const {
-        BsdfSample s = isYarn_ ? yarn_.sample(u, rng) : fiber_->sample(wi_, u, rng);
+        BsdfSample s = slice_.sample(u, rng);
         s.wo = normalize(frame_.fromLocal(s.wo));
         return s;
     }
 
   private:
     Frame frame_;
-    Vec3 wi_;
-    bool isYarn_ = false;
-    YarnBsdf::Slice yarn_;
-    const FiberBcsdf* fiber_ = nullptr;
+    BsdfSlice slice_;
 };
 
 // Nearest finite light hit by the ray before tMax: its index and distance.
@@ -119,7 +100,8 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Rng& 
             const Light& l = *lights[pick];
             const LightSample ls = l.sample(hit.point, {rng.uniform(), rng.uniform()});
             if (ls.valid() && !ls.radiance.isBlack()) {
-                const Rgb f = bsdf.eval(ls.wi);
+                const BsdfEval e = bsdf.evalPdf(ls.wi);
+                const Rgb& f = e.value;
                 if (!f.isBlack()) {
                     // Shadow ray up to just before the light's surface.
                     const double tMax =
@@ -131,7 +113,7 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Rng& 
                             blocked = lights[i]->intersect(hit.point, ls.wi, tMax) > 0;
                     if (!blocked) {
                         const double lightPdf = lightPick * ls.pdf;
-                        const double weight = powerHeuristic(lightPdf, bsdf.pdf(ls.wi));
+                        const double weight = powerHeuristic(lightPdf, e.pdf);
                         radiance += throughput * f * ls.radiance * (weight / lightPdf);
                     }
                 }

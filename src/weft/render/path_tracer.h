@@ -20,7 +20,7 @@
 //   - at most `maxDepth` scattering events (the scene's render.max_depth).
 // Shading frames: neural mode, the yarn frame of DESIGN.md 2 (t = segment
 // tangent, n = outward tube normal, b = t x n); fiber mode, the fiber frame
-// with the tangent as +x (FiberBcsdf).
+// with the tangent as +x (FiberBcsdf); both from Scene::shadingFrame.
 // All random numbers come from the caller's Rng, so a path is a function of
 // (scene, ray, generator state).
 #pragma once

@@ -9,6 +9,7 @@
 #include "weft/core/math.h"
 #include "weft/core/progress.h"
 #include "weft/core/rng.h"
+#include "weft/fiber/fiber_bcsdf.h"
 #include "weft/yarn/yarn_model.h"
 #include "weft/render/curves.h"
 #include "weft/render/yarn_geometry.h"
@@ -104,9 +105,9 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
             const YarnModel model = loadYarnModel(yarn.model);
             plyOf.push_back(model.ply);
             if (mode == RenderMode::Neural)
-                yarnBsdfs_.push_back(std::make_unique<YarnBsdf>(model, yarn.model, yarnOptions));
+                bsdfs_.push_back(std::make_unique<YarnBsdf>(model, yarn.model, yarnOptions));
             else
-                fiberBcsdfs_.push_back(std::make_unique<FiberBcsdf>(model.fiber));
+                bsdfs_.push_back(std::make_unique<FiberBcsdf>(model.fiber));
         }
         yarnMaterial.push_back(it->second);
     }

@@ -24,7 +24,8 @@
 #include <string>
 #include <vector>
 
-#include "weft/fiber/fiber_bcsdf.h"
+#include "weft/core/bsdf.h"
+#include "weft/core/vec.h"
 #include "weft/render/lights.h"
 #include "weft/render/scene_file.h"
 #include "weft/render/tube_accel.h"
@@ -77,9 +78,17 @@ class Scene {
     const std::vector<std::unique_ptr<Light>>& lights() const { return lights_; }
     const SceneBuildStats& stats() const { return stats_; }
 
-    // Material of a hit (TubeHit::material), by mode.
-    const YarnBsdf& yarnBsdf(int material) const { return *yarnBsdfs_[material]; }
-    const FiberBcsdf& fiberBcsdf(int material) const { return *fiberBcsdfs_[material]; }
+    // BSDF of a hit's material (TubeHit::material): the YarnBsdf (neural
+    // mode) or the FiberBcsdf (fiber mode) of its model.
+    const Bsdf& bsdf(int material) const { return *bsdfs_[material]; }
+    // The local frame of that BSDF at a hit: in neural mode the yarn frame
+    // (t, t x n, n) of DESIGN.md 2, in fiber mode the fiber frame with the
+    // tangent as +x (fiber_bcsdf.h).
+    Frame shadingFrame(const TubeHit& hit) const {
+        return mode_ == RenderMode::Neural
+                   ? yarnFrame(hit.tangent, hit.normal)
+                   : Frame::fromX(hit.tangent);
+    }
 
   private:
     RenderMode mode_;
@@ -87,8 +96,7 @@ class Scene {
     int width_, height_;
     std::unique_ptr<TubeAccel> accel_;
     std::vector<std::unique_ptr<Light>> lights_;
-    std::vector<std::unique_ptr<YarnBsdf>> yarnBsdfs_;
-    std::vector<std::unique_ptr<FiberBcsdf>> fiberBcsdfs_;
+    std::vector<std::unique_ptr<Bsdf>> bsdfs_;  // one per material
     SceneBuildStats stats_;
 };
 

@@ -278,9 +278,37 @@ void YarnBsdf::evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rg
     }
 }
 
-Rgb YarnBsdf::eval(const Vec3& wi, const Vec3& wo) const { return slice(wi).eval(wo); }
+void YarnBsdf::prepare(const Vec3& wi, BsdfIncident& in) const {
+    Prepared p;
+    p.flip = wi.z < 0;
+    p.upper = p.flip ? mirrored(wi) : wi;
+    p.in = incident(p.upper, transmissionUpper(p.upper));
+    in.emplace(wi, p);
+}
+
+BsdfEval YarnBsdf::evalPdf(const BsdfIncident& in, const Vec3& wo) const {
+    const Prepared& p = in.get<Prepared>();
+    BsdfEval e;
+    evalAndPdf(p.upper, p.flip ? mirrored(wo) : wo, p.in, &e.value, &e.pdf);
+    return e;
+}
+
+Rgb YarnBsdf::eval(const BsdfIncident& in, const Vec3& wo) const {
+    const Prepared& p = in.get<Prepared>();
+    Rgb value;
+    evalAndPdf(p.upper, p.flip ? mirrored(wo) : wo, p.in, &value, nullptr);
+    return value;
+}
+
+double YarnBsdf::pdf(const BsdfIncident& in, const Vec3& wo) const {
+    const Prepared& p = in.get<Prepared>();
+    double density;
+    evalAndPdf(p.upper, p.flip ? mirrored(wo) : wo, p.in, nullptr, &density);
+    return density;
+}
 
 double YarnBsdf::pdf(const Vec3& wi, const Vec3& wo) const {
+    // The density needs P(T) alone: no calibration or energy guard.
     const bool flip = wi.z < 0;
     const Vec3 i = flip ? mirrored(wi) : wi, o = flip ? mirrored(wo) : wo;
     double density;
@@ -299,57 +327,22 @@ YarnBsdf::Components YarnBsdf::components(const Vec3& wi, const Vec3& wo) const 
     return c;
 }
 
-BsdfSample YarnBsdf::sample(const Vec3& wi, const BsdfSampleInput& u) const {
-    // As FiberBcsdf: rejection steps draw from a generator seeded by the input
-    // numbers, so the result is a deterministic function of (wi, u).
-    Rng rng(hashDouble(u[0]) ^ (hashDouble(u[1]) >> 1), hashDouble(u[2]));
-    return sample(wi, u, rng);
-}
-
-BsdfSample YarnBsdf::sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) const {
-    return slice(wi).sample(u, rng);
-}
-
-YarnBsdf::Slice YarnBsdf::slice(const Vec3& wi) const {
-    Slice s;
-    s.bsdf_ = this;
-    s.flip_ = wi.z < 0;
-    s.wi_ = wi;
-    s.upper_ = s.flip_ ? mirrored(wi) : wi;
-    s.in_ = incident(s.upper_, transmissionUpper(s.upper_));
-    return s;
-}
-
-Rgb YarnBsdf::Slice::eval(const Vec3& wo) const {
-    Rgb value;
-    bsdf_->evalAndPdf(upper_, flip_ ? mirrored(wo) : wo, in_, &value,
-                      nullptr);
-    return value;
-}
-
-double YarnBsdf::Slice::pdf(const Vec3& wo) const {
-    double density;
-    bsdf_->evalAndPdf(upper_, flip_ ? mirrored(wo) : wo, in_, nullptr,
-                      &density);
-    return density;
-}
-
-BsdfSample YarnBsdf::Slice::sample(const BsdfSampleInput& u, Rng& rng) const {
-    const double pT = in_.pT;
+BsdfSample YarnBsdf::sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const {
+    const Prepared& p = in.get<Prepared>();
+    const double pT = p.in.pT;
     BsdfSample s;
     if (u[0] < pT) {
         // S_T = P(T|wi) delta(wo + wi), chosen with probability p_T = P(T|wi).
-        s.wo = -wi_;
+        s.wo = -in.wi();
         s.weight = Rgb(1.0);
         s.pdf = 0;
         s.lobe = kLobeT;
         s.isDelta = true;
         return s;
     }
-    const double kappaR = bsdf_->kappaR_;
-    const double pR = (1.0 - pT) * kappaR, pM = (1.0 - pT) * (1.0 - kappaR);
+    const double pR = (1.0 - pT) * kappaR_, pM = (1.0 - pT) * (1.0 - kappaR_);
     Vec3 o;
-    if (bsdf_->sampling_ == YarnSampling::Cosine) {
+    if (sampling_ == YarnSampling::Cosine) {
         s.lobe = kLobeM;
         // The rest of u[0], rescaled to [0, 1), picks the side of the surface.
         const double uSide = (u[0] - pT) / (1.0 - pT);
@@ -358,19 +351,16 @@ BsdfSample YarnBsdf::Slice::sample(const BsdfSampleInput& u, Rng& rng) const {
         o = {r * std::cos(phi), r * std::sin(phi), uSide < 0.5 ? z : -z};
     } else if (u[0] < pT + pR || !(pM > 0)) {
         s.lobe = kLobeR;
-        o = bsdf_->lobes_.sampleR(upper_, u[1], u[2]);
+        o = lobes_.sampleR(p.upper, u[1], u[2]);
     } else {
         s.lobe = kLobeM;
         // The rest of u[0], rescaled to [0, 1), picks the cone or the uniform part of pdf_M.
         const double uLobe = std::clamp((u[0] - pT - pR) / pM, 0.0, 0x1.fffffffffffffp-1);
-        o = bsdf_->lobes_.sampleM(upper_, uLobe, u[1], u[2], rng);
+        o = lobes_.sampleM(p.upper, uLobe, u[1], u[2], rng);
     }
-    Rgb value;
-    bsdf_->evalAndPdf(upper_, o, in_, &value, &s.pdf);
-    if (!(s.pdf > 0)) return BsdfSample{};
-    s.wo = flip_ ? mirrored(o) : o;
-    s.weight = value / s.pdf;
-    return s;
+    BsdfEval e;
+    evalAndPdf(p.upper, o, p.in, &e.value, &e.pdf);
+    return BsdfSample::fromEval(p.flip ? mirrored(o) : o, e, s.lobe);
 }
 
 }  // namespace weft

@@ -102,7 +102,7 @@ struct YarnBsdfOptions {
     YarnSampling sampling = YarnSampling::Fitted;
 };
 
-class YarnBsdf {
+class YarnBsdf final : public Bsdf {
   public:
     static constexpr int kLobeT = 0;
     static constexpr int kLobeR = 1;
@@ -117,12 +117,21 @@ class YarnBsdf {
     // loadYarnModel(path), then the constructor with the path as source.
     static YarnBsdf load(const std::string& path, const YarnBsdfOptions& options = {});
 
-    Rgb eval(const Vec3& wi, const Vec3& wo) const;
-    double pdf(const Vec3& wi, const Vec3& wo) const;
-    // Draws the von Mises rejection steps from a generator seeded by u (the
-    // result is a function of (wi, u)), as FiberBcsdf does.
-    BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u) const;
-    BsdfSample sample(const Vec3& wi, const BsdfSampleInput& u, Rng& rng) const;
+    // The Bsdf interface (core/bsdf.h); the incident state is what depends
+    // on wi alone (P(T), the calibration, the energy guard), so a slice
+    // (Bsdf::slice) pays for it once; pdf(wi, wo) computes P(T) alone.
+    // sample(wi, u) draws the von Mises rejection steps from
+    // bsdfSampleRng(u), as FiberBcsdf does.
+    using Bsdf::eval;
+    using Bsdf::evalPdf;
+    using Bsdf::pdf;
+    using Bsdf::sample;
+    void prepare(const Vec3& wi, BsdfIncident& in) const override;
+    BsdfEval evalPdf(const BsdfIncident& in, const Vec3& wo) const override;
+    Rgb eval(const BsdfIncident& in, const Vec3& wo) const override;
+    double pdf(const BsdfIncident& in, const Vec3& wo) const override;
+    double pdf(const Vec3& wi, const Vec3& wo) const override;
+    BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const override;
 
     // P(T | wi) from the T network (0 for a naive model).
     double transmission(const Vec3& wi) const;
@@ -137,28 +146,14 @@ class YarnBsdf {
         double pT;
         Rgb rScale, mScale;
     };
+    // What prepare() stores in a BsdfIncident (which holds wi as given).
+    struct Prepared {
+        bool flip;   // wi.z < 0: wi and wo are mirrored
+        Vec3 upper;  // wi mirrored into the upper hemisphere
+        Incident in;
+    };
 
   public:
-    // The BSDF with wi fixed (a slice): what depends on wi alone (P(T), the
-    // calibration, the energy guard) is computed once, so a path tracer that
-    // calls eval, pdf and sample at one vertex pays for it once. Its results
-    // equal eval(wi, .), pdf(wi, .) and sample(wi, ., rng).
-    class Slice {
-      public:
-        Rgb eval(const Vec3& wo) const;
-        double pdf(const Vec3& wo) const;
-        BsdfSample sample(const BsdfSampleInput& u, Rng& rng) const;
-        double transmission() const { return in_.pT; }
-
-      private:
-        friend class YarnBsdf;
-        const YarnBsdf* bsdf_ = nullptr;
-        bool flip_ = false;
-        Vec3 wi_, upper_;  // wi as given, and mirrored into the upper hemisphere
-        Incident in_;
-    };
-    Slice slice(const Vec3& wi) const;
-
     // The parts of eval for one pair, and the lobe probabilities of sample().
     struct Components {
         double pT = 0;  // P(T | wi)

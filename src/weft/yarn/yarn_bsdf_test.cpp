@@ -237,26 +237,57 @@ TEST(YarnBsdf, SampleIsDeterministicInItsInput) {
 }
 
 TEST(YarnBsdf, SliceEqualsTheTwoDirectionCalls) {
-    // The slice computes what depends on wi once; its eval, pdf and sample
-    // must be those of the BSDF, above and below the surface.
+    // The slice computes what depends on wi once; its eval, pdf, evalPdf and
+    // sample must be those of the BSDF, above and below the surface.
     const YarnBsdf& bsdf = testBsdf("fleece-small");
     Rng rng(4, 4);
     for (const Vec3& wi :
          {yarnDirection(30, 40), yarnDirection(85, -120), yarnDirection(130, 10)}) {
-        const YarnBsdf::Slice slice = bsdf.slice(wi);
-        EXPECT_DOUBLE_EQ(slice.transmission(), bsdf.transmission(wi));
+        const BsdfSlice slice = bsdf.slice(wi);
         for (int k = 0; k < 50; ++k) {
             const Vec3 wo = yarnDirection(180 * rng.uniform(), 360 * rng.uniform() - 180);
             EXPECT_EQ(slice.eval(wo), bsdf.eval(wi, wo));
-            EXPECT_DOUBLE_EQ(slice.pdf(wo), bsdf.pdf(wi, wo));
+            EXPECT_EQ(slice.pdf(wo), bsdf.pdf(wi, wo));
+            EXPECT_EQ(slice.evalPdf(wo).value, bsdf.eval(wi, wo));
+            EXPECT_EQ(slice.evalPdf(wo).pdf, bsdf.pdf(wi, wo));
             const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
             Rng a(k, 1), b(k, 1);
             const BsdfSample s = slice.sample(u, a), t = bsdf.sample(wi, u, b);
             EXPECT_EQ(s.wo, t.wo);
             EXPECT_EQ(s.weight, t.weight);
+            EXPECT_EQ(s.pdf, t.pdf);
             EXPECT_EQ(s.lobe, t.lobe);
         }
     }
+}
+
+TEST(YarnBsdf, InterfaceCallsAgreeExactly) {
+    // Through the Bsdf interface, for both models, with and without the
+    // energy guard and with cosine sampling: evalPdf is (eval, pdf) bit for
+    // bit, and a continuous sample's weight is eval / pdf at its wo, also bit
+    // for bit (the sample evaluates the same mirrored pair).
+    for (const char* name : kModels)
+        for (const YarnBsdfOptions options : {YarnBsdfOptions{}, YarnBsdfOptions{false},
+                                              YarnBsdfOptions{true, YarnSampling::Cosine}}) {
+            const YarnBsdf yarn(testModel(name), name, options);
+            const Bsdf& bsdf = yarn;
+            Rng rng(6, 6);
+            int continuous = 0;
+            for (int k = 0; k < 300; ++k) {
+                const Vec3 wi = randomUnitVector(rng), wo = randomUnitVector(rng);
+                const BsdfEval e = bsdf.evalPdf(wi, wo);
+                ASSERT_EQ(e.value, bsdf.eval(wi, wo)) << name << " " << text(wi) << text(wo);
+                ASSERT_EQ(e.pdf, bsdf.pdf(wi, wo)) << name << " " << text(wi) << text(wo);
+                const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
+                const BsdfSample s = bsdf.sample(wi, u);
+                if (!s.valid() || s.isDelta) continue;
+                ++continuous;
+                const BsdfEval at = bsdf.evalPdf(wi, s.wo);
+                ASSERT_EQ(s.pdf, at.pdf) << name << " " << text(wi);
+                ASSERT_EQ(s.weight, at.value / at.pdf) << name << " " << text(wi);
+            }
+            EXPECT_GT(continuous, 100) << name;
+        }
 }
 
 // The renderer's fast evaluation (energy guard off) agrees with the fit's

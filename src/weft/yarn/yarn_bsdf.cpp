@@ -121,7 +121,7 @@ void YarnBsdf::buildEnergyGuard() {
         Rgb energyR;
         for (size_t k = 0; k < ruleR.directions.size(); ++k)
             energyR += rLobe_.eval(wi, ruleR.directions[k], pT) * ruleR.weights[k];
-        const Rgb af = fiberAlbedo(frame.toLocal(wi));
+        const Rgb af = rLobe_.fiber().albedo(frame.toLocal(wi));
         for (int c = 0; c < 3; ++c) {
             const double full = (1.0 - pT) * af[c];
             guardReflectance_[node][c] = full > 0 ? energyR[c] / full : 0.0;
@@ -141,7 +141,7 @@ void YarnBsdf::buildEnergyGuard() {
         const double pT = transmissionUpper(wi);
         // The R table is smooth in fiber angles without the calibration, which is exact at eval time.
         const Rgb kept = keptReflectance(wi) * calibration_.scales(wi).r;
-        const Rgb af = fiberAlbedo(frame.toLocal(wi));
+        const Rgb af = rLobe_.fiber().albedo(frame.toLocal(wi));
         for (int c = 0; c < 3; ++c)
             albedo[node] = std::max(albedo[node], pT + (1.0 - pT) * kept[c] * af[c] + energy[c]);
     });
@@ -156,12 +156,6 @@ void YarnBsdf::buildEnergyGuard() {
                     if (albedo[static_cast<size_t>(r) * kGuardPhi + q] > kGuardThreshold)
                         guardCell_[static_cast<size_t>(a) * kGuardPhi + b] = 1;
     guardActive_ = std::find(guardCell_.begin(), guardCell_.end(), 1) != guardCell_.end();
-}
-
-Rgb YarnBsdf::fiberAlbedo(const Vec3& local) const {
-    // FiberBcsdf::albedo without its longitudinal angle: F + (1 - F) C_TT.
-    const Rgb f = rLobe_.fiber().fresnel(std::sqrt(local.y * local.y + local.z * local.z));
-    return f + (Rgb(1.0) - f) * rLobe_.fiber().params().cTT;
 }
 
 Rgb YarnBsdf::keptReflectance(const Vec3& wi) const {
@@ -219,7 +213,7 @@ YarnBsdf::GuardScales YarnBsdf::scaleUpper(const Vec3& wi, double pT,
     const GuardCell cell = guardCell(wi);
     if (!guardCell_[static_cast<size_t>(cell.a0) * kGuardPhi + cell.b0]) return s;
     const Rgb kept = keptReflectance(wi) * calibration.r, energy = energyM(cell);
-    const Rgb af = fiberAlbedo(lobes_.frame().toLocal(wi));
+    const Rgb af = rLobe_.fiber().albedo(lobes_.frame().toLocal(wi));
     for (int c = 0; c < 3; ++c) {
         // R alone can exceed 1 - P(T) only through an energy calibration above 1.
         const double r = kept[c] * af[c];
@@ -262,8 +256,9 @@ YarnBsdf::LobeProbabilities YarnBsdf::lobeProbabilities(const Vec3& wi) const {
 void YarnBsdf::evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rgb* value,
                           double* density) const {
     if (value) {
-        *value = evalM(wi, wo) * in.mScale;
-        if (hasReflection_) *value += rLobe_.eval(wi, wo, in.pT) * in.rScale;
+        const Components parts = componentsUpper(wi, wo, in);
+        *value = parts.m;
+        if (hasReflection_) *value += parts.r;
     }
     if (density && sampling_ == YarnSampling::Cosine) {
         // Cosine about n on the side of wo, each side with probability 1/2.
@@ -319,11 +314,15 @@ double YarnBsdf::pdf(const Vec3& wi, const Vec3& wo) const {
 YarnBsdf::Components YarnBsdf::components(const Vec3& wi, const Vec3& wo) const {
     const bool flip = wi.z < 0;
     const Vec3 i = flip ? mirrored(wi) : wi, o = flip ? mirrored(wo) : wo;
-    const Incident in = incident(i, transmissionUpper(i));
+    return componentsUpper(i, o, incident(i, transmissionUpper(i)));
+}
+
+YarnBsdf::Components YarnBsdf::componentsUpper(const Vec3& wi, const Vec3& wo,
+                                               const Incident& in) const {
     Components c;
     c.pT = in.pT;
-    if (hasReflection_) c.r = rLobe_.eval(i, o, in.pT) * in.rScale;
-    c.m = evalM(i, o) * in.mScale;
+    if (hasReflection_) c.r = rLobe_.eval(wi, wo, in.pT) * in.rScale;
+    c.m = evalM(wi, wo) * in.mScale;
     return c;
 }
 

@@ -192,6 +192,9 @@ class YarnBsdf final : public Bsdf {
 
   private:
     Incident incident(const Vec3& wi, double pT) const;
+    // S_R and S_M (calibration and guard applied) for wi in the upper
+    // hemisphere: the one place where the model's value is put together.
+    Components componentsUpper(const Vec3& wi, const Vec3& wo, const Incident& in) const;
     // eval and pdf for wi in the upper hemisphere: the one place where both are computed.
     void evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rgb* value,
                     double* density) const;
@@ -226,7 +229,6 @@ class YarnBsdf final : public Bsdf {
     };
     GuardCell guardCell(const Vec3& wi) const;
     Rgb keptReflectance(const Vec3& wi) const;
-    Rgb fiberAlbedo(const Vec3& local) const;  // a_f of a surface-fiber-local direction
     Rgb energyM(const GuardCell& cell) const;
 };
 

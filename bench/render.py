@@ -132,11 +132,17 @@ def main():
             lines.append("")
             results["scenes"][stem] = {"title": title, "table": table, "neural": n, "fiber": f}
 
-    os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
-    with open(a.out + ".tmp", "w") as fo:
+    write_results(a.out, lines, results)
+
+
+def write_results(out, lines, results):
+    """The Markdown table at `out` and the same results as JSON beside it
+    (.json), each written to a temporary file and renamed; the table is printed."""
+    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+    with open(out + ".tmp", "w") as fo:
         fo.write("\n".join(lines))
-    os.replace(a.out + ".tmp", a.out)
-    json_out = os.path.splitext(a.out)[0] + ".json"
+    os.replace(out + ".tmp", out)
+    json_out = os.path.splitext(out)[0] + ".json"
     with open(json_out + ".tmp", "w") as fo:
         json.dump(results, fo, indent=2)
     os.replace(json_out + ".tmp", json_out)

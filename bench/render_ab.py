@@ -29,7 +29,7 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from render import closeup_scene  # noqa: E402
+from render import closeup_scene, write_results  # noqa: E402
 
 
 def render(weft, scene, mode, spp, threads, seed, out):
@@ -114,15 +114,7 @@ def main():
                 " ".join("%.3f" % s for s in m["cpu_seconds"][which])))
     lines.append("")
 
-    os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
-    with open(a.out + ".tmp", "w") as fo:
-        fo.write("\n".join(lines))
-    os.replace(a.out + ".tmp", a.out)
-    json_out = os.path.splitext(a.out)[0] + ".json"
-    with open(json_out + ".tmp", "w") as fo:
-        json.dump(results, fo, indent=2)
-    os.replace(json_out + ".tmp", json_out)
-    print("\n".join(lines))
+    write_results(a.out, lines, results)
 
 
 if __name__ == "__main__":

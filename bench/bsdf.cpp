@@ -27,6 +27,7 @@
 #include "weft/core/math.h"
 #include "weft/core/rng.h"
 #include "weft/fiber/fiber_bcsdf.h"
+#include "weft/fit/mlp.h"
 #include "weft/yarn/yarn_bsdf.h"
 
 using namespace weft;

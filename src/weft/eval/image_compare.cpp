@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "weft/core/error.h"
-#include "weft/render/lights.h"
+#include "weft/core/image_io.h"
 
 namespace weft::eval {
 
@@ -202,8 +202,8 @@ ImageComparison compareImages(const Image& a, const std::string& aName, const Im
 ImageComparison compareImageFiles(const std::string& a, const std::string& b,
                                   const CompareOptions& options) {
     options.validate();
-    const Image imageA = render::readImage(a);
-    const Image imageB = render::readImage(b);
+    const Image imageA = readImage(a);
+    const Image imageB = readImage(b);
     return compareImages(imageA, a, imageB, b, options);
 }
 

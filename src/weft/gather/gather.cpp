@@ -18,6 +18,7 @@
 #include "weft/core/npy.h"
 #include "weft/core/progress.h"
 #include "weft/core/rng.h"
+#include "weft/core/sampling.h"
 #include "weft/fiber/fiber_bcsdf.h"
 #include "weft/gather/ply_tracer.h"
 
@@ -92,11 +93,8 @@ GatherResult gatherRdm(const GatherOptions& o) {
                     Vec3 org = n * ply.radius;
                     org.z = period * rng.uniform();
                     // wi uniform over the upper hemisphere: cos(theta) uniform.
-                    const double cosTheta = rng.uniform();
-                    const double sinTheta = safeSqrt(1.0 - cosTheta * cosTheta);
-                    const double phi = kTwoPi * rng.uniform() - kPi;
-                    const Vec3 wiLocal{sinTheta * std::cos(phi), sinTheta * std::sin(phi),
-                                       cosTheta};
+                    const double uCosTheta = rng.uniform(), uPhi = rng.uniform();
+                    const Vec3 wiLocal = sampleUniformHemisphere(uCosTheta, uPhi);
                     const size_t binIn = bins.incidentBin(wiLocal);
                     Vec3 dir = -entry.fromLocal(wiLocal);
                     Rgb weight(1.0);

@@ -8,6 +8,7 @@
 #include "weft/core/error.h"
 #include "weft/core/image_io.h"
 #include "weft/core/math.h"
+#include "weft/core/sampling.h"
 
 namespace weft::render {
 
@@ -70,13 +71,10 @@ ConstantLight::ConstantLight(const Rgb& radiance) : radiance_(radiance) {
 }
 
 LightSample ConstantLight::sample(const Vec3&, const std::array<double, 2>& u) const {
-    // Uniform on the sphere (pbrt's UniformSampleSphere).
-    const double z = 1.0 - 2.0 * u[0];
-    const double r = safeSqrt(1.0 - z * z), phi = kTwoPi * u[1];
-    return {{r * std::cos(phi), r * std::sin(phi), z}, radiance_, 0.25 * kInvPi, kInf};
+    return {sampleUniformSphere(u[0], u[1]), radiance_, uniformSpherePdf(), kInf};
 }
 
-double ConstantLight::pdf(const Vec3&, const Vec3&) const { return 0.25 * kInvPi; }
+double ConstantLight::pdf(const Vec3&, const Vec3&) const { return uniformSpherePdf(); }
 
 Rgb ConstantLight::radiance(const Vec3&) const { return radiance_; }
 

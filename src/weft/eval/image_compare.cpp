@@ -13,9 +13,6 @@ namespace weft::eval {
 
 namespace {
 
-// Luminance weights of linear Rec. 709 / sRGB primaries.
-constexpr double kLumaR = 0.2126, kLumaG = 0.7152, kLumaB = 0.0722;
-
 std::string sizeText(int width, int height) {
     return std::to_string(width) + " x " + std::to_string(height);
 }
@@ -82,7 +79,7 @@ const char* ssimModeName(SsimMode mode) {
 
 Plane toneMappedLuminance(const Image& image, double exposure) {
     return toneMapped(image, exposure,
-                      [](const float* p) { return kLumaR * p[0] + kLumaG * p[1] + kLumaB * p[2]; });
+                      [](const float* p) { return luminance(Rgb(p[0], p[1], p[2])); });
 }
 
 Plane toneMappedChannel(const Image& image, int channel, double exposure) {

@@ -27,9 +27,6 @@ std::string format(const T& value) {
 
 bool finiteNonNegative(const Rgb& c) { return c.isFinite() && c.r >= 0 && c.g >= 0 && c.b >= 0; }
 
-// Rec. 709 luminance: the weight of a texel in the sampling distribution.
-double luminance(const Rgb& c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; }
-
 // The cell of t in [0, 1] on a grid of n cells; NaN and out-of-range values clamp.
 int cellIndex(double t, int n) {
     if (!(t > 0)) return 0;

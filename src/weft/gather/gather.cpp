@@ -44,12 +44,8 @@ constexpr int64_t kChunk = 1024;  // paths per task
 void GatherOptions::validate() const {
     if (paths < 1)
         throw InputError("paths = " + std::to_string(paths) + " is out of range: allowed >= 1");
-    if (maxDepth < 1 || maxDepth > 1000000)
-        throw InputError("max depth = " + std::to_string(maxDepth) +
-                         " is out of range: allowed [1, 1000000]");
-    if (threads < 0 || threads > 1024)
-        throw InputError("threads = " + std::to_string(threads) +
-                         " is out of range: allowed [0, 1024] (0: all cores)");
+    checkRange("max depth =", maxDepth, 1, 1000000);
+    checkRange("threads =", threads, 0, 1024, " (0: all cores)");
     PeriodicPlyTracer::validateSegmentsPerTwist(segmentsPerTwist);
     fiber.validate();
     ply.validate();

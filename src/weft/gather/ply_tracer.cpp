@@ -48,9 +48,7 @@ double intersect(RTCScene scene, ExcludeContext& ctx, const Vec3& org, const Vec
 }  // namespace
 
 void PeriodicPlyTracer::validateSegmentsPerTwist(int segmentsPerTwist) {
-    if (segmentsPerTwist < 16 || segmentsPerTwist > 65536)
-        throw InputError("segments per twist = " + std::to_string(segmentsPerTwist) +
-                         " is out of range: allowed [16, 65536]");
+    checkRange("segments per twist =", segmentsPerTwist, 16, 65536);
 }
 
 PeriodicPlyTracer::PeriodicPlyTracer(const PlyGeometry& ply, int segmentsPerTwist,

@@ -6,10 +6,10 @@
 
 #include "weft/core/math.h"
 #include "weft/core/rng.h"
-#include "weft/fiber/fiber_params.h"
 #include "weft/fit/fit.h"
 #include "weft/fit/metrics.h"
 #include "weft/fit/yarn_lobes.h"
+#include "weft/yarn/material_preset.h"
 
 namespace weft {
 namespace {

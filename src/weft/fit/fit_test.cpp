@@ -8,6 +8,7 @@
 #include "weft/core/test_util.h"
 #include "weft/fit/metrics.h"
 #include "weft/fit/yarn_lobes.h"
+#include "weft/yarn/material_preset.h"
 
 namespace weft {
 namespace {

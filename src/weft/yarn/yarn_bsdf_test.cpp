@@ -15,6 +15,7 @@
 #include "weft/core/test_util.h"
 #include "weft/fit/fit.h"
 #include "weft/gather/rdm.h"
+#include "weft/yarn/material_preset.h"
 #include "weft/yarn/yarn_integrals.h"
 
 namespace weft {

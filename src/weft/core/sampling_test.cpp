@@ -47,8 +47,8 @@ double integrateSphere(const Pdf& f, int thetaSteps = 400, int phiSteps = 400) {
         const double theta = (i + 0.5) * dTheta, sinTheta = std::sin(theta);
         for (int j = 0; j < phiSteps; ++j) {
             const double phi = (j + 0.5) * dPhi;
-            sum += f({sinTheta * std::cos(phi), sinTheta * std::sin(phi), std::cos(theta)}) *
-                   sinTheta;
+            sum +=
+                f({sinTheta * std::cos(phi), sinTheta * std::sin(phi), std::cos(theta)}) * sinTheta;
         }
     }
     return sum * dTheta * dPhi;

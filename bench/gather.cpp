@@ -9,6 +9,8 @@
 // both with 1 and 2 threads in the same run, and the ratio (b) / (a).
 // Writes a Markdown table (default bench/results/gather.md). Optionally times
 // a full-size fleece gather (--fleece-paths 16000000: the target).
+#include "weft/gather/gather.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -23,8 +25,8 @@
 #include "weft/core/file.h"
 #include "weft/core/math.h"
 #include "weft/core/rng.h"
-#include "weft/gather/gather.h"
 #include "weft/gather/ply_tracer.h"
+#include "weft/yarn/material_preset.h"
 
 using namespace weft;
 

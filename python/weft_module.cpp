@@ -41,6 +41,7 @@
 #include "weft/render/renderer.h"
 #include "weft/render/scene.h"
 #include "weft/render/scene_file.h"
+#include "weft/yarn/material_preset.h"
 #include "weft/yarn/yarn_bsdf.h"
 
 namespace py = pybind11;

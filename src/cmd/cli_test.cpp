@@ -2,8 +2,6 @@
 // (WEFT_BIN) in a fresh temporary directory and checks its exit status, its
 // messages and the files it writes against the library.
 #include <gtest/gtest.h>
-
-#include "cli_test_util.h"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -20,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_test_util.h"
 #include "weft/core/curve_io.h"
 #include "weft/core/file.h"
 #include "weft/core/npy.h"
@@ -27,6 +26,7 @@
 #include "weft/core/vec.h"
 #include "weft/fiber/fiber_bcsdf.h"
 #include "weft/fiber/fiber_params.h"
+#include "weft/yarn/material_preset.h"
 
 namespace weft {
 namespace {

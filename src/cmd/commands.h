@@ -14,6 +14,7 @@
 #include "weft/core/npy.h"
 #include "weft/core/rng.h"
 #include "weft/fiber/fiber_params.h"
+#include "weft/ply/ply.h"
 
 namespace weft::cmd {
 

@@ -13,7 +13,7 @@
 #include "cli_test_util.h"
 #include "weft/core/file.h"
 #include "weft/core/image.h"
-#include "weft/render/lights.h"
+#include "weft/core/image_io.h"
 
 namespace weft {
 namespace {
@@ -35,9 +35,9 @@ class CompareCliTest : public testing::CliTestBase {
   protected:
     void SetUp() override {
         CliTestBase::SetUp();
-        render::writeExr(path("ref.exr"), gradient(16, 12, 0.1));
-        render::writeExr(path("same.exr"), gradient(16, 12, 0.1));
-        render::writeExr(path("off.exr"), gradient(16, 12, 0.3));
+        writeExr(path("ref.exr"), gradient(16, 12, 0.1));
+        writeExr(path("same.exr"), gradient(16, 12, 0.1));
+        writeExr(path("off.exr"), gradient(16, 12, 0.3));
     }
 };
 
@@ -107,14 +107,14 @@ TEST_F(CompareCliTest, DifferentImagesHaveABrighterHeatmap) {
 }
 
 TEST_F(CompareCliTest, BadInputIsNamed) {
-    render::writeExr(path("small.exr"), gradient(16, 10, 0.1));
+    writeExr(path("small.exr"), gradient(16, 10, 0.1));
     expectUserError(run("compare small.exr ref.exr --json r.json --heatmap h.png"),
                     {"small.exr", "16 x 10", "ref.exr", "16 x 12"});
-    render::writeExr(path("tiny.exr"), gradient(8, 8, 0.1));
+    writeExr(path("tiny.exr"), gradient(8, 8, 0.1));
     expectUserError(run("compare tiny.exr tiny.exr"), {"tiny.exr", "8 x 8", "11 x 11"});
     Image nan = gradient(16, 12, 0.1);
     nan.pixels[3 * (16 * 3 + 5) + 2] = std::numeric_limits<float>::quiet_NaN();
-    render::writeExr(path("nan.exr"), nan);
+    writeExr(path("nan.exr"), nan);
     expectUserError(run("compare ref.exr nan.exr"), {"nan.exr", "(5, 3)", "NaN"});
     expectUserError(run("compare missing.exr ref.exr"), {"missing.exr"});
     expectUserError(run("compare ref.exr ref.png"), {"ref.png", ".exr"});

@@ -9,8 +9,8 @@
 
 #include "cli_test_util.h"
 #include "weft/core/file.h"
+#include "weft/core/image_io.h"
 #include "weft/yarn/yarn_model.h"
-#include "weft/render/lights.h"
 
 namespace weft {
 namespace {
@@ -164,7 +164,7 @@ TEST_F(FitCliTest, AblationsFitAndRender) {
                                                          R"("}]})");
         r = run("render " + model + "-scene.json --spp 2 --quiet --out " + model + ".exr");
         ASSERT_EQ(r.status, 0) << r.err;
-        const Image image = render::readImage(path(model + ".exr"));
+        const Image image = readImage(path(model + ".exr"));
         double sum = 0;
         for (float v : image.pixels) {
             ASSERT_TRUE(std::isfinite(v)) << model;

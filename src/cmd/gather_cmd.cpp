@@ -8,6 +8,7 @@
 #include "weft/core/file.h"
 #include "weft/gather/gather.h"
 #include "weft/gather/rdm_image.h"
+#include "weft/yarn/material_preset.h"
 
 namespace weft::cmd {
 

@@ -5,6 +5,7 @@
 #include "commands.h"
 #include "weft/core/error.h"
 #include "weft/core/npy.h"
+#include "weft/yarn/material_preset.h"
 
 namespace weft::cmd {
 

@@ -9,6 +9,7 @@
 #include "weft/core/curve_io.h"
 #include "weft/core/error.h"
 #include "weft/ply/ply.h"
+#include "weft/yarn/material_preset.h"
 
 namespace weft::cmd {
 

@@ -8,7 +8,7 @@
 
 #include "cli_test_util.h"
 #include "weft/core/file.h"
-#include "weft/render/lights.h"
+#include "weft/core/image_io.h"
 
 namespace weft {
 namespace {
@@ -42,7 +42,7 @@ TEST_F(RenderCliTest, WritesExrPngAndStatistics) {
         const RunResult r =
             run("render scene.json --mode " + mode + " --spp 2 --threads 2 --out " + mode + ".exr");
         ASSERT_EQ(r.status, 0) << r.err;
-        const Image image = render::readImage(path(mode + ".exr"));
+        const Image image = readImage(path(mode + ".exr"));
         EXPECT_EQ(image.width, 16);
         EXPECT_EQ(image.height, 12);
         for (float v : image.pixels) ASSERT_TRUE(std::isfinite(v));
@@ -59,8 +59,7 @@ TEST_F(RenderCliTest, WritesExrPngAndStatistics) {
     }
     // Same seed, same image (files byte for byte), whatever the thread count.
     ASSERT_EQ(run("render scene.json --spp 2 --threads 1 --out again.exr").status, 0);
-    EXPECT_EQ(render::readImage(path("again.exr")).pixels,
-              render::readImage(path("neural.exr")).pixels);
+    EXPECT_EQ(readImage(path("again.exr")).pixels, readImage(path("neural.exr")).pixels);
 }
 
 TEST_F(RenderCliTest, TimeBudgetAndSceneDefaults) {
@@ -79,7 +78,7 @@ TEST_F(RenderCliTest, CosineYarnSampling) {
     const RunResult r =
         run("render scene.json --spp 2 --yarn-sampling cosine --quiet --out cos.exr");
     ASSERT_EQ(r.status, 0) << r.err;
-    const Image image = render::readImage(path("cos.exr"));
+    const Image image = readImage(path("cos.exr"));
     double sum = 0;
     for (float v : image.pixels) {
         ASSERT_TRUE(std::isfinite(v));
@@ -89,7 +88,7 @@ TEST_F(RenderCliTest, CosineYarnSampling) {
     EXPECT_EQ(nlohmann::json::parse(readFile(path("cos.json"))).at("yarn_sampling"), "cosine");
     ASSERT_EQ(run("render scene.json --spp 2 --quiet --out fitted.exr").status, 0);
     EXPECT_EQ(nlohmann::json::parse(readFile(path("fitted.json"))).at("yarn_sampling"), "fitted");
-    EXPECT_NE(render::readImage(path("fitted.exr")).pixels, image.pixels);
+    EXPECT_NE(readImage(path("fitted.exr")).pixels, image.pixels);
     expectUserError(run("render scene.json --spp 1 --yarn-sampling x --out x.exr"),
                     {"--yarn-sampling", "\"x\"", "fitted, cosine"});
 }

@@ -9,7 +9,7 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/image.h"
-#include "weft/render/lights.h"
+#include "weft/core/image_io.h"
 #include "weft/render/renderer.h"
 #include "weft/render/scene.h"
 #include "weft/render/scene_file.h"
@@ -63,7 +63,7 @@ void runRender(const RenderCmdOptions& o) {
     const render::Scene scene(desc, mode, o.quiet, yarnOptions);
     const render::RenderResult result = render::render(scene, options);
 
-    render::writeExr(o.out, result.image);
+    writeExr(o.out, result.image);
     writePng(stem + ".png", result.image, o.exposure);
     nlohmann::json stats = render::toJson(result.stats);
     stats["scene_file"] = o.scene;

@@ -10,8 +10,8 @@
 #include "cli_test_util.h"
 #include "weft/core/file.h"
 #include "weft/core/image.h"
+#include "weft/core/image_io.h"
 #include "weft/render/curves.h"
-#include "weft/render/lights.h"
 #include "weft/render/scene_file.h"
 
 namespace weft {
@@ -36,7 +36,7 @@ TEST_F(SceneCliTest, GeneratedWeaveRenders) {
 
     r = run("render weave/scene.json --mode neural --spp 1 --threads 2 --quiet --out img.exr");
     ASSERT_EQ(r.status, 0) << r.err;
-    const Image image = render::readImage(path("img.exr"));
+    const Image image = readImage(path("img.exr"));
     EXPECT_EQ(image.width, 16);
     EXPECT_EQ(image.height, 16);
     for (float v : image.pixels) ASSERT_TRUE(std::isfinite(v) && v >= 0);

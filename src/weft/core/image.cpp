@@ -12,6 +12,15 @@
 
 namespace weft {
 
+void checkImage(const Image& image, const std::string& what) {
+    if (image.width < 1 || image.height < 1 ||
+        image.pixels.size() != 3 * static_cast<size_t>(image.width) * image.height)
+        throw InputError(what + ": image of " + std::to_string(image.width) + " x " +
+                         std::to_string(image.height) + " texels with " +
+                         std::to_string(image.pixels.size()) +
+                         " values; expected width, height >= 1 and 3 values per texel");
+}
+
 double linearToSrgb(double v) {
     v = std::clamp(v, 0.0, 1.0);
     return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;

@@ -2,7 +2,8 @@
 //
 // Image holds linear RGB in row-major order (row 0 at the top). writePng
 // converts to 8-bit sRGB after multiplying by 2^exposure and clamping, and
-// writes atomically (temp file + rename).
+// writes atomically (temp file + rename). The linear image files (OpenEXR,
+// Radiance) are read and written by image_io.h.
 #pragma once
 
 #include <string>
@@ -21,13 +22,18 @@ struct Image {
 
     void set(int x, int y, const Rgb& c) {
         float* p = &pixels[3 * (static_cast<size_t>(y) * width + x)];
-        p[0] = static_cast<float>(c.r), p[1] = static_cast<float>(c.g), p[2] = static_cast<float>(c.b);
+        p[0] = static_cast<float>(c.r), p[1] = static_cast<float>(c.g),
+        p[2] = static_cast<float>(c.b);
     }
     Rgb get(int x, int y) const {
         const float* p = &pixels[3 * (static_cast<size_t>(y) * width + x)];
         return {p[0], p[1], p[2]};
     }
 };
+
+// InputError starting with `what` unless width, height >= 1 and pixels holds
+// 3 values per texel.
+void checkImage(const Image& image, const std::string& what);
 
 // The sRGB transfer function of a linear value in [0, 1] (clamped to it).
 double linearToSrgb(double v);

@@ -36,6 +36,11 @@ constexpr Rgb operator*(Rgb a, double s) { return a *= s; }
 constexpr Rgb operator*(double s, Rgb a) { return a *= s; }
 constexpr Rgb operator/(Rgb a, double s) { return a *= (1.0 / s); }
 
+// Luminance Y of linear Rec. 709 / sRGB primaries: the weight of a texel in
+// envmap sampling (render/lights.cpp) and the grey level SSIM compares
+// (eval/image_compare.cpp).
+constexpr double luminance(const Rgb& c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; }
+
 inline std::ostream& operator<<(std::ostream& os, const Rgb& c) {
     return os << '[' << c.r << ", " << c.g << ", " << c.b << ']';
 }

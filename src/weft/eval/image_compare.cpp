@@ -7,14 +7,11 @@
 #include <stdexcept>
 
 #include "weft/core/error.h"
-#include "weft/render/lights.h"
+#include "weft/core/image_io.h"
 
 namespace weft::eval {
 
 namespace {
-
-// Luminance weights of linear Rec. 709 / sRGB primaries.
-constexpr double kLumaR = 0.2126, kLumaG = 0.7152, kLumaB = 0.0722;
 
 std::string sizeText(int width, int height) {
     return std::to_string(width) + " x " + std::to_string(height);
@@ -82,7 +79,7 @@ const char* ssimModeName(SsimMode mode) {
 
 Plane toneMappedLuminance(const Image& image, double exposure) {
     return toneMapped(image, exposure,
-                      [](const float* p) { return kLumaR * p[0] + kLumaG * p[1] + kLumaB * p[2]; });
+                      [](const float* p) { return luminance(Rgb(p[0], p[1], p[2])); });
 }
 
 Plane toneMappedChannel(const Image& image, int channel, double exposure) {
@@ -202,8 +199,8 @@ ImageComparison compareImages(const Image& a, const std::string& aName, const Im
 ImageComparison compareImageFiles(const std::string& a, const std::string& b,
                                   const CompareOptions& options) {
     options.validate();
-    const Image imageA = render::readImage(a);
-    const Image imageB = render::readImage(b);
+    const Image imageA = readImage(a);
+    const Image imageB = readImage(b);
     return compareImages(imageA, a, imageB, b, options);
 }
 

@@ -103,7 +103,7 @@ struct ImageComparison {
 // than 11 x 11, or a pixel is NaN or infinite (the first one, x, y and channel).
 ImageComparison compareImages(const Image& a, const std::string& aName, const Image& b,
                               const std::string& bName, const CompareOptions& options);
-// The same for two files read with render::readImage (.exr or .hdr).
+// The same for two files read with readImage (core/image_io.h: .exr or .hdr).
 ImageComparison compareImageFiles(const std::string& a, const std::string& b,
                                   const CompareOptions& options);
 

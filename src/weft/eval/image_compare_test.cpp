@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
+#include "weft/core/image_io.h"
 #include "weft/core/rng.h"
 #include "weft/core/test_util.h"
-#include "weft/render/lights.h"
 
 namespace weft::eval {
 namespace {
@@ -327,8 +327,8 @@ class ImageCompareFiles : public testing::TempDirTest {};
 
 TEST_F(ImageCompareFiles, ReadsExrFiles) {
     const Image a = randomImage(12, 12, 11, 1.0), b = randomImage(12, 12, 12, 1.0);
-    render::writeExr(path("a.exr"), a);
-    render::writeExr(path("b.exr"), b);
+    writeExr(path("a.exr"), a);
+    writeExr(path("b.exr"), b);
     const ImageComparison c = compareImageFiles(path("a.exr"), path("b.exr"), options());
     EXPECT_EQ(c.a, path("a.exr"));
     EXPECT_EQ(c.b, path("b.exr"));
@@ -336,16 +336,16 @@ TEST_F(ImageCompareFiles, ReadsExrFiles) {
 }
 
 TEST_F(ImageCompareFiles, ErrorsNameTheFile) {
-    render::writeExr(path("a.exr"), randomImage(12, 12, 13, 1.0));
-    render::writeExr(path("wide.exr"), randomImage(14, 12, 14, 1.0));
-    render::writeExr(path("tiny.exr"), randomImage(10, 12, 15, 1.0));
-    render::writeExr(path("tiny2.exr"), randomImage(10, 12, 16, 1.0));
+    writeExr(path("a.exr"), randomImage(12, 12, 13, 1.0));
+    writeExr(path("wide.exr"), randomImage(14, 12, 14, 1.0));
+    writeExr(path("tiny.exr"), randomImage(10, 12, 15, 1.0));
+    writeExr(path("tiny2.exr"), randomImage(10, 12, 16, 1.0));
     Image nan = randomImage(12, 12, 17, 1.0);
     nan.pixels[3 * (12 * 7 + 4) + 1] = std::numeric_limits<float>::quiet_NaN();
-    render::writeExr(path("nan.exr"), nan);
+    writeExr(path("nan.exr"), nan);
     Image inf = randomImage(12, 12, 18, 1.0);
     inf.pixels[3 * (12 * 2 + 9)] = std::numeric_limits<float>::infinity();
-    render::writeExr(path("inf.exr"), inf);
+    writeExr(path("inf.exr"), inf);
 
     expectInputError([&] { compareImageFiles(path("a.exr"), path("wide.exr"), options()); },
                      {"a.exr", "12 x 12", "wide.exr", "14 x 12"});

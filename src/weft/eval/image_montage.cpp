@@ -10,8 +10,8 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/image_io.h"
 #include "weft/core/json_message.h"
-#include "weft/render/lights.h"
 
 namespace weft::eval {
 
@@ -27,7 +27,7 @@ void MontageOptions::validate() const {
 }
 
 Image readMontageInput(const std::string& path) {
-    if (lowercaseExtension(path) != ".png") return render::readImage(path);
+    if (lowercaseExtension(path) != ".png") return readImage(path);
     const std::string bytes = readFile(path);
     if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
         throw InputError("cannot read PNG image '" + path + "': file too large");

@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "weft/core/file.h"
+#include "weft/core/image_io.h"
 #include "weft/core/test_util.h"
-#include "weft/render/lights.h"
 
 namespace weft::eval {
 namespace {
@@ -90,7 +90,7 @@ TEST_F(MontageFiles, PngInputsKeepTheirEightBitValues) {
 }
 
 TEST_F(MontageFiles, ExrInputsAreReadAsStored) {
-    render::writeExr(path("a.exr"), constantImage(2, 2, {0.1, 0.2, 0.3}));
+    writeExr(path("a.exr"), constantImage(2, 2, {0.1, 0.2, 0.3}));
     const Image im = readMontageInput(path("a.exr"));
     EXPECT_FLOAT_EQ(static_cast<float>(im.get(1, 1).g), 0.2f);
 }

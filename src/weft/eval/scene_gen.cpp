@@ -17,6 +17,7 @@
 #include "weft/core/file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/math.h"
+#include "weft/render/camera.h"
 #include "weft/yarn/yarn_model.h"
 
 namespace weft::eval {
@@ -86,9 +87,8 @@ std::vector<render::LightDesc> paperLights(const render::CameraDesc& camera,
 
     const Vec3 toCentre = camera.to - camera.from;
     const double distance = length(toCentre);
-    const Vec3 forward = toCentre / distance;
-    const Vec3 right = normalize(cross(forward, camera.up));
-    const Vec3 up = cross(right, forward);
+    const render::ViewAxes axes = render::viewAxes(toCentre, camera.up);
+    const Vec3 &forward = axes.forward, &right = axes.right, &up = axes.up;
     const auto sphere = [&](double side, const Rgb& radiance) {
         render::LightDesc l;
         l.type = render::LightDesc::Type::Sphere;
@@ -101,25 +101,6 @@ std::vector<render::LightDesc> paperLights(const render::CameraDesc& camera,
     lights.push_back(sphere(+1, kKeyRadiance));
     lights.push_back(sphere(-1, kFillRadiance));
     return lights;
-}
-
-// The view axes of a camera looking along `forward` with `up`, as
-// render::Camera builds them, and the half-extents of its image plane at
-// distance 1 (the field of view spans the shorter film side).
-struct ViewBasis {
-    Vec3 f, r, u;
-    double halfW = 0, halfH = 0;
-};
-ViewBasis viewBasis(const Vec3& forward, const Vec3& up, double fovDeg, int width, int height) {
-    ViewBasis v;
-    v.f = normalize(forward);
-    v.r = normalize(cross(v.f, up));
-    v.u = cross(v.r, v.f);
-    const double half = std::tan(0.5 * radians(fovDeg));
-    const double aspect = static_cast<double>(width) / height;
-    v.halfW = aspect >= 1 ? half * aspect : half;
-    v.halfH = aspect >= 1 ? half : half / aspect;
-    return v;
 }
 
 GeneratedScene assemble(render::CurveSet curves, const render::CameraDesc& camera,
@@ -231,9 +212,10 @@ render::CameraDesc frameBox(const render::Bounds3& box, const Vec3& forward, dou
                             int width, int height, double fill) {
     render::CameraDesc cam;
     cam.fovDeg = fovDeg;
-    const ViewBasis view = viewBasis(forward, cam.up, fovDeg, width, height);
-    const Vec3 &f = view.f, &r = view.r, &u = view.u;
-    const double halfW = fill * view.halfW, halfH = fill * view.halfH;
+    const render::ViewAxes axes = render::viewAxes(forward, cam.up);
+    const render::FilmExtent film = render::filmExtent(fovDeg, width, height);
+    const Vec3 &f = axes.forward, &r = axes.right, &u = axes.up;
+    const double halfW = fill * film.halfWidth, halfH = fill * film.halfHeight;
     const Vec3 c = boxCentre(box);
     const double extent = length(box.hi - box.lo);
     // A corner q (relative to c) is at depth D + q.f from the camera at c - D f;
@@ -254,10 +236,10 @@ render::CameraDesc frameBox(const render::Bounds3& box, const Vec3& forward, dou
 
 bool outOfView(const render::CameraDesc& camera, int width, int height, const Vec3& p,
                double radius) {
-    const ViewBasis view =
-        viewBasis(camera.to - camera.from, camera.up, camera.fovDeg, width, height);
-    const Vec3 &f = view.f, &r = view.r, &u = view.u;
-    const double halfW = view.halfW, halfH = view.halfH;
+    const render::ViewAxes axes = render::viewAxes(camera.to - camera.from, camera.up);
+    const render::FilmExtent film = render::filmExtent(camera.fovDeg, width, height);
+    const Vec3 &f = axes.forward, &r = axes.right, &u = axes.up;
+    const double halfW = film.halfWidth, halfH = film.halfHeight;
     // Every corner of the cube p +- radius beyond one and the same side of the
     // view frustum (its four side planes and the camera plane): then the whole
     // ball of radius `radius` around p is out of view.
@@ -280,9 +262,10 @@ render::CameraDesc frameCover(double x0, double x1, double y0, double y1, const 
                               double fovDeg, int width, int height) {
     render::CameraDesc cam;
     cam.fovDeg = fovDeg;
-    const ViewBasis view = viewBasis(forward, cam.up, fovDeg, width, height);
-    const Vec3 &f = view.f, &r = view.r, &u = view.u;
-    const double halfW = view.halfW, halfH = view.halfH;
+    const render::ViewAxes axes = render::viewAxes(forward, cam.up);
+    const render::FilmExtent film = render::filmExtent(fovDeg, width, height);
+    const Vec3 &f = axes.forward, &r = axes.right, &u = axes.up;
+    const double halfW = film.halfWidth, halfH = film.halfHeight;
     const Vec3 c{0.5 * (x0 + x1), 0.5 * (y0 + y1), 0};
     // The footprint of the film on the plane grows with the distance D: find
     // the largest D at which the four corner rays land inside the rectangle.

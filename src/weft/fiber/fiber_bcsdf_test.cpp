@@ -2,17 +2,17 @@
 
 #include <gtest/gtest.h>
 
-#include <nlohmann/json.hpp>
-
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "weft/core/chi2.h"
 #include "weft/core/error.h"
 #include "weft/core/math.h"
 #include "weft/core/test_util.h"
+#include "weft/fiber/fiber_test_util.h"
 
 namespace weft {
 namespace {
@@ -53,7 +53,7 @@ const std::vector<double> kIncidentThetaDeg = {0, 15, -30, 45, -60, 75, 85, -89,
 
 TEST(FiberBcsdf, WhiteFurnaceAlbedoIsFresnelPlusTransmission) {
     double worst = 0;
-    for (const auto& preset : materialPresets()) {
+    for (const auto& preset : testing::table3Fibers()) {
         const FiberBcsdf fiber(preset.fiber);
         for (double thetaDeg : kIncidentThetaDeg) {
             const Vec3 wi = fiberDirection(thetaDeg, 37.0);
@@ -73,7 +73,7 @@ TEST(FiberBcsdf, WhiteFurnaceAlbedoIsFresnelPlusTransmission) {
 
 TEST(FiberBcsdf, PdfIntegratesToOne) {
     double worst = 0;
-    for (const auto& preset : materialPresets()) {
+    for (const auto& preset : testing::table3Fibers()) {
         const FiberBcsdf fiber(preset.fiber);
         for (double thetaDeg : kIncidentThetaDeg) {
             const Vec3 wi = fiberDirection(thetaDeg, -120.0);
@@ -114,7 +114,7 @@ Rgb referenceEval(const FiberParams& p, const Vec3& wi, const Vec3& wo) {
 
 TEST(FiberBcsdf, EvalMatchesIndependentFormula) {
     Rng rng(5, 5);
-    for (const auto& preset : materialPresets()) {
+    for (const auto& preset : testing::table3Fibers()) {
         const FiberBcsdf fiber(preset.fiber);
         for (int i = 0; i < 12; ++i) {
             const Vec3 wi = fiberDirection(170 * rng.uniform() - 85, 360 * rng.uniform());
@@ -131,7 +131,7 @@ TEST(FiberBcsdf, EvalMatchesIndependentFormula) {
 
 TEST(FiberBcsdf, SampleWeightIsEvalOverPdf) {
     Rng rng(1, 1);
-    for (const auto& preset : materialPresets()) {
+    for (const auto& preset : testing::table3Fibers()) {
         const FiberBcsdf fiber(preset.fiber);
         for (int i = 0; i < 2000; ++i) {
             const Vec3 wi = fiberDirection(180 * rng.uniform() - 90, 360 * rng.uniform());
@@ -151,7 +151,7 @@ TEST(FiberBcsdf, InterfaceCallsAgree) {
     // gives the (wi, wo) results, and a sample's weight is eval / pdf at its
     // wo (to rounding: the sample knows theta_o, eval recomputes it from wo).
     Rng rng(7, 7);
-    for (const auto& preset : materialPresets()) {
+    for (const auto& preset : testing::table3Fibers()) {
         const FiberBcsdf fiber(preset.fiber);
         const Bsdf& bsdf = fiber;
         for (int i = 0; i < 50; ++i) {
@@ -188,11 +188,11 @@ TEST(FiberBcsdf, InterfaceCallsAgree) {
 TEST(FiberBcsdf, SamplingIsChiSquareConsistentWithPdf) {
     const std::vector<std::pair<double, double>> incident = {
         {0, 0}, {30, 70}, {-60, -150}, {85, 10}, {-89.5, 200}, {90, 0}};
-    const int tests = static_cast<int>(materialPresets().size() * incident.size());
+    const int tests = static_cast<int>(testing::table3Fibers().size() * incident.size());
     const double alpha = sidakCorrectedLevel(0.01, tests);
     const SphereGrid grid{90, 90};
     double minP = 1, maxP = 0;
-    for (const auto& preset : materialPresets()) {
+    for (const auto& preset : testing::table3Fibers()) {
         const FiberBcsdf fiber(preset.fiber);
         for (const auto& [thetaDeg, phiDeg] : incident) {
             const Vec3 wi = fiberDirection(thetaDeg, phiDeg);
@@ -221,7 +221,7 @@ TEST(FiberBcsdf, SamplingIsChiSquareConsistentWithPdf) {
 TEST(FiberBcsdf, DirectionsAlongTheFiberAreFinite) {
     const std::vector<Vec3> special = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, 0, -1},
                                        fiberDirection(90 - 1e-10, 0), fiberDirection(-90 + 1e-12, 3)};
-    for (const auto& preset : materialPresets()) {
+    for (const auto& preset : testing::table3Fibers()) {
         const FiberBcsdf fiber(preset.fiber);
         for (const Vec3& wi : special) {
             for (const Vec3& wo : special) {
@@ -244,7 +244,7 @@ TEST(FiberBcsdf, DirectionsAlongTheFiberAreFinite) {
 }
 
 TEST(FiberBcsdf, SampleIsDeterministicInItsInput) {
-    const FiberBcsdf fiber(findMaterialPreset("fleece").fiber);
+    const FiberBcsdf fiber(testing::table3Fiber("fleece"));
     const Vec3 wi = fiberDirection(20, 30);
     const BsdfSample a = fiber.sample(wi, {0.3, 0.6, 0.9}), b = fiber.sample(wi, {0.3, 0.6, 0.9});
     EXPECT_EQ(a.wo, b.wo);
@@ -260,7 +260,7 @@ TEST(FiberParams, ValidationNamesFieldAndRange) {
             EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
         }
     };
-    const FiberParams good = findMaterialPreset("silk").fiber;
+    const FiberParams good = testing::table3Fiber("silk");
     FiberParams p = good;
     p.cR.g = 1.5;
     expectError(p, "c_r[1] = 1.5 is out of range: allowed [0, 1]");
@@ -279,7 +279,7 @@ TEST(FiberParams, ValidationNamesFieldAndRange) {
 }
 
 TEST(FiberParams, JsonIsStrict) {
-    const nlohmann::json good = findMaterialPreset("cotton").fiber.toJson();
+    const nlohmann::json good = testing::table3Fiber("cotton").toJson();
     EXPECT_EQ(FiberParams::fromJson(good, "x.json").toJson(), good);
     auto expectError = [](const nlohmann::json& j, const std::string& needle) {
         try {
@@ -328,7 +328,6 @@ TEST(FiberParams, JsonIsStrict) {
     } catch (const InputError& e) {
         EXPECT_STREQ(e.what(), "model.json: fiber.c_r = 1.5 is out of range: allowed [0, 1]");
     }
-    EXPECT_THROW(findMaterialPreset("wool"), InputError);
 }
 
 }  // namespace

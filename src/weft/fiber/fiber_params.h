@@ -1,4 +1,4 @@
-// weft/fiber/fiber_params.h — fiber shading parameters and the Table 3 presets.
+// weft/fiber/fiber_params.h — fiber shading parameters.
 //
 // Parameters of the Khungurn et al. (2015) fiber model (paper eq. 2-4,
 // DESIGN.md 3):
@@ -8,17 +8,14 @@
 //   beta_tt_deg  (0, 90]           longitudinal width of TT, degrees
 //   gamma_tt_deg (0, 90]           azimuthal width of TT, degrees (kappa = 1/gamma^2)
 // JSON form: {"c_r":[r,g,b],"c_tt":[r,g,b],"beta_r_deg":x,"beta_tt_deg":x,"gamma_tt_deg":x};
-// unknown keys are an error. A material preset adds the ply geometry
-// (N, rho, alpha) of the paper's Table 3.
+// unknown keys are an error. The paper's Table 3 materials (these and the ply
+// geometry) are the presets of yarn/material_preset.h.
 #pragma once
 
 #include <nlohmann/json_fwd.hpp>
 #include <string>
-#include <string_view>
-#include <vector>
 
 #include "weft/core/rgb.h"
-#include "weft/ply/ply.h"
 
 namespace weft {
 
@@ -37,16 +34,5 @@ struct FiberParams {
     static FiberParams fromJsonFile(const std::string& path);
     nlohmann::json toJson() const;
 };
-
-struct MaterialPreset {
-    std::string_view name;
-    FiberParams fiber;
-    PlyParams ply;
-};
-
-// The five materials of the paper's Table 3 (fleece, silk, polyester, cotton, gabardine).
-const std::vector<MaterialPreset>& materialPresets();
-// Throws InputError listing the known names when `name` is unknown.
-const MaterialPreset& findMaterialPreset(std::string_view name);
 
 }  // namespace weft

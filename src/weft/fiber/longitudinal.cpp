@@ -4,18 +4,13 @@
 #include <cmath>
 
 #include "weft/core/math.h"
+#include "weft/core/quadrature.h"
 
 namespace weft {
 
 namespace {
 
 constexpr int kTableIntervals = 2048;
-
-// 8-point Gauss-Legendre rule on [-1, 1].
-constexpr double kGlNodes[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
-                                0.9602898564975363};
-constexpr double kGlWeights[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
-                                  0.1012285362903763};
 
 // Mode of exp(-(t - mu)^2 / (2 beta^2)) cos^2 t, i.e. the root of
 // t - mu + 2 beta^2 tan t = 0, which lies between 0 and mu. By symmetry take
@@ -69,10 +64,11 @@ double LongitudinalGaussian::normalizationByQuadrature(double mu, double* deriva
     double z = 0, dz = 0;
     for (int p = 0; p < panels; ++p) {
         const double centre = a + (p + 0.5) * width;
+        // The 8-point Gauss-Legendre rule: the negative nodes, then the positive ones.
         for (int k = 0; k < 8; ++k) {
-            const double x = (k < 4 ? -1.0 : 1.0) * kGlNodes[k % 4];
+            const double x = (k < 4 ? -1.0 : 1.0) * quadrature::kGaussLegendre8HalfNodes[k % 4];
             const double t = centre + 0.5 * width * x;
-            const double w = kGlWeights[k % 4] * 0.5 * width;
+            const double w = quadrature::kGaussLegendre8HalfWeights[k % 4] * 0.5 * width;
             const double c = std::cos(t);
             const double v = w * std::exp(-sqr(t - mu) * inv2b2) * c * c;
             z += v;

@@ -8,7 +8,7 @@
 #include "weft/core/rng.h"
 #include "weft/fit/fit.h"
 #include "weft/fit/metrics.h"
-#include "weft/fiber/fiber_params.h"
+#include "weft/yarn/material_preset.h"
 #include "weft/yarn/yarn_lobes.h"
 
 namespace weft {

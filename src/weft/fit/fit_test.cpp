@@ -7,6 +7,7 @@
 #include "weft/core/math.h"
 #include "weft/core/test_util.h"
 #include "weft/fit/metrics.h"
+#include "weft/yarn/material_preset.h"
 #include "weft/yarn/yarn_lobes.h"
 
 namespace weft {

@@ -18,6 +18,7 @@
 #include "weft/core/npy.h"
 #include "weft/core/progress.h"
 #include "weft/core/rng.h"
+#include "weft/core/sampling.h"
 #include "weft/fiber/fiber_bcsdf.h"
 #include "weft/gather/ply_tracer.h"
 
@@ -43,12 +44,8 @@ constexpr int64_t kChunk = 1024;  // paths per task
 void GatherOptions::validate() const {
     if (paths < 1)
         throw InputError("paths = " + std::to_string(paths) + " is out of range: allowed >= 1");
-    if (maxDepth < 1 || maxDepth > 1000000)
-        throw InputError("max depth = " + std::to_string(maxDepth) +
-                         " is out of range: allowed [1, 1000000]");
-    if (threads < 0 || threads > 1024)
-        throw InputError("threads = " + std::to_string(threads) +
-                         " is out of range: allowed [0, 1024] (0: all cores)");
+    checkRange("max depth =", maxDepth, 1, 1000000);
+    checkRange("threads =", threads, 0, 1024, " (0: all cores)");
     PeriodicPlyTracer::validateSegmentsPerTwist(segmentsPerTwist);
     fiber.validate();
     ply.validate();
@@ -91,11 +88,8 @@ GatherResult gatherRdm(const GatherOptions& o) {
                     Vec3 org = n * ply.radius;
                     org.z = period * rng.uniform();
                     // wi uniform over the upper hemisphere: cos(theta) uniform.
-                    const double cosTheta = rng.uniform();
-                    const double sinTheta = safeSqrt(1.0 - cosTheta * cosTheta);
-                    const double phi = kTwoPi * rng.uniform() - kPi;
-                    const Vec3 wiLocal{sinTheta * std::cos(phi), sinTheta * std::sin(phi),
-                                       cosTheta};
+                    const double uCosTheta = rng.uniform(), uPhi = rng.uniform();
+                    const Vec3 wiLocal = sampleUniformHemisphere(uCosTheta, uPhi);
                     const size_t binIn = bins.incidentBin(wiLocal);
                     Vec3 dir = -entry.fromLocal(wiLocal);
                     Rgb weight(1.0);

@@ -10,6 +10,7 @@
 #include "weft/core/rng.h"
 #include "weft/core/test_util.h"
 #include "weft/fiber/fiber_bcsdf.h"
+#include "weft/fiber/fiber_test_util.h"
 #include "weft/gather/ply_tracer.h"
 
 namespace weft {
@@ -139,7 +140,7 @@ TEST(Gather, LosslessFiberConservesEnergyInEveryIncidentBin) {
 TEST(Gather, StraightPlyTransmissionMatchesTwoDimensionalGeometry) {
     const PlyParams plyParams{120, 0.3, 0.0};
     const GatherOptions o =
-        smallGather(findMaterialPreset("fleece").fiber, plyParams, testing::scaled(200000));
+        smallGather(testing::table3Fiber("fleece"), plyParams, testing::scaled(200000));
     const GatherResult r = gatherRdm(o);
     const PlyGeometry ply = generatePly(plyParams, 1.0, 1.0, o.seed);
     const double rf = ply.fiberRadius;
@@ -189,7 +190,7 @@ TEST(Gather, StraightPlyTransmissionMatchesTwoDimensionalGeometry) {
 TEST(Gather, SingleFiberFirstBounceEnergyIsTheFiberAlbedo) {
     // One straight fiber: a path interacts at most once, and the expected
     // weight of an interacting path is the fiber's albedo at that angle.
-    const FiberParams fleece = findMaterialPreset("fleece").fiber;
+    const FiberParams fleece = testing::table3Fiber("fleece");
     const PlyParams plyParams{1, 0.2, 0.0};
     const GatherOptions o = smallGather(fleece, plyParams, testing::scaled(400000));
     const GatherResult r = gatherRdm(o);
@@ -250,8 +251,8 @@ TEST(Gather, SingleFiberFirstBounceEnergyIsTheFiberAlbedo) {
 }
 
 TEST(Gather, ResultDoesNotDependOnThreadCountButOnSeed) {
-    GatherOptions o = smallGather(findMaterialPreset("polyester").fiber, {60, 0.4, 0.2},
-                                  testing::scaled(20000));
+    GatherOptions o =
+        smallGather(testing::table3Fiber("polyester"), {60, 0.4, 0.2}, testing::scaled(20000));
     o.threads = 1;
     const GatherResult one = gatherRdm(o);
     o.threads = 2;

@@ -38,21 +38,7 @@ ExcludeContext makeContext(int excludedFiber) {
 double intersect(RTCScene scene, ExcludeContext& ctx, const Vec3& org, const Vec3& dir,
                  double tfar, int* fiber) {
     RTCRayHit rh;
-    rh.ray.org_x = static_cast<float>(org.x);
-    rh.ray.org_y = static_cast<float>(org.y);
-    rh.ray.org_z = static_cast<float>(org.z);
-    rh.ray.dir_x = static_cast<float>(dir.x);
-    rh.ray.dir_y = static_cast<float>(dir.y);
-    rh.ray.dir_z = static_cast<float>(dir.z);
-    rh.ray.tnear = 0.0f;
-    rh.ray.tfar = static_cast<float>(std::min(tfar, 1e30));
-    rh.ray.time = 0.0f;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    initRay(rh, org, dir, tfar);
     rtcIntersect1(scene, &ctx.context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return -1.0;
     *fiber = static_cast<int>(rh.hit.geomID);
@@ -62,9 +48,7 @@ double intersect(RTCScene scene, ExcludeContext& ctx, const Vec3& org, const Vec
 }  // namespace
 
 void PeriodicPlyTracer::validateSegmentsPerTwist(int segmentsPerTwist) {
-    if (segmentsPerTwist < 16 || segmentsPerTwist > 65536)
-        throw InputError("segments per twist = " + std::to_string(segmentsPerTwist) +
-                         " is out of range: allowed [16, 65536]");
+    checkRange("segments per twist =", segmentsPerTwist, 16, 65536);
 }
 
 PeriodicPlyTracer::PeriodicPlyTracer(const PlyGeometry& ply, int segmentsPerTwist,

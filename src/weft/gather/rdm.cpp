@@ -6,6 +6,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/math.h"
+#include "weft/core/sampling.h"
 
 namespace weft {
 
@@ -89,30 +90,18 @@ double RdmBins::incidentSolidAngle(size_t bin) const {
            phiI;
 }
 
-namespace {
-
-// Uniform in solid angle over theta in [theta0, theta1], phi in [phi0, phi1]:
-// cos(theta) is uniform between its bounds.
-Vec3 directionInPatch(double theta0, double theta1, double phi0, double phi1, double u1, double u2) {
-    const double c0 = std::cos(theta0), c1 = std::cos(theta1);
-    const double cosTheta = c0 + u1 * (c1 - c0);
-    const double sinTheta = std::sqrt(std::max(0.0, 1.0 - cosTheta * cosTheta));
-    const double phi = phi0 + u2 * (phi1 - phi0);
-    return {sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta};
-}
-
-}  // namespace
-
 Vec3 RdmBins::incidentDirectionIn(size_t bin, double u1, double u2) const {
     const double t = static_cast<double>(bin / phiI), p = static_cast<double>(bin % phiI);
-    return directionInPatch(t * kHalfPi / thetaI, (t + 1) * kHalfPi / thetaI,
-                            -kPi + p * kTwoPi / phiI, -kPi + (p + 1) * kTwoPi / phiI, u1, u2);
+    const double theta0 = t * kHalfPi / thetaI, theta1 = (t + 1) * kHalfPi / thetaI;
+    const double phi0 = -kPi + p * kTwoPi / phiI, phi1 = -kPi + (p + 1) * kTwoPi / phiI;
+    return sampleUniformSphericalPatch(theta0, theta1, phi0, phi1, u1, u2);
 }
 
 Vec3 RdmBins::outgoingDirectionIn(size_t bin, double u1, double u2) const {
     const double t = static_cast<double>(bin / phiO), p = static_cast<double>(bin % phiO);
-    return directionInPatch(t * kPi / thetaO, (t + 1) * kPi / thetaO, -kPi + p * kTwoPi / phiO,
-                            -kPi + (p + 1) * kTwoPi / phiO, u1, u2);
+    const double theta0 = t * kPi / thetaO, theta1 = (t + 1) * kPi / thetaO;
+    const double phi0 = -kPi + p * kTwoPi / phiO, phi1 = -kPi + (p + 1) * kTwoPi / phiO;
+    return sampleUniformSphericalPatch(theta0, theta1, phi0, phi1, u1, u2);
 }
 
 }  // namespace weft

@@ -7,6 +7,7 @@
 #include "weft/core/file.h"
 #include "weft/core/npy.h"
 #include "weft/core/test_util.h"
+#include "weft/fiber/fiber_test_util.h"
 #include "weft/gather/gather.h"
 #include "weft/gather/rdm_image.h"
 
@@ -18,7 +19,7 @@ protected:
     // A small gather written to DIR/g.
     std::string writeSmallGather(GatherOptions* used = nullptr) {
         GatherOptions o;
-        o.fiber = findMaterialPreset("fleece").fiber;
+        o.fiber = testing::table3Fiber("fleece");
         o.ply = {40, 0.3, 0.2};
         o.paths = 2000;
         o.seed = 3;

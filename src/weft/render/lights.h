@@ -169,16 +169,4 @@ class SphereLight final : public Light {
     Rgb radiance_;
 };
 
-// Reads a linear RGB image: OpenEXR (.exr, RGB or RGBA channels, any pixel
-// type; alpha ignored; a Y-only file is grey; a missing one of R, G, B reads
-// as 0; the data window is the image; luminance/chroma and subsampled files
-// are refused) or Radiance RGBE (.hdr); the extension picks the reader
-// (case-insensitive). Values are returned as stored (no validation).
-// InputError naming the file for a missing, unreadable, truncated or corrupt
-// file, an unknown extension, or more than 2^28 texels.
-Image readImage(const std::string& path);
-// Writes linear RGB as an OpenEXR file with 32-bit float R, G, B channels,
-// atomically (temp file + rename).
-void writeExr(const std::string& path, const Image& image);
-
 }  // namespace weft::render

@@ -11,10 +11,10 @@
 #include <vector>
 
 #include "weft/core/file.h"
+#include "weft/core/image_io.h"
 #include "weft/core/math.h"
 #include "weft/core/rng.h"
 #include "weft/core/test_util.h"
-#include "weft/render/lights.h"
 #include "weft/render/path_tracer.h"
 #include "weft/render/renderer.h"
 #include "weft/render/scene.h"

@@ -36,12 +36,8 @@ void RenderOptions::validate() const {
     if (!std::isfinite(seconds) || seconds < 0 || seconds > 1e6)
         throw InputError("--time " + std::to_string(seconds) +
                          " is out of range: allowed (0, 1e6] seconds");
-    if (threads < 0 || threads > 1024)
-        throw InputError("--threads " + std::to_string(threads) +
-                         " is out of range: allowed [0, 1024] (0: all cores)");
-    if (maxDepth < 1 || maxDepth > 10000)
-        throw InputError("max_depth " + std::to_string(maxDepth) +
-                         " is out of range: allowed [1, 10000]");
+    checkRange("--threads", threads, 0, 1024, " (0: all cores)");
+    checkRange("max_depth", maxDepth, 1, 10000);
 }
 
 int64_t peakResidentBytes() {

@@ -26,25 +26,6 @@ RenderMode parseRenderMode(const std::string& name) {
     throw InputError("--mode " + name + " is not a render mode: allowed neural, fiber");
 }
 
-Camera::Camera(const CameraDesc& desc, int width, int height)
-    : origin_(desc.from), width_(width), height_(height) {
-    forward_ = normalize(desc.to - desc.from);
-    right_ = normalize(cross(forward_, desc.up));
-    up_ = cross(right_, forward_);
-    // fov_deg spans the shorter side (pbrt's perspective camera).
-    const double half = std::tan(0.5 * radians(desc.fovDeg));
-    const double aspect = static_cast<double>(width) / height;
-    halfWidth_ = aspect >= 1 ? half * aspect : half;
-    halfHeight_ = aspect >= 1 ? half : half / aspect;
-}
-
-void Camera::ray(double px, double py, Vec3* org, Vec3* dir) const {
-    const double x = (2.0 * px / width_ - 1.0) * halfWidth_;
-    const double y = (1.0 - 2.0 * py / height_) * halfHeight_;
-    *org = origin_;
-    *dir = normalize(forward_ + right_ * x + up_ * y);
-}
-
 namespace {
 
 std::unique_ptr<Light> makeLight(const LightDesc& desc) {

@@ -1,10 +1,7 @@
 // weft/render/scene.h — a scene file turned into what the path tracer needs (issue 7).
 //
 // Scene builds, from a SceneDesc (scene_file.h) and a mode:
-//   - the camera: a pinhole at `from` looking at `to`, `up` projected to the
-//     image's vertical, fov_deg the full angle of the shorter image side
-//     (pbrt's perspective camera); pixel (x, y) covers [x, x+1) x [y, y+1)
-//     with y = 0 at the top;
+//   - the camera (camera.h: a pinhole, pbrt's perspective camera);
 //   - the lights (lights.h; none given: the procedural sky);
 //   - the geometry (tube_accel.h) from each yarn's curves (yarn_geometry.h):
 //       neural mode: one tube per ply, shaded with the YarnBsdf of the
@@ -26,6 +23,7 @@
 
 #include "weft/core/bsdf.h"
 #include "weft/core/vec.h"
+#include "weft/render/camera.h"
 #include "weft/render/lights.h"
 #include "weft/render/scene_file.h"
 #include "weft/render/tube_accel.h"
@@ -41,19 +39,6 @@ inline constexpr int64_t kMaxSceneSegments = int64_t{200} * 1000 * 1000;
 const char* renderModeName(RenderMode mode);
 // "neural" or "fiber"; InputError otherwise.
 RenderMode parseRenderMode(const std::string& name);
-
-class Camera {
-  public:
-    Camera() = default;
-    Camera(const CameraDesc& desc, int width, int height);
-    // Primary ray through film position (px, py), px in [0, width), py in [0, height).
-    void ray(double px, double py, Vec3* org, Vec3* dir) const;
-
-  private:
-    Vec3 origin_, forward_, right_, up_;
-    double halfWidth_ = 0, halfHeight_ = 0;  // of the image plane at distance 1
-    int width_ = 1, height_ = 1;
-};
 
 struct SceneBuildStats {
     int64_t curves = 0;           // yarn curves read

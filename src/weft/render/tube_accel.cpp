@@ -50,21 +50,6 @@ OriginContext makeContext(const TubeId& origin,
     return ctx;
 }
 
-void setRay(RTCRay& ray, const Vec3& org, const Vec3& dir, double tMax) {
-    ray.org_x = static_cast<float>(org.x);
-    ray.org_y = static_cast<float>(org.y);
-    ray.org_z = static_cast<float>(org.z);
-    ray.dir_x = static_cast<float>(dir.x);
-    ray.dir_y = static_cast<float>(dir.y);
-    ray.dir_z = static_cast<float>(dir.z);
-    ray.tnear = 0.0f;
-    ray.tfar = static_cast<float>(std::min(tMax, 1e30));
-    ray.time = 0.0f;
-    ray.mask = 0xFFFFFFFFu;
-    ray.id = 0;
-    ray.flags = 0;
-}
-
 }  // namespace
 
 uint32_t TubeAccel::GeometryInfo::tubeOf(uint32_t segment) const {
@@ -161,10 +146,7 @@ bool TubeAccel::intersect(const Vec3& org, const Vec3& dir, double tMax, const T
                           TubeHit* hit) const {
     OriginContext ctx = makeContext(origin, geometries_);
     RTCRayHit rh;
-    setRay(rh.ray, org, dir, tMax);
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    initRay(rh, org, dir, tMax);
     rtcIntersect1(scene_, &ctx.context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
 
@@ -198,7 +180,7 @@ bool TubeAccel::occluded(const Vec3& org, const Vec3& dir, double tMax,
                          const TubeId& origin) const {
     OriginContext ctx = makeContext(origin, geometries_);
     RTCRay ray;
-    setRay(ray, org, dir, tMax);
+    initRay(ray, org, dir, tMax);
     rtcOccluded1(scene_, &ctx.context, &ray);
     // Embree sets tfar to -inf when the ray is occluded.
     return ray.tfar < 0.0f;

@@ -9,6 +9,7 @@
 #include "weft/core/error.h"
 #include "weft/core/math.h"
 #include "weft/core/quadrature.h"
+#include "weft/core/sampling.h"
 #include "weft/yarn/sphere_rule.h"
 
 namespace weft {
@@ -345,9 +346,8 @@ BsdfSample YarnBsdf::sample(const BsdfIncident& in, const BsdfSampleInput& u, Rn
         s.lobe = kLobeM;
         // The rest of u[0], rescaled to [0, 1), picks the side of the surface.
         const double uSide = (u[0] - pT) / (1.0 - pT);
-        const double r = std::sqrt(u[1]), phi = kTwoPi * u[2];
-        const double z = std::sqrt(std::max(0.0, 1.0 - u[1]));
-        o = {r * std::cos(phi), r * std::sin(phi), uSide < 0.5 ? z : -z};
+        o = sampleCosineHemisphere(u[1], u[2]);
+        if (!(uSide < 0.5)) o.z = -o.z;
     } else if (u[0] < pT + pR || !(pM > 0)) {
         s.lobe = kLobeR;
         o = lobes_.sampleR(p.upper, u[1], u[2]);

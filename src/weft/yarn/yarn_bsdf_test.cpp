@@ -13,6 +13,7 @@
 #include "weft/core/file.h"
 #include "weft/core/math.h"
 #include "weft/core/test_util.h"
+#include "weft/yarn/material_preset.h"
 #include "weft/yarn/yarn_integrals.h"
 
 namespace weft {

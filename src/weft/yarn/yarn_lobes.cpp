@@ -5,6 +5,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/math.h"
+#include "weft/core/sampling.h"
 
 namespace weft {
 
@@ -123,11 +124,7 @@ Vec3 SamplingLobes::sampleM(const Vec3& wi, double uLobe, double u1, double u2, 
         const double thetaO = gM_.sample(-frame_.longitudinalAngle(wi), u1);
         return frame_.direction(thetaO, vonMisesM_.sample(u2, rng));
     }
-    // Uniform sphere: z uniform in [-1, 1], azimuth uniform (any frame).
-    const double z = 1.0 - 2.0 * u1;
-    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-    const double phi = kTwoPi * u2;
-    return {r * std::cos(phi), r * std::sin(phi), z};
+    return sampleUniformSphere(u1, u2);  // in any frame
 }
 
 double SamplingLobes::pdfM(const Vec3& wi, const Vec3& wo) const {

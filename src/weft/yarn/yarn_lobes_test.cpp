@@ -6,6 +6,7 @@
 
 #include "weft/core/math.h"
 #include "weft/core/test_util.h"
+#include "weft/yarn/material_preset.h"
 
 namespace weft {
 namespace {

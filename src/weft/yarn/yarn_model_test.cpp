@@ -15,6 +15,7 @@
 #include "weft/core/file.h"
 #include "weft/core/rng.h"
 #include "weft/core/test_util.h"
+#include "weft/yarn/material_preset.h"
 
 namespace weft {
 namespace {

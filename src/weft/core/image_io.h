@@ -1,0 +1,39 @@
+// weft/core/image_io.h — reading and writing the HDR image files.
+//
+// The one home of linear image files: envmaps (render/lights.h) and the
+// images compared and laid out by eval/ are read here, and renders written
+// here. PNG, an 8-bit display format, is written by writePng (image.h, which
+// this header includes); the linear formats are:
+//   OpenEXR (.exr)    read: RGB or RGBA channels, any pixel type (alpha
+//                     ignored; Y-only is grey; a missing one of R, G, B reads
+//                     as 0; the data window is the image); luminance/chroma
+//                     and subsampled files are refused. Written: 32-bit float
+//                     R, G, B, ZIP compressed (lossless).
+//   Radiance (.hdr)   read only (RGBE, flat or run-length encoded), through
+//                     stb_image, with truncated and corrupt files detected
+//                     first (see image_io.cpp).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "weft/core/image.h"
+
+namespace weft {
+
+// Images larger than this (2^28 texels, 3 GiB of floats) are refused as
+// corrupt rather than allocated.
+inline constexpr int64_t kMaxImagePixels = int64_t(1) << 28;
+
+// Reads a linear RGB image, OpenEXR (.exr) or Radiance RGBE (.hdr); the
+// extension picks the reader (case-insensitive). Values are returned as
+// stored (no validation). InputError naming the file for a missing,
+// unreadable, truncated or corrupt file, an unknown extension, or more than
+// kMaxImagePixels texels.
+Image readImage(const std::string& path);
+// Writes linear RGB as an OpenEXR file with 32-bit float R, G, B channels,
+// atomically (temp file + rename). InputError naming the file for an image
+// that fails checkImage or a file that cannot be written.
+void writeExr(const std::string& path, const Image& image);
+
+}  // namespace weft

@@ -10,9 +10,12 @@ namespace weft {
 
 std::string toString(OutputFunction f) {
     switch (f) {
-        case OutputFunction::Identity: return "identity";
-        case OutputFunction::Sigmoid: return "sigmoid";
-        case OutputFunction::Exp: return "exp";
+        case OutputFunction::Identity:
+            return "identity";
+        case OutputFunction::Sigmoid:
+            return "sigmoid";
+        case OutputFunction::Exp:
+            return "exp";
     }
     return "identity";
 }
@@ -34,7 +37,10 @@ std::vector<int> NetworkWeights::widths() const {
 
 std::string NetworkWeights::widthsText() const {
     std::string text;
-    for (int w : widths()) text += (text.empty() ? "" : "-") + std::to_string(w);
+    for (int w : widths()) {
+        if (!text.empty()) text += '-';
+        text += std::to_string(w);
+    }
     return text;
 }
 
@@ -73,12 +79,14 @@ void NetworkWeights::validate(const std::string& name, int in, int out, OutputFu
 NetworkWeights NetworkWeights::initialised(const std::vector<int>& widths,
                                            const std::vector<bool>& prelu, OutputFunction output,
                                            uint64_t seed) {
-    if (widths.size() < 2) throw InputError("a network needs at least an input and an output width");
+    if (widths.size() < 2)
+        throw InputError("a network needs at least an input and an output width");
     if (prelu.size() + 1 != widths.size())
         throw std::invalid_argument("NetworkWeights: one PReLU flag per layer expected");
     for (int w : widths)
         if (w < 1 || w > 4096)
-            throw InputError("layer width " + std::to_string(w) + " is out of range: allowed [1, 4096]");
+            throw InputError("layer width " + std::to_string(w) +
+                             " is out of range: allowed [1, 4096]");
     NetworkWeights net;
     net.output = output;
     Rng rng(0x4d4c50, seed);

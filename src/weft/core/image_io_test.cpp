@@ -8,7 +8,6 @@
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <gtest/gtest.h>
-#include <stb/stb_image_write.h>
 
 #include <algorithm>
 #include <array>
@@ -146,12 +145,7 @@ TEST_F(ImageFiles, HdrReadsFlatAndRunLengthFiles) {
     for (int y = 0; y < 3; ++y)
         for (int x = 0; x < 20; ++x)
             rle.set(x, y, Rgb(x < 10 ? 1.0 : 0.5, std::ldexp(x + 1, y - 4), 3.0 * (x % 4 == 0)));
-    std::string bytes;
-    ASSERT_TRUE(stbi_write_hdr_to_func(
-        [](void* ctx, void* data, int size) {
-            static_cast<std::string*>(ctx)->append(static_cast<const char*>(data), size);
-        },
-        &bytes, 20, 3, 3, rle.pixels.data()));
+    const std::string bytes = testing::radianceFileBytes(rle);
     writeFileAtomic(path("rle.HDR"), bytes);
     EXPECT_TRUE(sameBits(readImage(path("rle.HDR")), rle));
 }
@@ -192,12 +186,7 @@ TEST_F(ImageFiles, TruncatedFilesAreInputErrors) {
     expectInputError([&] { readImage(path("cut.exr")); }, {path("cut.exr")});
 
     // Radiance, run-length encoded and flat.
-    std::string rle;
-    stbi_write_hdr_to_func(
-        [](void* ctx, void* data, int size) {
-            static_cast<std::string*>(ctx)->append(static_cast<const char*>(data), size);
-        },
-        &rle, image.width, image.height, 3, image.pixels.data());
+    const std::string rle = testing::radianceFileBytes(image);
     const std::vector<std::array<uint8_t, 4>> texels(6 * 40, {100, 50, 25, 130});
     const std::string flat = rgbeFile(6, 40, texels);
     for (const std::string* full : {&std::as_const(rle), &flat}) {
@@ -256,12 +245,7 @@ TEST_F(ImageFiles, CorruptedBytesNeverCrash) {
     Rng rng(22, 22);
     for (float& v : image.pixels) v = static_cast<float>(rng.uniform());
     writeExr(path("ok.exr"), image);
-    std::string hdr;
-    stbi_write_hdr_to_func(
-        [](void* ctx, void* data, int size) {
-            static_cast<std::string*>(ctx)->append(static_cast<const char*>(data), size);
-        },
-        &hdr, image.width, image.height, 3, image.pixels.data());
+    const std::string hdr = testing::radianceFileBytes(image);
     for (const auto& [name, original] :
          {std::pair<std::string, std::string>{"bad.exr", readFile(path("ok.exr"))},
           std::pair<std::string, std::string>{"bad.hdr", hdr}}) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <stb/stb_image_write.h>
 #include <unistd.h>
 
 #include <cstdint>
@@ -60,6 +61,19 @@ inline Image constantImage(int width, int height, const Rgb& colour) {
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) image.set(x, y, colour);
     return image;
+}
+
+// The bytes of a Radiance .hdr file of `image`, run-length encoded by
+// stb_image_write (values with 8-bit mantissas survive RGBE exactly).
+inline std::string radianceFileBytes(const Image& image) {
+    std::string bytes;
+    const int ok = stbi_write_hdr_to_func(
+        [](void* ctx, void* data, int size) {
+            static_cast<std::string*>(ctx)->append(static_cast<const char*>(data), size);
+        },
+        &bytes, image.width, image.height, 3, image.pixels.data());
+    EXPECT_TRUE(ok) << "stbi_write_hdr_to_func failed";
+    return bytes;
 }
 
 // A fixture with a fresh directory per test, removed afterwards.

@@ -6,25 +6,15 @@
 #include <string>
 
 #include "weft/yarn/yarn_bsdf.h"
+#include "weft/yarn/yarn_test_util.h"
 
 namespace weft {
 namespace {
 
 const char* const kModels[] = {"fleece-small", "gabardine-small"};
 
-YarnModel testModel(const std::string& name) {
-    return loadYarnModel(std::string(WEFT_SOURCE_DIR) + "/tests/data/" + name + ".json");
-}
-
-// A calibration that scales R by 1/2 and M by 2 exp(0.3 x).
-YarnModel withCalibration(YarnModel model) {
-    model.calibration.degree = 1;
-    for (int c = 0; c < 3; ++c) {
-        model.calibration.r[c] = {-std::log(2.0), 0, 0, 0};
-        model.calibration.m[c] = {std::log(2.0), 0, 0, 0.3};  // 1, z, y, x
-    }
-    return model;
-}
+YarnModel testModel(const std::string& name) { return loadYarnModel(testing::testModelPath(name)); }
+using testing::withCalibration;
 
 // The maps evaluate the model's parts on their own (model_maps.h): they must
 // agree with the renderer's BSDF without the energy guard.

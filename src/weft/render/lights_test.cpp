@@ -1,7 +1,6 @@
 #include "weft/render/lights.h"
 
 #include <gtest/gtest.h>
-#include <stb/stb_image_write.h>
 
 #include <cmath>
 #include <cstdint>
@@ -685,12 +684,7 @@ TEST_F(EnvmapFiles, LoadReadsTheImageFile) {
     for (int y = 0; y < 3; ++y)
         for (int x = 0; x < 20; ++x)
             rle.set(x, y, Rgb(x < 10 ? 1.0 : 0.5, std::ldexp(x + 1, y - 4), 3.0 * (x % 4 == 0)));
-    std::string bytes;
-    ASSERT_TRUE(stbi_write_hdr_to_func(
-        [](void* ctx, void* data, int size) {
-            static_cast<std::string*>(ctx)->append(static_cast<const char*>(data), size);
-        },
-        &bytes, 20, 3, 3, rle.pixels.data()));
+    const std::string bytes = testing::radianceFileBytes(rle);
     writeFileAtomic(path("rle.HDR"), bytes);
     const EnvironmentLight light = EnvironmentLight::load(path("rle.HDR"), 1.0, 0.0);
     EXPECT_TRUE(sameBits(light.image(), rle));

@@ -15,6 +15,7 @@
 #include "weft/core/test_util.h"
 #include "weft/yarn/material_preset.h"
 #include "weft/yarn/yarn_integrals.h"
+#include "weft/yarn/yarn_test_util.h"
 
 namespace weft {
 namespace {
@@ -291,17 +292,7 @@ TEST(YarnBsdf, InterfaceCallsAgreeExactly) {
         }
 }
 
-// The renderer's fast evaluation (energy guard off) agrees with the fit's
-// maps (Mlp::forward, RLobe), which `weft fit` and `weft yarn check` report.
-// A hand-set energy calibration: S_R times 1/2 and S_M times 2 exp(0.3 x).
-YarnModel withCalibration(YarnModel model) {
-    model.calibration.degree = 1;
-    for (int c = 0; c < 3; ++c) {
-        model.calibration.r[c] = {-std::log(2.0), 0, 0, 0};
-        model.calibration.m[c] = {std::log(2.0), 0, 0, 0.3};  // 1, z, y, x
-    }
-    return model;
-}
+using testing::withCalibration;
 
 TEST(YarnBsdf, EnergyCalibrationScalesTheLobes) {
     const YarnModel& model = testModel("fleece-small");

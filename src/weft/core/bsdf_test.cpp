@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "weft/core/math.h"
+#include "weft/core/test_util.h"
 
 namespace weft {
 namespace {
@@ -91,19 +92,8 @@ TEST(Bsdf, AllFormsAgreeAndASlicePreparesOnce) {
         EXPECT_EQ(slice.wi(), wi);
         for (int k = 0; k < 20; ++k) {
             const Vec3 wo = direction(180 * rng.uniform(), 360 * rng.uniform());
-            const BsdfEval e = bsdf.evalPdf(wi, wo);
-            EXPECT_EQ(e.value, bsdf.eval(wi, wo));
-            EXPECT_EQ(e.pdf, bsdf.pdf(wi, wo));
-            EXPECT_EQ(slice.evalPdf(wo).value, e.value);
-            EXPECT_EQ(slice.evalPdf(wo).pdf, e.pdf);
-            EXPECT_EQ(slice.eval(wo), e.value);
-            EXPECT_EQ(slice.pdf(wo), e.pdf);
             const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
-            Rng a(k, 1), b(k, 1);
-            const BsdfSample s = slice.sample(u, a), t = bsdf.sample(wi, u, b);
-            EXPECT_EQ(s.wo, t.wo);
-            EXPECT_EQ(s.weight, t.weight);
-            EXPECT_EQ(s.pdf, t.pdf);
+            const BsdfSample s = testing::expectBsdfFormsAgree(bsdf, slice, wo, u, k);
             EXPECT_EQ(bsdf.sample(wi, u).wo, slice.sample(u).wo);
             // weight = eval / pdf at the sampled direction.
             const BsdfEval at = bsdf.evalPdf(wi, s.wo);

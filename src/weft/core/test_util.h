@@ -11,6 +11,7 @@
 #include <initializer_list>
 #include <string>
 
+#include "weft/core/bsdf.h"
 #include "weft/core/error.h"
 #include "weft/core/image.h"
 
@@ -74,6 +75,30 @@ inline std::string radianceFileBytes(const Image& image) {
         &bytes, image.width, image.height, 3, image.pixels.data());
     EXPECT_TRUE(ok) << "stbi_write_hdr_to_func failed";
     return bytes;
+}
+
+// The forms of the Bsdf contract (core/bsdf.h) agree at one wo and one sample
+// input, bit for bit: evalPdf is (eval, pdf), the slice (prepared for its wi)
+// gives the (wi, wo) results, and the slice's sample equals sample(wi, u, rng)
+// for the same generator stream. Returns that sample (for the caller's own
+// checks of weight = eval / pdf).
+inline BsdfSample expectBsdfFormsAgree(const Bsdf& bsdf, const BsdfSlice& slice, const Vec3& wo,
+                                       const BsdfSampleInput& u, uint64_t stream) {
+    const Vec3& wi = slice.wi();
+    const BsdfEval e = bsdf.evalPdf(wi, wo);
+    EXPECT_EQ(e.value, bsdf.eval(wi, wo));
+    EXPECT_EQ(e.pdf, bsdf.pdf(wi, wo));
+    EXPECT_EQ(slice.evalPdf(wo).value, e.value);
+    EXPECT_EQ(slice.evalPdf(wo).pdf, e.pdf);
+    EXPECT_EQ(slice.eval(wo), e.value);
+    EXPECT_EQ(slice.pdf(wo), e.pdf);
+    Rng a(stream, 1), b(stream, 1);
+    const BsdfSample s = slice.sample(u, a), t = bsdf.sample(wi, u, b);
+    EXPECT_EQ(s.wo, t.wo);
+    EXPECT_EQ(s.weight, t.weight);
+    EXPECT_EQ(s.pdf, t.pdf);
+    EXPECT_EQ(s.lobe, t.lobe);
+    return s;
 }
 
 // A fixture with a fresh directory per test, removed afterwards.

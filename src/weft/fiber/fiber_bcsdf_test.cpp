@@ -159,20 +159,9 @@ TEST(FiberBcsdf, InterfaceCallsAgree) {
             const BsdfSlice slice = bsdf.slice(wi);
             for (int k = 0; k < 10; ++k) {
                 const Vec3 wo = fiberDirection(180 * rng.uniform() - 90, 360 * rng.uniform());
-                const BsdfEval e = bsdf.evalPdf(wi, wo);
-                ASSERT_EQ(e.value, bsdf.eval(wi, wo)) << preset.name;
-                ASSERT_EQ(e.pdf, bsdf.pdf(wi, wo)) << preset.name;
-                ASSERT_EQ(slice.evalPdf(wo).value, e.value) << preset.name;
-                ASSERT_EQ(slice.evalPdf(wo).pdf, e.pdf) << preset.name;
-                ASSERT_EQ(slice.eval(wo), e.value) << preset.name;
-                ASSERT_EQ(slice.pdf(wo), e.pdf) << preset.name;
                 const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
-                Rng a(k, 2), b(k, 2);
-                const BsdfSample s = slice.sample(u, a), t = bsdf.sample(wi, u, b);
-                ASSERT_EQ(s.wo, t.wo) << preset.name;
-                ASSERT_EQ(s.weight, t.weight) << preset.name;
-                ASSERT_EQ(s.pdf, t.pdf) << preset.name;
-                ASSERT_EQ(s.lobe, t.lobe) << preset.name;
+                SCOPED_TRACE(preset.name);
+                const BsdfSample s = testing::expectBsdfFormsAgree(bsdf, slice, wo, u, k);
                 ASSERT_TRUE(s.valid());
                 const BsdfEval at = bsdf.evalPdf(wi, s.wo);
                 EXPECT_NEAR(s.pdf, at.pdf, 1e-12 * at.pdf) << preset.name;

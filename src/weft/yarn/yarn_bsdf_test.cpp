@@ -248,17 +248,8 @@ TEST(YarnBsdf, SliceEqualsTheTwoDirectionCalls) {
         const BsdfSlice slice = bsdf.slice(wi);
         for (int k = 0; k < 50; ++k) {
             const Vec3 wo = yarnDirection(180 * rng.uniform(), 360 * rng.uniform() - 180);
-            EXPECT_EQ(slice.eval(wo), bsdf.eval(wi, wo));
-            EXPECT_EQ(slice.pdf(wo), bsdf.pdf(wi, wo));
-            EXPECT_EQ(slice.evalPdf(wo).value, bsdf.eval(wi, wo));
-            EXPECT_EQ(slice.evalPdf(wo).pdf, bsdf.pdf(wi, wo));
             const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
-            Rng a(k, 1), b(k, 1);
-            const BsdfSample s = slice.sample(u, a), t = bsdf.sample(wi, u, b);
-            EXPECT_EQ(s.wo, t.wo);
-            EXPECT_EQ(s.weight, t.weight);
-            EXPECT_EQ(s.pdf, t.pdf);
-            EXPECT_EQ(s.lobe, t.lobe);
+            testing::expectBsdfFormsAgree(bsdf, slice, wo, u, k);
         }
     }
 }

@@ -139,12 +139,8 @@ TEST_F(ImageFiles, HdrReadsFlatAndRunLengthFiles) {
         const double f = t[3] == 0 ? 0.0 : std::ldexp(1.0, t[3] - 136);
         EXPECT_EQ(image.get(i % 3, i / 3), Rgb(t[0] * f, t[1] * f, t[2] * f)) << "texel " << i;
     }
-    // 20 x 3, run-length encoded by stb_image_write; values with 8-bit
-    // mantissas survive RGBE exactly.
-    Image rle(20, 3);
-    for (int y = 0; y < 3; ++y)
-        for (int x = 0; x < 20; ++x)
-            rle.set(x, y, Rgb(x < 10 ? 1.0 : 0.5, std::ldexp(x + 1, y - 4), 3.0 * (x % 4 == 0)));
+    // Run-length encoded by stb_image_write; values that survive RGBE exactly.
+    const Image rle = testing::rgbeExactImage();
     const std::string bytes = testing::radianceFileBytes(rle);
     writeFileAtomic(path("rle.HDR"), bytes);
     EXPECT_TRUE(sameBits(readImage(path("rle.HDR")), rle));

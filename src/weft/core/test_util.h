@@ -5,6 +5,7 @@
 #include <stb/stb_image_write.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -75,6 +76,17 @@ inline std::string radianceFileBytes(const Image& image) {
         &bytes, image.width, image.height, 3, image.pixels.data());
     EXPECT_TRUE(ok) << "stbi_write_hdr_to_func failed";
     return bytes;
+}
+
+// A 20 x 3 image whose values have 8-bit mantissas, so that a Radiance file
+// (RGBE) keeps them exactly; wide enough for stb_image_write to run-length
+// encode its rows.
+inline Image rgbeExactImage() {
+    Image image(20, 3);
+    for (int y = 0; y < 3; ++y)
+        for (int x = 0; x < 20; ++x)
+            image.set(x, y, Rgb(x < 10 ? 1.0 : 0.5, std::ldexp(x + 1, y - 4), 3.0 * (x % 4 == 0)));
+    return image;
 }
 
 // The forms of the Bsdf contract (core/bsdf.h) agree at one wo and one sample

@@ -680,10 +680,7 @@ bool sameBits(const Image& a, const Image& b) {
 
 TEST_F(EnvmapFiles, LoadReadsTheImageFile) {
     // A run-length encoded Radiance file (values with 8-bit mantissas survive RGBE exactly).
-    Image rle(20, 3);
-    for (int y = 0; y < 3; ++y)
-        for (int x = 0; x < 20; ++x)
-            rle.set(x, y, Rgb(x < 10 ? 1.0 : 0.5, std::ldexp(x + 1, y - 4), 3.0 * (x % 4 == 0)));
+    const Image rle = testing::rgbeExactImage();
     const std::string bytes = testing::radianceFileBytes(rle);
     writeFileAtomic(path("rle.HDR"), bytes);
     const EnvironmentLight light = EnvironmentLight::load(path("rle.HDR"), 1.0, 0.0);

@@ -182,6 +182,7 @@ double EnvironmentLight::pdf(const Vec3&, const Vec3& wi) const {
 }
 
 Rgb EnvironmentLight::radiance(const Vec3& d) const {
+    if (exactRadiance_) return exactRadiance_(rotateY(d, cosRot_, -sinRot_)) * scale_;
     const size_t texel = texelOf(d, nullptr);
     const float* px = &image_.pixels[3 * texel];
     return Rgb(px[0], px[1], px[2]) * scale_;
@@ -220,7 +221,9 @@ Image skyImage(int width, int height) {
 }
 
 EnvironmentLight skyLight(double scale, int width, int height) {
-    return EnvironmentLight(skyImage(width, height), scale, 0.0, "procedural sky");
+    EnvironmentLight sky(skyImage(width, height), scale, 0.0, "procedural sky");
+    sky.exactRadiance_ = &skyRadiance;
+    return sky;
 }
 
 // ---------------------------------------------------------------------------

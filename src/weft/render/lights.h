@@ -14,7 +14,11 @@
 //                     lookup agree.
 //   The procedural sky (skyLight()) is an EnvironmentLight over an image
 //                     computed from a documented analytic formula (docs/scene-format.md,
-//                     "Procedural sky"; see skyRadiance below).
+//                     "Procedural sky"; see skyRadiance below). It is importance
+//                     sampled by that image's texels like any map, but its
+//                     radiance is the formula itself at the exact direction, so
+//                     it is smooth (a nearest-texel lookup shows bands) and the
+//                     pdf stays exactly what sample() draws from.
 //   SphereLight       a sphere of uniform emitted radiance; sampled uniformly
 //                     in the cone of directions it subtends (pbrt-v3
 //                     Sphere::Sample(ref)), pdf 1 / (2 pi (1 - cos theta_max));
@@ -115,6 +119,11 @@ class EnvironmentLight final : public Light {
     // Index (y * width + x) of the texel seen in direction d; *sinTheta (if
     // not null) gets sin theta of d.
     size_t texelOf(const Vec3& d, double* sinTheta) const;
+
+    // The sky's formula (skyLight()): radiance() evaluates it instead of the
+    // nearest texel; null for maps read from files.
+    friend EnvironmentLight skyLight(double scale, int width, int height);
+    Rgb (*exactRadiance_)(const Vec3& mapDirection) = nullptr;
 
     Image image_;
     double scale_ = 1, rotateRad_ = 0;

@@ -64,6 +64,9 @@ void runCheck(const CheckOptions& o) {
         {"m_rel_l2", s.at("m_rel_l2")},
         {"r_rel_l2", s.at("r_rel_l2")},
         {"variance_proxy", s.at("variance_proxy")},
+        {"sampling_weights_worst_bin", s.at("sampling_weights").is_null()
+                                           ? nlohmann::json(nullptr)
+                                           : s.at("sampling_weights").at("worst_bin")},
         {"seconds", s.at("seconds")}};
     std::printf("%s\n", line.dump().c_str());
 }

@@ -69,6 +69,11 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
     const std::vector<Rgb> rdmM = incidentEnergies(rdm.rdmM, bins);
 
     std::vector<double> albedoModel(nIn * 3), albedoRdm(nIn * 3), moments(nIn * 3);
+    // sample()'s weights per bin (luminance): E[w] / albedo, E[w^2] / E[w]^2,
+    // largest w / albedo; and the bin with the largest relative second moment.
+    std::vector<double> weights(nIn * 3);
+    size_t worstWeightBin = 0;
+    double worstWeightRatio = -1, largestWeight = 0, smallestMean = 1e300;
     std::vector<double> componentsModel(nIn * 9), componentsRdm(nIn * 9);
     Rgb sumAbs, worst, modelMax, rdmMax, sumModel, sumRdm;
     Rgb guardedMax, sumAbsGuarded, worstGuarded;
@@ -97,6 +102,15 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
             modelMax[c] = std::max(modelMax[c], a[c]);
             guardedMax[c] = std::max(guardedMax[c], g[c]);
             rdmMax[c] = std::max(rdmMax[c], b[c]);
+        }
+        if (d.weightMean > 0) {
+            const double ratio = d.weightSecondMoment / sqr(d.weightMean);
+            weights[3 * i] = d.weightMean / d.albedoLuminance;
+            weights[3 * i + 1] = ratio;
+            weights[3 * i + 2] = d.weightMax / d.albedoLuminance;
+            if (ratio > worstWeightRatio) worstWeightRatio = ratio, worstWeightBin = i;
+            largestWeight = std::max(largestWeight, weights[3 * i + 2]);
+            smallestMean = std::min(smallestMean, weights[3 * i]);
         }
         moments[3 * i] = d.secondMomentYarn;
         moments[3 * i + 1] = d.secondMomentUniform;
@@ -235,6 +249,23 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
     proxy["cosine"] = sumCosine / nAll;
     proxy["bins_where_yarn_beats_cosine"] = static_cast<double>(beatsCosine) / nAll;
     proxy["bins_where_yarn_beats_uniform"] = static_cast<double>(beatsUniform) / nAll;
+
+    nlohmann::json& sampling = summary["sampling_weights"];
+    if (worstWeightRatio >= 0) {
+        const auto [theta, phi] = binAngles(bins, worstWeightBin);
+        const double* w = &weights[3 * worstWeightBin];
+        sampling["second_moment_ratio_max"] = worstWeightRatio;
+        sampling["max_weight_over_albedo_max"] = largestWeight;
+        sampling["mean_over_albedo_min"] = smallestMean;
+        sampling["worst_bin"] = {{"theta_deg", theta},
+                                 {"phi_deg", phi},
+                                 {"mean_over_albedo", w[0]},
+                                 {"second_moment_ratio", w[1]},
+                                 {"max_weight_over_albedo", w[2]},
+                                 {"albedo_luminance", integrals[worstWeightBin].albedoLuminance}};
+    } else {
+        sampling = nullptr;  // a black model: no weights to report
+    }
     summary["seconds"] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     YarnCheckResult result;
@@ -243,6 +274,7 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
     result.componentsModel = std::move(componentsModel);
     result.componentsRdm = std::move(componentsRdm);
     result.secondMoments = std::move(moments);
+    result.samplingWeights = std::move(weights);
     result.rMap = std::move(rMap), result.mMap = std::move(mMap);
     return result;
 }
@@ -255,6 +287,7 @@ void writeYarnCheck(const YarnCheckResult& check, const RdmData& rdm, const std:
     writeNpy(dir + "/components_model.npy", check.componentsModel.data(), {ti, pi, 3, 3});
     writeNpy(dir + "/components_rdm.npy", check.componentsRdm.data(), {ti, pi, 3, 3});
     writeNpy(dir + "/second_moment.npy", check.secondMoments.data(), {ti, pi, 3});
+    writeNpy(dir + "/sampling_weights.npy", check.samplingWeights.data(), {ti, pi, 3});
 
     // Albedo maps as one (1, 1, TI, PI) "slice": RDM left, model right, same exposure.
     {

@@ -19,6 +19,8 @@
 //   components_model.npy      float64 (TI, PI, 3, 3) the albedo's parts T, R, M (rows) per channel
 //   components_rdm.npy        float64 (TI, PI, 3, 3) the same for the RDM (T = p_t in each
 //                             channel)
+//   sampling_weights.npy      float64 (TI, PI, 3) sample()'s weight w = eval / pdf on luminance,
+//                             T included: E[w] / albedo, E[w^2] / E[w]^2, largest w / albedo
 //   second_moment.npy         float64 (TI, PI, 3) relative second moments: yarn sampler,
 //                             uniform sphere, cosine (DirectionalIntegrals)
 //   albedo.png                RDM (left) and model (right) albedo: rows theta_i from 0 (top)
@@ -47,6 +49,7 @@ struct YarnCheckResult {
     std::vector<double> albedoModel, albedoRdm;          // (TI, PI, 3)
     std::vector<double> componentsModel, componentsRdm;  // (TI, PI, 3, 3): T, R, M rows
     std::vector<double> secondMoments;                   // (TI, PI, 3)
+    std::vector<double> samplingWeights;                 // (TI, PI, 3)
     std::vector<float> rMap, mMap;                       // the model's maps (model_maps.h)
 };
 YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& modelPath,

@@ -330,6 +330,36 @@ TEST(YarnIntegrals, QuadratureConvergedAndPdfIntegratesToOneMinusPT) {
 
 // The mean sample weight (T included) estimates the directional albedo: the
 // sampler is unbiased and the quadrature right, independently of each other.
+// The quadrature's weight statistics (what `weft yarn check` reports per bin)
+// against brute force: the mean and mean square of luminance(sample().weight)
+// over many samples, T included.
+TEST(YarnIntegrals, WeightMomentsMatchSampling) {
+    for (const char* name : kModels) {
+        const YarnBsdf& bsdf = testBsdf(name);
+        for (const Vec3& wi : {yarnDirection(20, 30), yarnDirection(75, -100)}) {
+            const DirectionalIntegrals d = integrateDirections(bsdf, wi);
+            EXPECT_NEAR(d.weightMean, d.albedoLuminance, 1e-9);  // the pdf covers R + M
+            EXPECT_GE(d.weightSecondMoment, d.weightMean * d.weightMean);
+            EXPECT_GE(d.weightMax, d.weightMean);
+            const int64_t n = testing::scaled(100000);
+            Rng rng(21, 22);
+            double sum = 0, sumSq = 0, sumFourth = 0;
+            for (int64_t k = 0; k < n; ++k) {
+                const BsdfSample s =
+                    bsdf.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()}, rng);
+                const double w = luminance(s.weight);
+                sum += w, sumSq += w * w, sumFourth += w * w * w * w;
+            }
+            const double mean = sum / n, meanSq = sumSq / n;
+            const double sigma = std::sqrt(std::max(0.0, meanSq - mean * mean) / n);
+            const double sigmaSq = std::sqrt(std::max(0.0, sumFourth / n - meanSq * meanSq) / n);
+            EXPECT_NEAR(mean, d.weightMean, 4.5 * sigma + 1e-3) << name << " " << wi;
+            EXPECT_NEAR(meanSq, d.weightSecondMoment, 5 * sigmaSq + 2e-3 * meanSq)
+                << name << " " << wi;
+        }
+    }
+}
+
 TEST(YarnIntegrals, MeanSampleWeightIsTheQuadratureAlbedo) {
     for (const char* name : kModels) {
         const YarnBsdf& bsdf = testBsdf(name);

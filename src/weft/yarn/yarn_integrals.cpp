@@ -20,6 +20,7 @@ DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, i
     out.pT = bsdf.transmission(wi);
     const double continuousShare = 1.0 - out.pT;
     double integral = 0, yarn = 0, uniform = 0, cosine = 0;
+    double lumIntegral = 0, lumCovered = 0, lumSecond = 0, weightMax = 0;
     for (size_t k = 0; k < rule.directions.size(); ++k) {
         const Vec3& wo = rule.directions[k];
         const double w = rule.weights[k];
@@ -30,11 +31,25 @@ DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, i
         const double f = (c.r + c.m).average();
         if (f == 0) continue;
         integral += f * w;
-        const double pYarn = continuousShare > 0 ? bsdf.pdf(wi, wo) / continuousShare : 0.0;
+        const double pdf = bsdf.pdf(wi, wo);
+        const double pYarn = continuousShare > 0 ? pdf / continuousShare : 0.0;
+        const double lum = luminance(c.r + c.m);
+        lumIntegral += lum * w;
+        if (pdf > 0) {
+            lumCovered += lum * w;
+            lumSecond += lum * lum / pdf * w;
+            weightMax = std::max(weightMax, lum / pdf);
+        }
         yarn += pYarn > 0 ? f * f / pYarn * w : std::numeric_limits<double>::infinity();
         uniform += f * f * (4 * kPi) * w;
         const double pCosine = std::fabs(wo.z) / kTwoPi;
         cosine += pCosine > 0 ? f * f / pCosine * w : std::numeric_limits<double>::infinity();
+    }
+    if (secondMoments) {
+        out.albedoLuminance = out.pT + lumIntegral;
+        out.weightMean = out.pT + lumCovered;
+        out.weightSecondMoment = out.pT + lumSecond;
+        out.weightMax = std::max(out.pT > 0 ? 1.0 : 0.0, weightMax);
     }
     const double squared = integral * integral;
     if (squared > 0) {

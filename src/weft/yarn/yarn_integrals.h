@@ -28,9 +28,17 @@ struct DirectionalIntegrals {
     double secondMomentUniform = 0;  // p = 1 / (4 pi)
     double secondMomentCosine = 0;   // p = |cos theta_o| / (2 pi): cosine-weighted on each
                                      // hemisphere, each picked with probability 1/2
+
+    // sample()'s weight w = eval / pdf on luminance (core/rgb.h), T lobe
+    // included (chosen with probability P(T), weight 1): the numbers that
+    // decide a path tracer's variance at this wi.
+    double albedoLuminance = 0;     // P(T) + integral of luminance(R + M)
+    double weightMean = 0;          // E[w] = P(T) + that integral where pdf > 0
+    double weightSecondMoment = 0;  // E[w^2] = P(T) + integral of luminance^2 / pdf
+    double weightMax = 0;           // the largest w at the quadrature nodes (1 for T)
 };
 
-// `secondMoments` false leaves the variance proxies at 0 (and skips the pdf):
+// `secondMoments` false leaves the variance proxies and weights at 0 (and skips the pdf):
 // the energies alone, as the fit's energy calibration needs them.
 DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, int refinement = 1,
                                          bool secondMoments = true);

@@ -20,13 +20,6 @@ std::string toString(OutputFunction f) {
     return "identity";
 }
 
-OutputFunction outputFunctionFromString(const std::string& name) {
-    if (name == "identity") return OutputFunction::Identity;
-    if (name == "sigmoid") return OutputFunction::Sigmoid;
-    if (name == "exp") return OutputFunction::Exp;
-    throw InputError("unknown output function \"" + name + "\" (allowed: identity, sigmoid, exp)");
-}
-
 std::vector<int> NetworkWeights::widths() const {
     std::vector<int> w;
     if (layers.empty()) return w;

@@ -18,7 +18,6 @@ namespace weft {
 enum class OutputFunction { Identity, Sigmoid, Exp };
 
 std::string toString(OutputFunction f);
-OutputFunction outputFunctionFromString(const std::string& name);  // InputError if unknown
 
 struct NetworkLayer {
     int in = 0, out = 0;
@@ -36,7 +35,6 @@ struct NetworkWeights {
     OutputFunction output = OutputFunction::Identity;
 
     bool operator==(const NetworkWeights&) const = default;
-    bool empty() const { return layers.empty(); }
     int inputs() const { return layers.empty() ? 0 : layers.front().in; }
     int outputs() const { return layers.empty() ? 0 : layers.back().out; }
     // {inputs, hidden widths..., outputs}; "6-21-21-21-3" as text.

@@ -543,7 +543,7 @@ py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object
     summary["report"] = reportDir.empty() ? py::object(py::none()) : py::object(py::str(reportDir));
     py::dict d;
     d["model"] = py::cast(std::make_unique<PyYarnModel>(
-        std::move(result->model), outPath.empty() ? "fitted model" : outPath, true, "fitted"));
+        std::move(result->model), outPath.empty() ? "fitted model" : outPath, true, "tabulated"));
     d["report"] = summary;
     return d;
 }
@@ -702,7 +702,7 @@ PYBIND11_MODULE(weft, m) {
                  YarnModel ym = readUserJson(source, [&] { return yarnModelFromJson(j, source); });
                  return std::make_unique<PyYarnModel>(std::move(ym), source, energyGuard, sampling);
              }),
-             py::arg("model"), py::arg("energy_guard") = true, py::arg("sampling") = "fitted",
+             py::arg("model"), py::arg("energy_guard") = true, py::arg("sampling") = "tabulated",
              "From a dict in the model.json layout (docs/model-format.md).")
         .def_static(
             "load",
@@ -711,7 +711,7 @@ PYBIND11_MODULE(weft, m) {
                 YarnModel ym = readUserJson(p, [&] { return loadYarnModel(p); });
                 return std::make_unique<PyYarnModel>(std::move(ym), p, energyGuard, sampling);
             },
-            py::arg("path"), py::arg("energy_guard") = true, py::arg("sampling") = "fitted",
+            py::arg("path"), py::arg("energy_guard") = true, py::arg("sampling") = "tabulated",
             "Reads a model.json (weft fit); energy_guard=False is --no-energy-guard.")
         .def(
             "eval",
@@ -800,7 +800,7 @@ PYBIND11_MODULE(weft, m) {
 
     m.def("render", &pyRender, py::arg("scene"), py::kw_only(), py::arg("mode") = "neural",
           py::arg("spp") = py::none(), py::arg("seconds") = py::none(), py::arg("threads") = 0,
-          py::arg("seed") = py::none(), py::arg("nee") = true, py::arg("yarn_sampling") = "fitted",
+          py::arg("seed") = py::none(), py::arg("nee") = true, py::arg("yarn_sampling") = "tabulated",
           py::arg("base_dir") = py::none(), py::arg("quiet") = true,
           "`weft render`: a scene file or dict to an (H,W,3) float32 linear RGB image and the "
           "statistics dict.");

@@ -19,7 +19,7 @@ namespace weft::cmd {
 namespace {
 
 struct RenderCmdOptions {
-    std::string scene, mode = "neural", out, yarnSampling = "fitted";
+    std::string scene, mode = "neural", out, yarnSampling = "tabulated";
     int spp = 0, threads = 0;
     double seconds = 0, exposure = 0;
     uint64_t seed = 0;
@@ -102,8 +102,9 @@ void addRenderCommand(CLI::App& app) {
                     "(ground truth)")
         ->capture_default_str();
     cmd->add_option("--yarn-sampling", o->yarnSampling,
-                    "Neural mode: how the yarn BSDF samples directions: fitted (its lobe "
-                    "selection and M lobe) or cosine (cosine about the normal on either side, "
+                    "Neural mode: how the yarn BSDF samples directions: tabulated (in "
+                    "proportion to the model, from tables built at load), fitted (the paper's "
+                    "lobe selection and M lobe) or cosine (cosine about the normal on either side, "
                     "for the sampling ablation; the T lobe stays a delta)")
         ->capture_default_str();
     o->sppOpt =

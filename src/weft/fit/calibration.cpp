@@ -35,7 +35,7 @@ BinEnergies binEnergies(const YarnModel& fitted, const RdmData& rdm, int64_t min
     const RdmBins& bins = rdm.bins;
     YarnModel model = fitted;
     model.calibration = EnergyCalibration{};
-    const YarnBsdf bsdf(model, "the model being calibrated", YarnBsdfOptions{false});
+    const YarnBsdf bsdf(model, "the model being calibrated", YarnBsdfOptions{false, YarnSampling::Fitted});
     BinEnergies e;
     for (size_t i = 0; i < bins.incidentCount(); ++i)
         if (rdm.count[i] >= minPaths) e.bin.push_back(i);

@@ -54,7 +54,11 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
     // renderer's BSDF with its energy guard (reported beside it).
     const YarnBsdf bsdf(model, modelPath, YarnBsdfOptions{false});
     std::unique_ptr<YarnBsdf> guarded;
-    arena.execute([&] { guarded = std::make_unique<YarnBsdf>(model, modelPath); });
+    // (Its scales only: no sampling table.)
+    arena.execute([&] {
+        guarded = std::make_unique<YarnBsdf>(model, modelPath,
+                                             YarnBsdfOptions{true, YarnSampling::Fitted});
+    });
 
     // Model side: quadrature per incident bin centre (the expensive part).
     std::vector<DirectionalIntegrals> integrals(nIn);

@@ -38,6 +38,10 @@ T withSource(const std::string& source, const Args&... args) {
 
 constexpr Vec3 mirrored(const Vec3& w) { return {w.x, w.y, -w.z}; }
 
+// The smallest probability of a part of the tabulated mixture that may carry energy.
+constexpr double kMinimumShare = 1e-3;
+constexpr double kOneMinusEpsilon = 0x1.fffffffffffffp-1;
+
 }  // namespace
 
 YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
@@ -51,18 +55,30 @@ YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
       hasReflection_(model.hasReflectionLobe()),
       sampling_(options.sampling),
       kappaR_(hasReflection_ ? model.sampling.kappaR : 0.0),
-      calibration_(model.calibration) {
+      calibration_(model.calibration),
+      peakLongitudinal_(radians(model.fiber.betaRDeg)) {
     if (options.energyGuard) buildEnergyGuard();
+    if (sampling_ == YarnSampling::Tabulated) buildSamplingTable();
 }
 
 YarnSampling parseYarnSampling(const std::string& name, const std::string& what) {
+    if (name == "tabulated") return YarnSampling::Tabulated;
     if (name == "fitted") return YarnSampling::Fitted;
     if (name == "cosine") return YarnSampling::Cosine;
-    throw InputError(what + " \"" + name + "\": unknown yarn sampling (allowed: fitted, cosine)");
+    throw InputError(what + " \"" + name +
+                     "\": unknown yarn sampling (allowed: tabulated, fitted, cosine)");
 }
 
 const char* yarnSamplingName(YarnSampling sampling) {
-    return sampling == YarnSampling::Cosine ? "cosine" : "fitted";
+    switch (sampling) {
+        case YarnSampling::Tabulated:
+            return "tabulated";
+        case YarnSampling::Fitted:
+            return "fitted";
+        case YarnSampling::Cosine:
+            return "cosine";
+    }
+    return "fitted";
 }
 
 YarnBsdf YarnBsdf::load(const std::string& path, const YarnBsdfOptions& options) {
@@ -243,12 +259,126 @@ double YarnBsdf::transmission(const Vec3& wi) const {
 YarnBsdf::Incident YarnBsdf::incident(const Vec3& wi, double pT) const {
     const EnergyCalibration::Scales s = calibration_.scales(wi);
     const GuardScales g = scaleUpper(wi, pT, s);
-    return {pT, s.r * g.r, s.m * g.m};
+    Incident in;
+    in.pT = in.pickT = pT;
+    in.rScale = s.r * g.r;
+    in.mScale = s.m * g.m;
+    if (table_.empty()) return in;
+    // Tabulated sampling (yarn_bsdf.h): the mixture's weights from the
+    // energies of its parts.
+    in.table = table_.incident(wi);
+    const Vec3 local = lobes_.frame().toLocal(wi);
+    const double cosThetaI = std::sqrt(local.y * local.y + local.z * local.z);
+    in.thetaI = std::atan2(local.x, cosThetaI);
+    double peak = 0;
+    if (hasReflection_)
+        peak = 0.5 * (1.0 - pT) *
+               luminance(rLobe_.fiber().fresnel(cosThetaI) * in.rScale) *
+               table_.blend(in.table, peakMasking_);
+    // The table's M term, and its R term (the fiber's TT lobe inside S_R) per unit 1 - P(T).
+    const double rest = table_.blend(in.table, tableEnergyM_) +
+                        (1.0 - pT) * table_.blend(in.table, tableEnergyR_);
+    const double continuous = peak + rest;
+    // q_R keeps a share wherever S_R may be positive, the table wherever S_M may be.
+    in.pickR = hasReflection_
+                   ? std::clamp(continuous > 0 ? peak / continuous : 0.5, kMinimumShare,
+                                1.0 - kMinimumShare)
+                   : 0.0;
+    in.pickT = pT > 0 ? std::min(pT / (pT + continuous), 1.0 - kMinimumShare) : 0.0;
+    return in;
+}
+
+Rgb YarnBsdf::reflectionPeak(const Vec3& wi, const Vec3& wo, const Incident& in) const {
+    if (!hasReflection_ || wi.z <= 0 || wo.z <= 0) return Rgb();
+    // FiberBcsdf's R term, F(theta_i) g_R(theta_o; -theta_i) / (2 pi) cos theta_o, in
+    // the surface fiber frame, times (1 - P(T)) m and the calibration: S_R's sharp part.
+    const SurfaceFiberFrame& frame = lobes_.frame();
+    const Vec3 li = frame.toLocal(wi), lo = frame.toLocal(wo);
+    const double cosThetaI = std::sqrt(li.y * li.y + li.z * li.z);
+    const double cosThetaO = std::sqrt(lo.y * lo.y + lo.z * lo.z);
+    const double g = peakLongitudinal_.eval(std::atan2(lo.x, cosThetaO),
+                                            -std::atan2(li.x, cosThetaI));
+    return rLobe_.fiber().fresnel(cosThetaI) * in.rScale *
+           ((1.0 - in.pT) * g * cosThetaO / kTwoPi * rLobe_.masking(wi, wo));
+}
+
+void YarnBsdf::buildSamplingTable() {
+    // The table follows the luminance of everything but the R peak, in two
+    // terms: S_M and the rest of S_R.
+    table_ = SamplingTable(lobes_.frame(), 2, [this](const Vec3& wi, const std::vector<Vec3>& wo,
+                                                     std::vector<double>& values) {
+        const Incident in = incident(wi, transmissionUpper(wi));
+        for (size_t k = 0; k < wo.size(); ++k) {
+            const Components c = componentsUpper(wi, wo[k], in);
+            values[2 * k] = std::max(0.0, luminance(c.m));
+            values[2 * k + 1] =
+                hasReflection_ ? std::max(0.0, luminance(c.r - reflectionPeak(wi, wo[k], in)))
+                               : 0.0;
+        }
+    });
+    // Their energies per node, the R term's per unit 1 - P(T), which can
+    // change fast with wi (P(T) does near grazing incidence).
+    tableEnergyM_.assign(SamplingTable::kNodes, 0.0);
+    tableEnergyR_.assign(SamplingTable::kNodes, 0.0);
+    for (int node = 0; node < SamplingTable::kNodes; ++node) {
+        const Vec3 wi = SamplingTable::nodeDirection(lobes_.frame(), node / SamplingTable::kIncidentPhi,
+                                                     node % SamplingTable::kIncidentPhi);
+        const double kept = 1.0 - transmissionUpper(wi);
+        tableEnergyM_[node] = table_.nodeEnergy(node, 0);
+        tableEnergyR_[node] = kept > 0 ? table_.nodeEnergy(node, 1) / kept : 0.0;
+    }
+    // Mean masking over q_R at every node: theta_o from g cos^2 around
+    // -theta_i (Gauss-Legendre panels over +-6 beta_R, weights normalised),
+    // phi_o uniform on the half cone.
+    peakMasking_.assign(SamplingTable::kNodes, 1.0);
+    if (!hasReflection_ || rLobe_.params().masking.empty()) return;
+    const SurfaceFiberFrame& frame = lobes_.frame();
+    const double beta = peakLongitudinal_.beta();
+    tbb::parallel_for(0, SamplingTable::kNodes, [&](int node) {
+        const Vec3 wi = SamplingTable::nodeDirection(frame, node / SamplingTable::kIncidentPhi,
+                                                     node % SamplingTable::kIncidentPhi);
+        const double thetaI = frame.longitudinalAngle(wi);
+        std::vector<double> thetaEdges, phiEdges, theta, thetaWeight, phi, phiWeight;
+        quadrature::uniformEdges(std::max(-kHalfPi, -thetaI - 6 * beta),
+                                 std::min(kHalfPi, -thetaI + 6 * beta), 8, &thetaEdges);
+        quadrature::uniformEdges(-kHalfPi, kHalfPi, 8, &phiEdges);
+        quadrature::panelRule(thetaEdges, &theta, &thetaWeight);
+        quadrature::panelRule(phiEdges, &phi, &phiWeight);
+        double sum = 0, weightSum = 0;
+        for (size_t a = 0; a < theta.size(); ++a) {
+            const double w = thetaWeight[a] * peakLongitudinal_.eval(theta[a], -thetaI) *
+                             sqr(std::cos(theta[a]));
+            for (size_t b = 0; b < phi.size(); ++b) {
+                sum += w * phiWeight[b] * rLobe_.masking(wi, frame.direction(theta[a], phi[b]));
+                weightSum += w * phiWeight[b];
+            }
+        }
+        peakMasking_[node] = weightSum > 0 ? sum / weightSum : 1.0;
+    });
+}
+
+double YarnBsdf::continuousPdf(const Vec3& wi, const Vec3& wo, const Incident& in) const {
+    (void)wi;
+    double d = 0;
+    if (in.pickR > 0 && wo.z > 0) {
+        const Vec3 lo = lobes_.frame().toLocal(wo);
+        const double cosThetaO = std::sqrt(lo.y * lo.y + lo.z * lo.z);
+        d += in.pickR * peakLongitudinal_.eval(std::atan2(lo.x, cosThetaO), -in.thetaI) *
+             cosThetaO * kInvPi;
+    }
+    if (in.pickR < 1) d += (1.0 - in.pickR) * table_.pdf(in.table, wo);
+    return (1.0 - in.pickT) * d;
 }
 
 Rgb YarnBsdf::evalM(const Vec3& wi, const Vec3& wo) const { return evalScattering(mNet_, wi, wo); }
 
 YarnBsdf::LobeProbabilities YarnBsdf::lobeProbabilities(const Vec3& wi) const {
+    if (sampling_ == YarnSampling::Tabulated) {
+        const Vec3 i = wi.z < 0 ? mirrored(wi) : wi;
+        const Incident in = incident(i, transmissionUpper(i));
+        const double continuous = 1.0 - in.pickT;
+        return {in.pickT, continuous * in.pickR, continuous * (1.0 - in.pickR)};
+    }
     const double pT = transmission(wi);
     if (sampling_ == YarnSampling::Cosine) return {pT, 0.0, 1.0 - pT};
     return {pT, (1.0 - pT) * kappaR_, (1.0 - pT) * (1.0 - kappaR_)};
@@ -261,7 +391,9 @@ void YarnBsdf::evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rg
         *value = parts.m;
         if (hasReflection_) *value += parts.r;
     }
-    if (density && sampling_ == YarnSampling::Cosine) {
+    if (density && sampling_ == YarnSampling::Tabulated) {
+        *density = continuousPdf(wi, wo, in);
+    } else if (density && sampling_ == YarnSampling::Cosine) {
         // Cosine about n on the side of wo, each side with probability 1/2.
         *density = (1.0 - in.pT) * std::fabs(wo.z) * (0.5 * kInvPi);
     } else if (density) {
@@ -304,11 +436,16 @@ double YarnBsdf::pdf(const BsdfIncident& in, const Vec3& wo) const {
 }
 
 double YarnBsdf::pdf(const Vec3& wi, const Vec3& wo) const {
-    // The density needs P(T) alone: no calibration or energy guard.
+    // The tabulated density needs the whole incident state.
+    if (sampling_ == YarnSampling::Tabulated) return Bsdf::pdf(wi, wo);
+    // The others need P(T) alone: no calibration or energy guard.
     const bool flip = wi.z < 0;
     const Vec3 i = flip ? mirrored(wi) : wi, o = flip ? mirrored(wo) : wo;
+    Incident in;
+    in.pT = in.pickT = transmissionUpper(i);
+    in.rScale = in.mScale = Rgb(1.0);
     double density;
-    evalAndPdf(i, o, {transmissionUpper(i), Rgb(1.0), Rgb(1.0)}, nullptr, &density);
+    evalAndPdf(i, o, in, nullptr, &density);
     return density;
 }
 
@@ -329,12 +466,13 @@ YarnBsdf::Components YarnBsdf::componentsUpper(const Vec3& wi, const Vec3& wo,
 
 BsdfSample YarnBsdf::sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const {
     const Prepared& p = in.get<Prepared>();
-    const double pT = p.in.pT;
+    const double pT = p.in.pT, pickT = p.in.pickT;
     BsdfSample s;
-    if (u[0] < pT) {
-        // S_T = P(T|wi) delta(wo + wi), chosen with probability p_T = P(T|wi).
+    if (u[0] < pickT) {
+        // S_T = P(T|wi) delta(wo + wi), chosen with probability P_T (P(T|wi)
+        // unless the sampling is tabulated).
         s.wo = -in.wi();
-        s.weight = Rgb(1.0);
+        s.weight = Rgb(pT / pickT);
         s.pdf = 0;
         s.lobe = kLobeT;
         s.isDelta = true;
@@ -342,7 +480,20 @@ BsdfSample YarnBsdf::sample(const BsdfIncident& in, const BsdfSampleInput& u, Rn
     }
     const double pR = (1.0 - pT) * kappaR_, pM = (1.0 - pT) * (1.0 - kappaR_);
     Vec3 o;
-    if (sampling_ == YarnSampling::Cosine) {
+    if (sampling_ == YarnSampling::Tabulated) {
+        // The rest of u[0], rescaled to [0, 1), picks q_R or the table, then the table's node.
+        const double uPart = std::clamp((u[0] - pickT) / (1.0 - pickT), 0.0, kOneMinusEpsilon);
+        if (uPart < p.in.pickR) {
+            s.lobe = kLobeR;
+            const double thetaO = peakLongitudinal_.sample(-p.in.thetaI, u[1], rng);
+            o = lobes_.frame().direction(thetaO, kPi * (u[2] - 0.5));
+        } else {
+            s.lobe = kLobeM;
+            const double uNode =
+                std::clamp((uPart - p.in.pickR) / (1.0 - p.in.pickR), 0.0, kOneMinusEpsilon);
+            o = table_.sample(p.in.table, uNode, u[1], u[2]);
+        }
+    } else if (sampling_ == YarnSampling::Cosine) {
         s.lobe = kLobeM;
         // The rest of u[0], rescaled to [0, 1), picks the side of the surface.
         const double uSide = (u[0] - pT) / (1.0 - pT);
@@ -354,7 +505,7 @@ BsdfSample YarnBsdf::sample(const BsdfIncident& in, const BsdfSampleInput& u, Rn
     } else {
         s.lobe = kLobeM;
         // The rest of u[0], rescaled to [0, 1), picks the cone or the uniform part of pdf_M.
-        const double uLobe = std::clamp((u[0] - pT - pR) / pM, 0.0, 0x1.fffffffffffffp-1);
+        const double uLobe = std::clamp((u[0] - pT - pR) / pM, 0.0, kOneMinusEpsilon);
         o = lobes_.sampleM(p.upper, uLobe, u[1], u[2], rng);
     }
     BsdfEval e;

@@ -65,8 +65,29 @@
 // both, the lobe selection uses kappa_R = 0 whatever the file says, so R is
 // never sampled, and the energy guard runs with E_R = 0.
 //
-// Sampling (YarnBsdfOptions::sampling), for the ablation "cosine sampling"
-// of paper Fig. 5: Fitted is the above. Cosine keeps the delta T lobe
+// Sampling (YarnBsdfOptions::sampling). Tabulated (the default) draws wo in
+// proportion to the model itself, so that the weight eval / pdf stays close
+// to the albedo for every wi (docs/yarn.md gives the measured bounds):
+//   the T lobe is picked with probability P_T = P(T) / (P(T) + E), E the
+//     estimated luminance albedo of R + M below, so that its weight P(T) / P_T
+//     matches the continuous part's (grey; paper eq. 11 uses P_T = P(T));
+//   the continuous part, density (1 - P_T) (a_R q_R + (1 - a_R) q_table):
+//     q_R draws the fiber's R lobe inside S_R (its sharp, analytic part:
+//       F(theta_i) g(theta_o; -theta_i, beta_R) cos theta_o / (2 pi) times
+//       (1 - P(T)) m on the upper half cone) exactly, theta_o from g cos^2
+//       (fiber/longitudinal.h) and phi_o uniform on the half cone, so
+//       q_R = g(theta_o; -theta_i, beta_R) cos theta_o / pi and that part's
+//       weight varies only with the masking m;
+//     q_table follows the luminance of the rest (S_M and the fiber's TT lobe
+//       inside S_R, calibration and energy guard applied) through a
+//       SamplingTable (sampling_table.h) built when the model loads;
+//     a_R = E_peak / E with E_peak = (1 - P(T)) lum(s_R F(theta_i)) mbar / 2,
+//       mbar the mean masking over q_R (tabulated at the table's nodes), and
+//       E = E_peak + the table's energy.
+//   Samples report kLobeR (q_R) or kLobeM (the table); the density is the
+//   whole mixture, so the two are combined by one-sample MIS.
+// The pdf integrates to 1 - P_T. Fitted is the paper's scheme (eq. 10-11,
+// above). Cosine, for the ablation "cosine sampling" of paper Fig. 5, keeps the delta T lobe
 // (chosen with p_T = P(T|wi) as above, same weight) but draws the continuous
 // part from a cosine density about n on either side of the surface, each with
 // probability 1/2 (the yarn BSDF covers the whole sphere: M also transmits):
@@ -85,6 +106,8 @@
 
 #include "weft/core/bsdf.h"
 #include "weft/core/rng.h"
+#include "weft/fiber/longitudinal.h"
+#include "weft/yarn/sampling_table.h"
 #include "weft/yarn/yarn_lobes.h"
 #include "weft/yarn/yarn_model.h"
 #include "weft/yarn/fixed_mlp.h"
@@ -92,14 +115,14 @@
 namespace weft {
 
 // How sample() draws the continuous part (above).
-enum class YarnSampling { Fitted, Cosine };
-// "fitted" or "cosine"; InputError naming `what` and the allowed values otherwise.
+enum class YarnSampling { Tabulated, Fitted, Cosine };
+// "tabulated", "fitted" or "cosine"; InputError naming `what` and the allowed values otherwise.
 YarnSampling parseYarnSampling(const std::string& name, const std::string& what);
 const char* yarnSamplingName(YarnSampling sampling);
 
 struct YarnBsdfOptions {
     bool energyGuard = true;  // scale S_M where the model's albedo exceeds 1 (above)
-    YarnSampling sampling = YarnSampling::Fitted;
+    YarnSampling sampling = YarnSampling::Tabulated;
 };
 
 class YarnBsdf final : public Bsdf {
@@ -143,8 +166,12 @@ class YarnBsdf final : public Bsdf {
     // What eval and pdf need of wi (in the upper hemisphere): P(T), the
     // calibration of R, and the calibration times the energy guard of M.
     struct Incident {
-        double pT;
+        double pT = 0;
         Rgb rScale, mScale;
+        // Tabulated sampling: the probability of the T lobe and, given the
+        // continuous part, of q_R; theta_i in the surface fiber frame; the table's rows and nodes.
+        double pickT = 0, pickR = 0, thetaI = 0;
+        SamplingTable::Incident table;
     };
     // What prepare() stores in a BsdfIncident (which holds wi as given).
     struct Prepared {
@@ -160,7 +187,8 @@ class YarnBsdf final : public Bsdf {
         Rgb r, m;       // S_R and S_M (calibration and energy guard applied), cosine included
     };
     // p_T, p_R, p_M of sample(); with cosine sampling p_R = 0 and p_M is the
-    // whole continuous part.
+    // whole continuous part; with tabulated sampling p_R is the share of q_R
+    // and p_M the table's.
     Components components(const Vec3& wi, const Vec3& wo) const;
     struct LobeProbabilities {
         double t = 0, r = 0, m = 0;
@@ -177,6 +205,8 @@ class YarnBsdf final : public Bsdf {
     const RLobe& rLobe() const { return rLobe_; }
     const SamplingLobes& samplingLobes() const { return lobes_; }
     const SurfaceFiberFrame& surfaceFiberFrame() const { return lobes_.frame(); }
+    // The tabulated sampler's table (empty unless the sampling is Tabulated).
+    const SamplingTable& samplingTable() const { return table_; }
 
     // The energy guard's tables (above). M table node (a, b), a < kGuardTheta,
     // b < kGuardPhi: yarn-frame polar angle guardPolarAngle(a), azimuth
@@ -205,6 +235,11 @@ class YarnBsdf final : public Bsdf {
     GuardScales scaleUpper(const Vec3& wi, double pT,
                            const EnergyCalibration::Scales& calibration) const;
     void buildEnergyGuard();
+    void buildSamplingTable();
+    // The fiber's R lobe inside S_R (tabulated sampling, above), calibration applied.
+    Rgb reflectionPeak(const Vec3& wi, const Vec3& wo, const Incident& in) const;
+    // Density of the continuous part of sample() (1 - P_T included).
+    double continuousPdf(const Vec3& wi, const Vec3& wo, const Incident& in) const;
 
     TransmissionMlp tNet_;
     ScatteringMlp mNet_;
@@ -222,6 +257,11 @@ class YarnBsdf final : public Bsdf {
     std::vector<Rgb> guardReflectance_, guardEnergyM_;
     // 1 where a cell of the M table (rows a, a + 1; columns b, b + 1) may need the guard.
     std::vector<uint8_t> guardCell_;
+    // Tabulated sampling: the fiber's R longitudinal lobe, the table and the
+    // mean masking over q_R at the table's nodes.
+    LongitudinalGaussian peakLongitudinal_{1.0};
+    SamplingTable table_;
+    std::vector<double> peakMasking_, tableEnergyM_, tableEnergyR_;
     // Lookups in the two tables.
     struct GuardCell {
         int a0 = 0, b0 = 0, b1 = 0;

@@ -73,28 +73,40 @@ const Incident kIncident[] = {
     {"below the surface", [](const YarnBsdf&) { return yarnDirection(120, 30); }},
 };
 
-TEST(YarnBsdf, TransmissionIsADeltaWithUnitWeight) {
+// T is picked with probability P_T = lobeProbabilities(wi).t (P(T|wi) for the
+// fitted sampler) and weighs P(T|wi) / P_T, grey.
+TEST(YarnBsdf, TransmissionIsADeltaOfWeightPOverPick) {
     for (const char* name : kModels) {
-        const YarnBsdf& bsdf = testBsdf(name);
-        Rng rng(1, 2);
-        int deltas = 0;
-        for (int k = 0; k < 2000; ++k) {
-            const Vec3 wi = randomUnitVector(rng);
-            const double pT = bsdf.transmission(wi);
-            ASSERT_GE(pT, 0.0);
-            ASSERT_LE(pT, 1.0);
-            // u[0] just below P(T|wi) picks T: wo is exactly -wi.
-            const BsdfSample s = bsdf.sample(wi, {pT * 0.999, rng.uniform(), rng.uniform()});
-            if (pT == 0) continue;
-            ASSERT_TRUE(s.valid());
-            EXPECT_EQ(s.lobe, YarnBsdf::kLobeT);
-            EXPECT_TRUE(s.isDelta);
-            EXPECT_EQ(s.wo, -wi);
-            EXPECT_EQ(s.weight, Rgb(1.0));
-            EXPECT_EQ(s.pdf, 0.0);
-            ++deltas;
+        const YarnBsdf fitted(testModel(name), name, YarnBsdfOptions{true, YarnSampling::Fitted});
+        for (const YarnBsdf* bsdf : {&testBsdf(name), &fitted}) {
+            Rng rng(1, 2);
+            int deltas = 0;
+            for (int k = 0; k < 2000; ++k) {
+                const Vec3 wi = randomUnitVector(rng);
+                const double pT = bsdf->transmission(wi);
+                const double pick = bsdf->lobeProbabilities(wi).t;
+                ASSERT_GE(pT, 0.0);
+                ASSERT_LE(pT, 1.0);
+                ASSERT_EQ(pick > 0, pT > 0);
+                if (bsdf == &fitted) {
+                    ASSERT_EQ(pick, pT);
+                }
+                // u[0] just below P_T picks T: wo is exactly -wi.
+                const BsdfSample s = bsdf->sample(wi, {pick * 0.999, rng.uniform(), rng.uniform()});
+                if (pT == 0) continue;
+                ASSERT_TRUE(s.valid());
+                EXPECT_EQ(s.lobe, YarnBsdf::kLobeT);
+                EXPECT_TRUE(s.isDelta);
+                EXPECT_EQ(s.wo, -wi);
+                EXPECT_EQ(s.weight, Rgb(pT / pick));
+                if (bsdf == &fitted) {
+                    EXPECT_EQ(s.weight, Rgb(1.0));
+                }
+                EXPECT_EQ(s.pdf, 0.0);
+                ++deltas;
+            }
+            EXPECT_GT(deltas, 1900) << name;
         }
-        EXPECT_GT(deltas, 1900) << name;
     }
 }
 
@@ -126,13 +138,14 @@ TEST(YarnBsdf, SampleWeightIsEvalOverPdf) {
 }
 
 TEST(YarnBsdf, SamplingIsChiSquareConsistentWithPdf) {
-    const int tests = static_cast<int>(std::size(kModels) * std::size(kIncident));
+    const int tests = static_cast<int>(2 * std::size(kModels) * std::size(kIncident));
     const double alpha = sidakCorrectedLevel(0.01, tests);
     // Cells in the surface fiber frame, where the R lobe is a band of theta.
     const SphereGrid grid{90, 90};
     double minP = 1;
     for (const char* name : kModels) {
-        const YarnBsdf& bsdf = testBsdf(name);
+        for (const YarnSampling sampling : {YarnSampling::Tabulated, YarnSampling::Fitted}) {
+        const YarnBsdf bsdf(testModel(name), name, YarnBsdfOptions{true, sampling});
         const SurfaceFiberFrame& frame = bsdf.surfaceFiberFrame();
         for (const Incident& incident : kIncident) {
             const Vec3 wi = incident.direction(bsdf);
@@ -148,14 +161,15 @@ TEST(YarnBsdf, SamplingIsChiSquareConsistentWithPdf) {
             std::vector<double> expected = grid.expectedCounts(
                 [&](const Vec3& local) { return bsdf.pdf(wi, frame.fromLocal(local)); },
                 static_cast<double>(n));
-            // The delta lobe is one more cell, expected n P(T|wi) times.
-            expected.push_back(static_cast<double>(n) * bsdf.transmission(wi));
+            // The delta lobe is one more cell, expected n P_T times.
+            expected.push_back(static_cast<double>(n) * bsdf.lobeProbabilities(wi).t);
             const Chi2Result r = chi2Test(observed, expected);
-            std::printf("  %s, wi %s: chi2 %.1f, dof %d, p %.3g\n", name, incident.name,
-                        r.statistic, r.dof, r.pValue);
+            std::printf("  %s (%s), wi %s: chi2 %.1f, dof %d, p %.3g\n", name,
+                        yarnSamplingName(sampling), incident.name, r.statistic, r.dof, r.pValue);
             minP = std::min(minP, r.pValue);
             EXPECT_GT(r.pValue, alpha) << name << ", wi " << incident.name
                                        << ": chi2 = " << r.statistic << ", dof = " << r.dof;
+        }
         }
     }
     std::printf("chi-square: %d tests, smallest p-value %.3g (level %.3g)\n", tests, minP, alpha);
@@ -289,8 +303,10 @@ TEST(YarnBsdf, EnergyCalibrationScalesTheLobes) {
     const YarnModel& model = testModel("fleece-small");
     YarnModel plain = model;
     plain.calibration = EnergyCalibration{};
-    const YarnBsdf a(plain, "plain", YarnBsdfOptions{false});
-    const YarnBsdf b(withCalibration(plain), "calibrated", YarnBsdfOptions{false});
+    // The fitted sampler, whose density does not depend on the calibration.
+    const YarnBsdf a(plain, "plain", YarnBsdfOptions{false, YarnSampling::Fitted});
+    const YarnBsdf b(withCalibration(plain), "calibrated",
+                     YarnBsdfOptions{false, YarnSampling::Fitted});
     Rng rng(5, 5);
     for (int k = 0; k < 200; ++k) {
         const Vec3 wi = randomUnitVector(rng), wo = randomUnitVector(rng);
@@ -306,7 +322,7 @@ TEST(YarnBsdf, EnergyCalibrationScalesTheLobes) {
 
 // --------------------------------------------------------- integrals / energy --
 
-TEST(YarnIntegrals, QuadratureConvergedAndPdfIntegratesToOneMinusPT) {
+TEST(YarnIntegrals, QuadratureConvergedAndPdfIntegratesToOneMinusPickT) {
     for (const char* name : kModels) {
         const YarnBsdf& bsdf = testBsdf(name);
         for (const Incident& incident : kIncident) {
@@ -322,7 +338,7 @@ TEST(YarnIntegrals, QuadratureConvergedAndPdfIntegratesToOneMinusPT) {
             double pdfIntegral = 0;
             for (size_t k = 0; k < rule.directions.size(); ++k)
                 pdfIntegral += bsdf.pdf(wi, rule.directions[k]) * rule.weights[k];
-            EXPECT_NEAR(pdfIntegral, 1 - bsdf.transmission(wi), 2e-3)
+            EXPECT_NEAR(pdfIntegral, 1 - bsdf.lobeProbabilities(wi).t, 2e-3)
                 << name << " " << incident.name;
         }
     }

@@ -46,10 +46,13 @@ DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, i
         cosine += pCosine > 0 ? f * f / pCosine * w : std::numeric_limits<double>::infinity();
     }
     if (secondMoments) {
+        // T is picked with probability P_T and weighs P(T) / P_T.
+        const double pickT = bsdf.lobeProbabilities(wi).t;
+        const double weightT = pickT > 0 ? out.pT / pickT : 0.0;
         out.albedoLuminance = out.pT + lumIntegral;
         out.weightMean = out.pT + lumCovered;
-        out.weightSecondMoment = out.pT + lumSecond;
-        out.weightMax = std::max(out.pT > 0 ? 1.0 : 0.0, weightMax);
+        out.weightSecondMoment = out.pT * weightT + lumSecond;
+        out.weightMax = std::max(weightT, weightMax);
     }
     const double squared = integral * integral;
     if (squared > 0) {

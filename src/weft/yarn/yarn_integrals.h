@@ -30,12 +30,12 @@ struct DirectionalIntegrals {
                                      // hemisphere, each picked with probability 1/2
 
     // sample()'s weight w = eval / pdf on luminance (core/rgb.h), T lobe
-    // included (chosen with probability P(T), weight 1): the numbers that
-    // decide a path tracer's variance at this wi.
+    // included (picked with probability P_T = lobeProbabilities(wi).t, weight
+    // P(T) / P_T): the numbers that decide a path tracer's variance at this wi.
     double albedoLuminance = 0;     // P(T) + integral of luminance(R + M)
     double weightMean = 0;          // E[w] = P(T) + that integral where pdf > 0
-    double weightSecondMoment = 0;  // E[w^2] = P(T) + integral of luminance^2 / pdf
-    double weightMax = 0;           // the largest w at the quadrature nodes (1 for T)
+    double weightSecondMoment = 0;  // E[w^2] = P(T)^2 / P_T + integral of luminance^2 / pdf
+    double weightMax = 0;           // the largest w at the quadrature nodes and P(T) / P_T
 };
 
 // `secondMoments` false leaves the variance proxies and weights at 0 (and skips the pdf):

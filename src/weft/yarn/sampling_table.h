@@ -1,0 +1,114 @@
+// weft/yarn/sampling_table.h — a tabulated sampling density over outgoing
+// directions that follows a given function of (wi, wo) (the yarn BSDF's
+// smooth part, yarn_bsdf.h), for every incident direction.
+//
+// Built once from a non-negative function f(wi, wo) (luminance, yarn frame,
+// wi in the upper hemisphere); sampled and evaluated exactly: pdf() is the
+// density sample() draws from, a piecewise-constant function of wo that is
+// positive everywhere and integrates to 1 over the sphere.
+//
+// Coordinates: the surface fiber frame (yarn_lobes.h), where the yarn's
+// lobes sit on cones about the tilted fiber t~: z = sin(theta) = w.t~ and the
+// azimuth phi from n. Cells are uniform in solid angle inside (dw = dz dphi).
+//   Outgoing cells: kRows rows in z times kColumns equal azimuth columns. The
+//     row edges follow the specular cone z = -z_i of the incident direction:
+//     they are equal steps of A(z) = atan((z + z_i) / gamma) between
+//     A(-1) and A(1) (a Cauchy quantile warp), fine near the cone and wide far
+//     from it, with gamma = max(kWarpWidth cos(theta_i), kWarpWidthMin), since
+//     a lobe of angular width beta has width beta cos(theta) in z. Because
+//     the rows move with wi, a table built at one incident direction is a
+//     good density at a nearby one: its lobes keep their cells.
+//   Incident nodes: kIncidentTheta x kIncidentPhi, equal steps of the surface
+//     fiber angles theta_i in [-pi/2, pi/2] and phi_i in [-pi/2, pi/2] (the
+//     upper hemisphere). A node stores the probability of every cell of its
+//     own row layout, computed by a 2 x 2 midpoint rule per cell, with a
+//     floor of kFloor times the uniform density (so the density is positive
+//     wherever f is), as a cumulative table: rows in double, the columns of
+//     each row as 16-bit cumulative counts (every cell at least one count).
+//   At an incident direction between nodes, the density is the bilinear
+//     mixture of the four neighbouring nodes' cell probabilities laid out on
+//     this wi's own rows: pdf(wo) = sum_n w_n P_n(row, column) / (dz dphi),
+//     and sample() picks the node n with probability w_n. Both use the same
+//     stored numbers, so pdf is exactly the sampled density.
+// 13 x 13 nodes of 64 x 32 cells take 780 KB.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "weft/core/vec.h"
+#include "weft/yarn/yarn_lobes.h"
+
+namespace weft {
+
+class SamplingTable {
+  public:
+    static constexpr int kIncidentTheta = 19;
+    static constexpr int kIncidentPhi = 19;
+    static constexpr int kNodes = kIncidentTheta * kIncidentPhi;
+    static constexpr int kRows = 64;
+    static constexpr int kColumns = 32;
+    static constexpr int kCells = kRows * kColumns;
+    static constexpr double kWarpWidth = 0.45;
+    static constexpr double kWarpWidthMin = 0.15;
+    static constexpr double kFloor = 0.03;
+    static constexpr double kCodeStep = 12;  // codes per factor 2 of a cell's mass
+
+    // What depends on wi: the row layout and the four nodes with their weights.
+    struct Incident {
+        double zc = 0, gamma = 1, atanLo = 0,
+               atanStep = 1;  // rows: z = zc + gamma tan(atanLo + k atanStep)
+        int node[4] = {0, 0, 0, 0};
+        double weight[4] = {1, 0, 0, 0};
+    };
+
+    // f as a sum of `parts` terms: for one incident direction and many
+    // outgoing ones (yarn frame), values[k * parts + q] = term q at wo[k]; all
+    // finite and >= 0. The table follows their sum; nodeEnergy() integrates each.
+    using Function = std::function<void(const Vec3& wi, const std::vector<Vec3>& wo,
+                                        std::vector<double>& values)>;
+
+    SamplingTable() = default;
+    // Builds the nodes in parallel (TBB).
+    SamplingTable(const SurfaceFiberFrame& frame, int parts, const Function& f);
+
+    bool empty() const { return codes_.empty(); }
+
+    // wi: yarn frame, upper hemisphere (wi.z >= 0).
+    Incident incident(const Vec3& wi) const;
+    // Density per unit solid angle of sample() at the yarn-frame direction wo.
+    double pdf(const Incident& in, const Vec3& wo) const;
+    // uNode picks the node, u1 the cell and z in it, u2 the azimuth in it.
+    Vec3 sample(const Incident& in, double uNode, double u1, double u2) const;
+    // The integral of term `part` over the sphere at node n (kNodes of them).
+    double nodeEnergy(int node, int part) const {
+        return energy_[static_cast<size_t>(node) * parts_ + part];
+    }
+    // Any per-node quantity (kNodes values, theta-major) bilinear between the nodes.
+    double blend(const Incident& in, const std::vector<double>& perNode) const;
+
+    // The yarn-frame direction of node (a, b).
+    static Vec3 nodeDirection(const SurfaceFiberFrame& frame, int a, int b);
+
+    // Bytes of the tables.
+    size_t bytes() const;
+
+  private:
+    static Incident rowsOf(double zi);
+    static double rowEdge(const Incident& in, int k);
+    static int rowOf(const Incident& in, double z);
+    static int columnOf(double phi);
+
+    SurfaceFiberFrame frame_;
+    int parts_ = 1;
+    // Per node: kCells codes of the cell masses (row-major); kRows + 1
+    // cumulative row sums of the decoded masses (the last is their total);
+    // the integral of each term.
+    std::vector<uint8_t> codes_;
+    std::vector<float> rowCdf_;
+    std::vector<double> energy_;
+};
+
+}  // namespace weft

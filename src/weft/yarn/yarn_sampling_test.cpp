@@ -1,0 +1,99 @@
+// The tabulated sampler (yarn_bsdf.h, sampling_table.h) on the five shipped
+// models (models/*.json): its samples follow its pdf, the pdf integrates to
+// 1 - P_T, and the weight eval / pdf stays near the albedo at every wi.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "weft/core/chi2.h"
+#include "weft/core/math.h"
+#include "weft/core/test_util.h"
+#include "weft/yarn/yarn_bsdf.h"
+#include "weft/yarn/yarn_integrals.h"
+
+namespace weft {
+namespace {
+
+const char* const kShipped[] = {"fleece", "silk", "polyester", "cotton", "gabardine"};
+
+const YarnBsdf& shipped(const std::string& name) {
+    static std::map<std::string, std::unique_ptr<YarnBsdf>> cache;
+    auto& slot = cache[name];
+    if (!slot)
+        slot = std::make_unique<YarnBsdf>(
+            YarnBsdf::load(std::string(WEFT_SOURCE_DIR) + "/models/" + name + ".json"));
+    return *slot;
+}
+
+Vec3 yarnDirection(double thetaDeg, double phiDeg) {
+    return sphericalDirection(radians(thetaDeg), radians(phiDeg));
+}
+
+TEST(TabulatedSampling, ShippedModelsSampleTheirPdf) {
+    const std::vector<Vec3> incident = {yarnDirection(10, 30), yarnDirection(60, -120),
+                                        yarnDirection(84, 70)};
+    const int tests = static_cast<int>(std::size(kShipped) * incident.size());
+    const double alpha = sidakCorrectedLevel(0.01, tests);
+    // Cells in the surface fiber frame, fine in theta for the R lobe (beta_R down to 1 degree).
+    const SphereGrid grid{180, 60};
+    for (const char* name : kShipped) {
+        const YarnBsdf& bsdf = shipped(name);
+        ASSERT_EQ(bsdf.sampling(), YarnSampling::Tabulated);
+        const SurfaceFiberFrame& frame = bsdf.surfaceFiberFrame();
+        for (const Vec3& wi : incident) {
+            const int64_t n = testing::scaled(100000);
+            std::vector<double> observed(grid.cells() + 1, 0);
+            Rng rng(7, static_cast<uint64_t>(1e6 * (wi.x + 2 * wi.y + 3 * wi.z) + 1e7));
+            for (int64_t k = 0; k < n; ++k) {
+                const BsdfSample s =
+                    bsdf.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()}, rng);
+                ASSERT_TRUE(s.valid());
+                observed[s.isDelta ? grid.cells() : grid.cellOf(frame.toLocal(s.wo))] += 1;
+            }
+            std::vector<double> expected = grid.expectedCounts(
+                [&](const Vec3& local) { return bsdf.pdf(wi, frame.fromLocal(local)); },
+                static_cast<double>(n));
+            const double pickT = bsdf.lobeProbabilities(wi).t;
+            expected.push_back(static_cast<double>(n) * pickT);
+            // The pdf integrates to 1 - P_T (on the rule that resolves the R lobe;
+            // its panels do not follow the table's cell edges, which costs it
+            // about 2e-3 on a piecewise-constant density: sampling_table_test
+            // checks the table's integral on a finer grid).
+            const SphereRule rule = yarnSphereRule(bsdf, wi, 2);
+            double pdfIntegral = 0;
+            for (size_t k = 0; k < rule.directions.size(); ++k)
+                pdfIntegral += bsdf.pdf(wi, rule.directions[k]) * rule.weights[k];
+            EXPECT_NEAR(pdfIntegral, 1 - pickT, 4e-3) << name << " " << wi;
+            const Chi2Result r = chi2Test(observed, expected);
+            std::printf("%s, wi %g %g %g: P_T %.3f, chi2 %.1f, dof %d, p %.3g\n", name, wi.x, wi.y,
+                        wi.z, pickT, r.statistic, r.dof, r.pValue);
+            EXPECT_GT(r.pValue, alpha) << name << " " << wi;
+        }
+    }
+}
+
+// The bound on the weight's relative second moment, luminance, T
+// included, at directions from normal to grazing incidence.
+TEST(TabulatedSampling, ShippedModelsWeightsStayNearTheAlbedo) {
+    for (const char* name : kShipped) {
+        const YarnBsdf& bsdf = shipped(name);
+        double worst = 0;
+        for (double theta : {5.0, 35.0, 65.0, 80.0})
+            for (double phi : {-150.0, -60.0, 20.0, 110.0}) {
+                const DirectionalIntegrals d = integrateDirections(bsdf, yarnDirection(theta, phi));
+                EXPECT_NEAR(d.weightMean, d.albedoLuminance, 1e-9);
+                const double ratio = d.weightSecondMoment / (d.weightMean * d.weightMean);
+                worst = std::max(worst, ratio);
+                EXPECT_LT(ratio, 1.25) << name << " theta " << theta << " phi " << phi;
+            }
+        std::printf("%s: largest E[w^2] / E[w]^2 %.3f\n", name, worst);
+    }
+}
+
+}  // namespace
+}  // namespace weft

@@ -10,13 +10,13 @@
 // forward pass is one indirect call.
 //
 // The kernel (one input vector, latency-bound): a layer's outputs are
-// `vectors` SIMD vectors of accumulators, processed in blocks of up to 4
-// vectors; each input j is broadcast from memory and multiply-added with the
-// stored column W[:, j]. One accumulator set per input would make a chain of
-// `in` dependent FMAs (4 cycles each) per vector; kSets sets take inputs j
-// with j mod kSets = s, so the block has vectors * kSets independent chains
-// (about 8, what two FMA ports with latency 4 keep busy) and the sets are
-// summed at the end. The vectors are arrays of Highway vectors, which SVE and
+// `vectors` SIMD vectors of accumulators, processed in blocks of up to 3 or
+// 4 vectors; each input j is broadcast from memory and multiply-added with
+// the stored column W[:, j]. One accumulator set per input would make a chain
+// of `in` dependent FMAs (4 cycles each) per vector; four sets take the
+// inputs j with j mod 4 = s, so the 21-input layers' chains are 6 FMAs long,
+// and the sets are
+// summed pairwise at the end. The vectors are arrays of Highway vectors, which SVE and
 // RVV (sizeless types) do not allow: those targets are disabled below, and
 // Arm builds run NEON.
 #include "weft/yarn/fixed_mlp.h"
@@ -41,10 +41,16 @@ namespace hn = hwy::HWY_NAMESPACE;
 using Tag = hn::CappedTag<float, FixedMlpKernel::kMaxLanes>;
 using Vector = hn::Vec<Tag>;
 
-// Accumulator sets for a block of `vectors` vectors: about 8 independent
-// chains (two FMA ports, latency 4), 2 to 4 sets. (8 sets for one or two
+// Four accumulator sets, in every kernel: each output lane then goes through
+// the same operations in the same order whatever the vector width, so the
+// AVX2 and AVX-512 kernels (all kernels with FMA) give the same bits and a
+// render does not depend on which of them the CPU runs. A block of one or
+// two vectors has 4 or 8 independent chains (two FMA ports, latency 4); a
+// block holds at most as many vectors as 4 sets of them fit in half the
+// vector registers (AVX-512 has 32, the others 16). (8 sets for one or two
 // AVX-512 vectors were slower: the extra column pointers spill.)
-constexpr int accumulatorSets(int vectors) { return vectors >= 4 ? 2 : vectors == 3 ? 3 : 4; }
+constexpr int kSets = 4;
+constexpr int kBlockVectors = (HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL) ? 4 : 3;
 
 // acc[v] += w[column, v lanes) x for one input x (column = its weights).
 template <int kVectors>
@@ -70,34 +76,30 @@ template <int kVectors>
 HWY_INLINE void denseBlock(const float* HWY_RESTRICT w, int stride, int in,
                            const float* HWY_RESTRICT bias, const float* HWY_RESTRICT slope,
                            const float* HWY_RESTRICT a, float* HWY_RESTRICT z) {
-    constexpr int kSets = accumulatorSets(kVectors);
-    static_assert(kSets >= 2 && kSets <= 4);
     const Tag d;
     const int lanes = static_cast<int>(hn::Lanes(d));
     Vector acc0[kVectors], acc1[kVectors], acc2[kVectors], acc3[kVectors];
     for (int v = 0; v < kVectors; ++v) {
         acc0[v] = hn::Load(d, bias + v * lanes);
         acc1[v] = hn::Zero(d);
-        if constexpr (kSets > 2) acc2[v] = hn::Zero(d);
-        if constexpr (kSets > 3) acc3[v] = hn::Zero(d);
+        acc2[v] = hn::Zero(d);
+        acc3[v] = hn::Zero(d);
     }
     const float* column = w;
     int j = 0;
     for (; j + kSets <= in; j += kSets, column += kSets * stride) {
         multiplyAdd<kVectors>(column, a[j], acc0);
         multiplyAdd<kVectors>(column + stride, a[j + 1], acc1);
-        if constexpr (kSets > 2) multiplyAdd<kVectors>(column + 2 * stride, a[j + 2], acc2);
-        if constexpr (kSets > 3) multiplyAdd<kVectors>(column + 3 * stride, a[j + 3], acc3);
+        multiplyAdd<kVectors>(column + 2 * stride, a[j + 2], acc2);
+        multiplyAdd<kVectors>(column + 3 * stride, a[j + 3], acc3);
     }
     // The last in mod kSets inputs, one per set (still independent chains).
     if (j < in) multiplyAdd<kVectors>(column, a[j], acc0);
-    if constexpr (kSets > 2)
-        if (j + 1 < in) multiplyAdd<kVectors>(column + stride, a[j + 1], acc1);
-    if constexpr (kSets > 3)
-        if (j + 2 < in) multiplyAdd<kVectors>(column + 2 * stride, a[j + 2], acc2);
+    if (j + 1 < in) multiplyAdd<kVectors>(column + stride, a[j + 1], acc1);
+    if (j + 2 < in) multiplyAdd<kVectors>(column + 2 * stride, a[j + 2], acc2);
     // The sum of the sets, pairwise.
-    if constexpr (kSets > 2) add<kVectors>(acc0, acc2);
-    if constexpr (kSets > 3) add<kVectors>(acc1, acc3);
+    add<kVectors>(acc0, acc2);
+    add<kVectors>(acc1, acc3);
     add<kVectors>(acc0, acc1);
     if (slope) {
         const Vector zero = hn::Zero(d);
@@ -117,10 +119,10 @@ void denseLayer(const FixedMlpLayer& layer, const float* HWY_RESTRICT params,
     const float* bias = w + layer.in * stride;
     const float* slope = layer.prelu ? bias + stride : nullptr;
     const int vectors = stride / lanes;
-    for (int v = 0; v < vectors; v += 4) {
+    for (int v = 0; v < vectors; v += kBlockVectors) {
         const int o = v * lanes;
         const float* s = slope ? slope + o : nullptr;
-        switch (std::min(4, vectors - v)) {
+        switch (std::min(kBlockVectors, vectors - v)) {
             case 1:
                 denseBlock<1>(w + o, stride, layer.in, bias + o, s, a, z + o);
                 break;

@@ -22,9 +22,11 @@
 //     zero weights to a multiple of the kernel's vector width (lanes(): 4
 //     floats for SSE, 8 for AVX2, 16 for AVX-512); y += W[:, j] x[j] is a
 //     multiply-add of a broadcast input into accumulator vectors held in
-//     registers; two to four accumulator sets take alternate inputs (j mod
-//     the set count) so that the chain of dependent multiply-adds, not their
-//     throughput, does not set the latency of one call; padded outputs stay 0;
+//     registers; four accumulator sets take alternate inputs (j mod 4) so
+//     that one call is not a single chain of dependent multiply-adds; every
+//     kernel does the same operations per output in the same order, so the
+//     kernels with FMA (AVX2, AVX-512) give the same bits; padded outputs
+//     stay 0;
 //   - PReLU as max(z, 0) + slope min(z, 0): the same value, no branches;
 //   - float arithmetic like the training code; forwardScalar() is the plain
 //     C++ reference on the same stored weights, with each layer's sums in

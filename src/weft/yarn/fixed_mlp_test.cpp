@@ -224,6 +224,31 @@ TEST(FixedMlp, SimdMatchesScalarOnRandomNetworks) {
     }
 }
 
+// Every kernel with FMA does the same operations per output in the same
+// order: AVX2 and AVX-512 give the same bits, so a render does not depend on
+// which of them the CPU has.
+TEST(FixedMlp, KernelsWithFmaAgreeBitForBit) {
+    std::vector<FixedMlpKernel> fma;
+    for (const FixedMlpKernel& kernel : fixedMlpKernels())
+        if (kernel.fusedMultiplyAdd) fma.push_back(kernel);
+    if (fma.size() < 2) GTEST_SKIP() << "fewer than two kernels with FMA on this CPU";
+    for (const auto& widths : std::vector<std::vector<int>>{
+             {6, 21, 21, 21, 3}, {3, 7, 7, 1}, {6, 64, 64, 3}, {5, 17, 33, 49, 2}}) {
+        const NetworkWeights weights = randomNetwork(widths, OutputFunction::Exp, 3);
+        const auto xs = randomInputs(weights.inputs(), 500, 4);
+        const WideMlp reference(weights, "net", fma.front());
+        std::vector<float> want(weights.outputs()), got(weights.outputs());
+        for (size_t k = 1; k < fma.size(); ++k) {
+            const WideMlp net(weights, "net", fma[k]);
+            for (const std::vector<float>& x : xs) {
+                reference.forward(x.data(), want.data());
+                net.forward(x.data(), got.data());
+                ASSERT_EQ(got, want) << weights.widthsText() << " " << fma[k].target;
+            }
+        }
+    }
+}
+
 // The kernels pad each layer to their own vector width; whether a network
 // fits must not depend on it (capacity is checked at the widest padding).
 TEST(FixedMlp, CapacityDoesNotDependOnTheKernel) {

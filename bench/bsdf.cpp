@@ -3,10 +3,13 @@
 // ns per call, one thread, on 4096 fixed random direction pairs (wi in the
 // upper hemisphere, wo on the sphere) cycled through so that branches and
 // caches see a renderer-like mix: YarnBsdf eval / pdf / sample (with and
-// without the energy guard), its parts (the T and M networks through
-// FixedMlp, the R lobe), Mlp<float>::forward on a batch of one (what the
-// fixed-size evaluator replaces), FiberBcsdf eval / sample, and the time to
-// construct a YarnBsdf (model validation, energy guard table).
+// without the energy guard), the same on a prepared incident (Bsdf::prepare
+// once per wi outside the timing, then eval / evalPdf / sample(in, ...): the
+// per-wo cost that a path tracer pays at a shading point), its parts (the T
+// and M networks through FixedMlp, SIMD kernel and scalar reference, the R
+// lobe), Mlp<float>::forward on a batch of one (what the fixed-size evaluator
+// replaces), FiberBcsdf eval / sample, and the time to construct a YarnBsdf
+// (model validation, energy guard table).
 // Writes a Markdown table (default bench/results/bsdf.md; --md=PATH) with
 // every time relative to FiberBcsdf::eval; --benchmark_out=FILE.json adds
 // Google Benchmark's JSON. The model: tests/data/fleece-small.json next to
@@ -15,12 +18,14 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "weft/core/file.h"
@@ -80,6 +85,42 @@ const Pairs& pairs() {
     return p;
 }
 
+// The pairs' wi prepared once (outside the timing), as a path tracer does at a
+// shading point before it evaluates and samples there.
+const std::vector<BsdfIncident>& preparedIncidents(const Bsdf& bsdf) {
+    static std::vector<std::pair<const Bsdf*, std::vector<BsdfIncident>>> cache;
+    for (const auto& [b, incidents] : cache)
+        if (b == &bsdf) return incidents;
+    std::vector<BsdfIncident> incidents(kPairs);
+    for (size_t k = 0; k < kPairs; ++k) bsdf.prepare(pairs().wi[k], incidents[k]);
+    cache.emplace_back(&bsdf, std::move(incidents));
+    return cache.back().second;
+}
+
+// The networks' inputs as floats: (wi, wo) per pair.
+const std::vector<std::array<float, 6>>& floatPairs() {
+    static const std::vector<std::array<float, 6>> x = [] {
+        std::vector<std::array<float, 6>> x;
+        for (size_t k = 0; k < kPairs; ++k) {
+            const Vec3 &wi = pairs().wi[k], &wo = pairs().wo[k];
+            x.push_back({static_cast<float>(wi.x), static_cast<float>(wi.y),
+                         static_cast<float>(wi.z), static_cast<float>(wo.x),
+                         static_cast<float>(wo.y), static_cast<float>(wo.z)});
+        }
+        return x;
+    }();
+    return x;
+}
+
+const ScatteringMlp& mNet() {
+    static const ScatteringMlp net(model().mNet, "m_net");
+    return net;
+}
+const TransmissionMlp& tNet() {
+    static const TransmissionMlp net(model().tNet, "t_net");
+    return net;
+}
+
 template <typename F>
 void loop(benchmark::State& state, const F& f) {
     const Pairs& p = pairs();
@@ -96,6 +137,18 @@ void FiberEval(benchmark::State& state) {
     loop(state, [&](const Vec3& wi, const Vec3& wo, const BsdfSampleInput&) {
         benchmark::DoNotOptimize(fiber.eval(wi, wo));
     });
+}
+
+void FiberEvalPrepared(benchmark::State& state) {
+    const FiberBcsdf fiber(model().fiber);
+    const std::vector<BsdfIncident>& in = preparedIncidents(fiber);
+    const Pairs& p = pairs();
+    size_t k = 0;
+    for (auto _ : state) {
+        benchmark::DoNotOptimize(fiber.eval(in[k], p.wo[k]));
+        k = (k + 1) % kPairs;
+    }
+    state.SetItemsProcessed(state.iterations());
 }
 
 void FiberSample(benchmark::State& state) {
@@ -124,6 +177,64 @@ void YarnSample(benchmark::State& state) {
     loop(state, [&](const Vec3& wi, const Vec3&, const BsdfSampleInput& u) {
         benchmark::DoNotOptimize(bsdf.sample(wi, u));
     });
+}
+
+// eval, evalPdf or sample on a prepared incident (argument 0, 1, 2), with the
+// energy guard; sample draws its rejection steps from one running generator,
+// as a path's own.
+void YarnPrepared(benchmark::State& state) {
+    const YarnBsdf& bsdf = guardedBsdf();
+    const std::vector<BsdfIncident>& in = preparedIncidents(bsdf);
+    const Pairs& p = pairs();
+    const int64_t what = state.range(0);
+    Rng rng(3, 4);
+    size_t k = 0;
+    for (auto _ : state) {
+        if (what == 0)
+            benchmark::DoNotOptimize(bsdf.eval(in[k], p.wo[k]));
+        else if (what == 1)
+            benchmark::DoNotOptimize(bsdf.evalPdf(in[k], p.wo[k]));
+        else
+            benchmark::DoNotOptimize(bsdf.sample(in[k], p.u[k], rng));
+        k = (k + 1) % kPairs;
+    }
+    state.SetItemsProcessed(state.iterations());
+}
+
+// FixedMlp::forward (argument 1: the SIMD kernel) or forwardScalar (0) on
+// float inputs: the network alone, without the conversion from Vec3.
+void MNetwork(benchmark::State& state) {
+    const ScatteringMlp& net = mNet();
+    const auto& x = floatPairs();
+    const bool simd = state.range(0) != 0;
+    float y[3];
+    size_t k = 0;
+    for (auto _ : state) {
+        if (simd)
+            net.forward(x[k].data(), y);
+        else
+            net.forwardScalar(x[k].data(), y);
+        benchmark::DoNotOptimize(y);
+        k = (k + 1) % kPairs;
+    }
+    state.SetItemsProcessed(state.iterations());
+}
+
+void TNetwork(benchmark::State& state) {
+    const TransmissionMlp& net = tNet();
+    const auto& x = floatPairs();
+    const bool simd = state.range(0) != 0;
+    float y;
+    size_t k = 0;
+    for (auto _ : state) {
+        if (simd)
+            net.forward(x[k].data(), &y);
+        else
+            net.forwardScalar(x[k].data(), &y);
+        benchmark::DoNotOptimize(y);
+        k = (k + 1) % kPairs;
+    }
+    state.SetItemsProcessed(state.iterations());
 }
 
 void YarnMNetwork(benchmark::State& state) {
@@ -198,6 +309,7 @@ const char* describe(const std::string& name) {
         const char* what;
     };
     static const Entry entries[] = {
+        {"FiberEvalPrepared", "FiberBcsdf::eval on a prepared incident"},
         {"FiberEval", "FiberBcsdf::eval (the reference)"},
         {"FiberSample", "FiberBcsdf::sample"},
         {"YarnEval/1", "YarnBsdf::eval: T network, R lobe, M network, energy guard"},
@@ -205,8 +317,16 @@ const char* describe(const std::string& name) {
         {"YarnPdf", "YarnBsdf::pdf: T network, eq. 10 lobes"},
         {"YarnSample/1", "YarnBsdf::sample: lobe choice, direction, eval and pdf, energy guard"},
         {"YarnSample/0", "YarnBsdf::sample without the energy guard"},
-        {"YarnMNetwork", "M network alone (FixedMlp, 6-21-21-21-3)"},
-        {"YarnTNetwork", "T network alone (FixedMlp, 3-7-7-1)"},
+        {"YarnPrepared/0", "YarnBsdf::eval on a prepared incident (per-wo cost; target <= 1.2)"},
+        {"YarnPrepared/1",
+         "YarnBsdf::evalPdf on a prepared incident (NEE's eval + pdf; target <= 1.5)"},
+        {"YarnPrepared/2", "YarnBsdf::sample on a prepared incident (target <= 2)"},
+        {"YarnMNetwork", "M network alone (evalM: Vec3 in, Rgb out, SIMD kernel)"},
+        {"MNetwork/1", "M network alone, FixedMlp::forward on floats (SIMD kernel)"},
+        {"MNetwork/0", "M network alone, FixedMlp::forwardScalar on floats (scalar reference)"},
+        {"TNetwork/1", "T network alone, FixedMlp::forward on floats (SIMD kernel)"},
+        {"TNetwork/0", "T network alone, FixedMlp::forwardScalar on floats (scalar reference)"},
+        {"YarnTNetwork", "T network alone (transmission: Vec3 in, SIMD kernel)"},
         {"YarnRLobe", "R lobe alone (eq. 8 with masking)"},
         {"MlpForwardBatchOfOne", "M network through Mlp<float>::forward, batch of 1"},
         {"YarnConstruct/1", "YarnBsdf construction with the energy guard table"},
@@ -217,15 +337,27 @@ const char* describe(const std::string& name) {
     return "";
 }
 
+// The compiled FixedMlp kernels this CPU runs, best first.
+std::string kernelNames() {
+    std::string names;
+    for (const FixedMlpKernel& k : fixedMlpKernels())
+        names += (names.empty() ? "" : ", ") + std::string(k.target);
+    return names;
+}
+
 }  // namespace
 
 BENCHMARK(FiberEval);
+BENCHMARK(FiberEvalPrepared);
 BENCHMARK(FiberSample);
 BENCHMARK(YarnEval)->Arg(1)->Arg(0);
 BENCHMARK(YarnPdf);
 BENCHMARK(YarnSample)->Arg(1)->Arg(0);
+BENCHMARK(YarnPrepared)->Arg(0)->Arg(1)->Arg(2);
 BENCHMARK(YarnMNetwork);
+BENCHMARK(MNetwork)->Arg(1)->Arg(0);
 BENCHMARK(YarnTNetwork);
+BENCHMARK(TNetwork)->Arg(1)->Arg(0);
 BENCHMARK(YarnRLobe);
 BENCHMARK(MlpForwardBatchOfOne);
 BENCHMARK(YarnConstruct)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
@@ -256,7 +388,10 @@ int main(int argc, char** argv) {
         << "One machine, one thread; CPU time per call over 4096 fixed random (wi, wo) pairs (wi "
            "in the upper hemisphere), median of the repetitions. Model: `"
         << std::filesystem::path(gModelPath).filename().string()
-        << "` (6-21-21-21-3 M network). Ratios are to FiberBcsdf::eval in the same run.\n\n"
+        << "` (" << model().mNet.widthsText() << " M network, " << model().tNet.widthsText()
+        << " T network). Ratios are to FiberBcsdf::eval in the same run. Network kernel: "
+        << mNet().target() << " (Highway dynamic dispatch; this CPU runs " << kernelNames()
+        << ").\n\n"
         << "| benchmark | what | ns per call | / fiber eval |\n| --- | --- | --- | --- |\n";
     for (const auto& row : reporter.rows) {
         char line[512];
@@ -266,6 +401,20 @@ int main(int argc, char** argv) {
         else
             std::snprintf(line, sizeof line, "| %s | %s | %.0f | %.2f |\n", row.name.c_str(),
                           describe(row.name), row.median(), fiber > 0 ? row.median() / fiber : 0.0);
+        out << line;
+    }
+    // Issue 17's targets for the per-wo cost, as ratios to FiberBcsdf::eval.
+    auto ratio = [&](const char* name) {
+        for (const auto& row : reporter.rows)
+            if (row.name == name && fiber > 0) return row.median() / fiber;
+        return 0.0;
+    };
+    if (ratio("YarnPrepared/0") > 0) {
+        char line[256];
+        std::snprintf(line, sizeof line,
+                      "\nPer-wo cost on a prepared incident / FiberBcsdf::eval: eval %.2f "
+                      "(target <= 1.2), evalPdf %.2f (<= 1.5), sample %.2f (<= 2).\n",
+                      ratio("YarnPrepared/0"), ratio("YarnPrepared/1"), ratio("YarnPrepared/2"));
         out << line;
     }
     if (!md.empty()) {

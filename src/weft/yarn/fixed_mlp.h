@@ -8,23 +8,39 @@
 // function y = out(W_L ... prelu(W_1 x + b_1) ... + b_L) without touching the
 // heap:
 //   - widths are run-time values up to MaxWidth (the architecture is a fit
-//     option, DESIGN.md 6), all parameters after padding fit in Capacity floats;
-//   - each layer is stored column-major with its output count padded to a
-//     multiple of kLanes (8) with zero weights; the layer kernel is compiled
-//     for each padded width N, so y[0..N) += W[0..N, j] x[j] keeps its N
-//     accumulators in registers as 4-wide SIMD multiply-adds (GCC / Clang
-//     vector extensions); padded outputs stay 0;
+//     option, DESIGN.md 6); all parameters after padding fit in Capacity floats;
+//   - forward() is float32 SIMD through Google Highway (libhwy-dev) with
+//     dynamic dispatch (fixed_mlp.cpp): the kernel is compiled for every x86
+//     instruction set from SSSE3 to AVX-512 (plus Highway's portable EMU128),
+//     and the constructor binds the best one that this CPU runs, so a
+//     portable build (no -march flag) gets AVX2 + FMA or AVX-512 where the
+//     machine has them. Highway rather than Eigen's fixed-size matrices or
+//     xsimd: both of those pick the instruction set at compile time (-march),
+//     so a binary built for any x86-64 would run SSE2 everywhere; Highway's
+//     runtime dispatch needs no flag and costs one indirect call per forward;
+//   - each layer is stored column-major with its output count padded with
+//     zero weights to a multiple of the kernel's vector width (lanes(): 4
+//     floats for SSE, 8 for AVX2, 16 for AVX-512); y += W[:, j] x[j] is a
+//     multiply-add of a broadcast input into accumulator vectors held in
+//     registers; four accumulator sets take alternate inputs (j mod 4) so
+//     that one call is not a single chain of dependent multiply-adds; every
+//     kernel does the same operations per output in the same order, so the
+//     kernels with FMA (AVX2, AVX-512) give the same bits; padded outputs
+//     stay 0;
 //   - PReLU as max(z, 0) + slope min(z, 0): the same value, no branches;
-//   - float arithmetic like the training code; only the summation order
-//     differs from Eigen's (results agree to about 1e-6 relative);
+//   - float arithmetic like the training code; forwardScalar() is the plain
+//     C++ reference on the same stored weights, with each layer's sums in
+//     double (below); fixed_mlp_test holds forward() to it within 1e-5
+//     relative for every instruction set the CPU runs;
 //   - the exp output saturates at e^80 so that no input can give +inf.
-// For the 6-21-21-21-3 network the weights take 6 KB: they stay in L1.
+// For the 6-21-21-21-3 network the weights take 6-9 KB: they stay in L1.
 #pragma once
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "weft/core/error.h"
 #include "weft/core/rgb.h"
@@ -33,24 +49,60 @@
 
 namespace weft {
 
+// One layer of a FixedMlp's stored parameters (offsets in floats): `in`
+// columns of `outPadded` weights, then `outPadded` biases, then (with PReLU)
+// `outPadded` slopes.
+struct FixedMlpLayer {
+    int in = 0, out = 0, outPadded = 0, offset = 0;
+    bool prelu = false;
+};
+
+// The compiled forward pass of one instruction set (fixed_mlp.cpp).
+struct FixedMlpKernel {
+    // No kernel is wider than this (floats per vector); capacities are
+    // checked as if every layer were padded to it, so that whether a network
+    // fits does not depend on the machine.
+    static constexpr int kMaxLanes = 16;
+    // z[0, outPadded of the last layer) = the last layer's pre-activation of
+    // the network at x; `a` and `b` hold the hidden activations (each a
+    // padded width long). z, a and b are aligned to 64 bytes.
+    using Forward = void (*)(const FixedMlpLayer* layers, int layerCount, const float* params,
+                             const float* x, float* a, float* b, float* z);
+    Forward forward = nullptr;
+    int lanes = 1;                   // floats per vector: the padding unit
+    bool fusedMultiplyAdd = false;  // one rounding per multiply-add (AVX2, AVX-512, NEON)
+    const char* target = "none";    // Highway's name: "AVX3", "AVX2", "SSE4", "SCALAR", ...
+};
+
+// The kernel of the best instruction set that this CPU runs (Highway's
+// dynamic dispatch).
+FixedMlpKernel fixedMlpKernel();
+// Every compiled kernel that this CPU runs, best first (for tests and
+// benchmarks; switches Highway's target choice while it runs, so do not call
+// it while another thread constructs a FixedMlp).
+std::vector<FixedMlpKernel> fixedMlpKernels();
+
 template <int MaxWidth, int Capacity>
 class FixedMlp {
   public:
-    static constexpr int kLanes = 8;
     static constexpr int kMaxLayers = 8;
-    static_assert(MaxWidth % kLanes == 0, "MaxWidth must be a multiple of the SIMD block");
 
     FixedMlp() = default;
 
     // Copies `net`; InputError starting with `name` ("m_net") when it is wider,
     // deeper or larger than this evaluator supports.
-    FixedMlp(const NetworkWeights& net, const std::string& name) : output_(net.output) {
+    FixedMlp(const NetworkWeights& net, const std::string& name)
+        : FixedMlp(net, name, fixedMlpKernel()) {}
+    // The same with a given kernel (one of fixedMlpKernels()).
+    FixedMlp(const NetworkWeights& net, const std::string& name, const FixedMlpKernel& kernel)
+        : kernel_(kernel), output_(net.output) {
         const auto& layers = net.layers;
         if (layers.empty() || layers.size() > static_cast<size_t>(kMaxLayers))
             throw InputError(name + ": " + std::to_string(layers.size()) +
                              " layers; the renderer's network evaluator supports 1 to " +
                              std::to_string(kMaxLayers));
-        int offset = 0;
+        const int lanes = kernel_.lanes;
+        int offset = 0, worstCase = 0;
         layerCount_ = static_cast<int>(layers.size());
         for (int l = 0; l < layerCount_; ++l) {
             const NetworkLayer& src = layers[l];
@@ -59,17 +111,20 @@ class FixedMlp {
                                  std::to_string(src.out) + " x " + std::to_string(src.in) +
                                  "; the renderer's network evaluator supports widths up to " +
                                  std::to_string(MaxWidth));
-            Layer& dst = layers_[l];
+            FixedMlpLayer& dst = layers_[l];
             dst.in = src.in;
             dst.out = src.out;
-            dst.outPadded = (src.out + kLanes - 1) / kLanes * kLanes;
+            dst.outPadded = roundUp(src.out, lanes);
             dst.prelu = src.hasPrelu();
             dst.offset = offset;
-            offset += dst.outPadded * (dst.in + 1 + (dst.prelu ? 1 : 0));
-            if (offset > Capacity)
+            const int rows = dst.in + 1 + (dst.prelu ? 1 : 0);
+            offset += dst.outPadded * rows;
+            worstCase += roundUp(src.out, FixedMlpKernel::kMaxLanes) * rows;
+            if (worstCase > Capacity)
                 throw InputError(name + ": " + std::to_string(net.parameterCount()) +
                                  " parameters need more than the " + std::to_string(Capacity) +
-                                 " (after padding to blocks of " + std::to_string(kLanes) +
+                                 " (after padding to blocks of " +
+                                 std::to_string(FixedMlpKernel::kMaxLanes) +
                                  ") that the renderer's network evaluator holds");
             float* p = params_.data() + dst.offset;
             for (int j = 0; j < dst.in; ++j)
@@ -84,86 +139,75 @@ class FixedMlp {
     int inputs() const { return layers_[0].in; }
     int outputs() const { return layerCount_ > 0 ? layers_[layerCount_ - 1].out : 0; }
     OutputFunction output() const { return output_; }
+    // The instruction set forward() runs ("AVX3", "AVX2", ...; fixedMlpKernel()).
+    const char* target() const { return kernel_.target; }
 
-    // y[0, outputs()) = net(x[0, inputs())).
+    // y[0, outputs()) = net(x[0, inputs())): the SIMD kernel.
     void forward(const float* x, float* y) const {
-        alignas(32) std::array<float, MaxWidth> bufferA, bufferB;
-        float* a = bufferA.data();
-        float* z = bufferB.data();
-        for (int k = 0; k < layers_[0].in; ++k) a[k] = x[k];
+        if (layerCount_ == 0) return;  // a default-constructed evaluator has no kernel
+        alignas(64) float a[kPadded], b[kPadded], z[kPadded];
+        kernel_.forward(layers_.data(), layerCount_, params_.data(), x, a, b, z);
+        applyOutput(z, y);
+    }
+
+    // The same function in plain C++, the reference for forward(): each
+    // output's sum (bias, then the inputs in order) in double, rounded to
+    // float once per layer as the kernels store it. The kernels sum in float;
+    // on the shipped networks, whose hidden values reach 1e2 - 1e3 and cancel
+    // to pre-activations of order 1, float rounding alone moves an output by
+    // up to about 1e-5 relative, so a float reference would be as far from
+    // the exact value as the kernels are.
+    void forwardScalar(const float* x, float* y) const {
+        float bufferA[kPadded], bufferB[kPadded];
+        const float* a = x;
+        float* z = bufferA;
         for (int l = 0; l < layerCount_; ++l) {
-            const Layer& layer = layers_[l];
-            dispatchLayer<kLanes>(layer, params_.data() + layer.offset, a, z);
-            std::swap(a, z);
+            const FixedMlpLayer& layer = layers_[l];
+            const float* w = params_.data() + layer.offset;
+            const float* bias = w + layer.in * layer.outPadded;
+            for (int o = 0; o < layer.out; ++o) {
+                double sum = bias[o];
+                for (int j = 0; j < layer.in; ++j)
+                    sum += static_cast<double>(w[j * layer.outPadded + o]) * a[j];
+                if (layer.prelu && sum < 0) sum *= bias[layer.outPadded + o];
+                z[o] = static_cast<float>(sum);
+            }
+            a = z;
+            z = z == bufferA ? bufferB : bufferA;
         }
+        applyOutput(a, y);
+    }
+
+  private:
+    // The scratch length: a width up to MaxWidth padded for the widest kernel.
+    static constexpr int kPadded =
+        (MaxWidth + FixedMlpKernel::kMaxLanes - 1) / FixedMlpKernel::kMaxLanes *
+        FixedMlpKernel::kMaxLanes;
+
+    static int roundUp(int n, int lanes) { return (n + lanes - 1) / lanes * lanes; }
+
+    void applyOutput(const float* z, float* y) const {
         const int out = outputs();
         for (int o = 0; o < out; ++o) {
             switch (output_) {
                 case OutputFunction::Sigmoid:
-                    y[o] = 1.0f / (1.0f + std::exp(-a[o]));
+                    y[o] = 1.0f / (1.0f + std::exp(-z[o]));
                     break;
                 case OutputFunction::Exp:
-                    y[o] = std::exp(std::min(a[o], 80.0f));
+                    y[o] = std::exp(std::min(z[o], 80.0f));
                     break;
                 case OutputFunction::Identity:
-                    y[o] = a[o];
+                    y[o] = z[o];
                     break;
             }
         }
     }
 
-  private:
-    struct Layer {
-        int in = 0, out = 0, outPadded = 0, offset = 0;
-        bool prelu = false;
-    };
-
-    // One layer of compile-time padded width N: the N accumulators are N / 4
-    // four-float vectors (GCC / Clang vector extensions, SSE on x86-64, NEON
-    // on ARM) kept in registers; every input adds N / 4 independent
-    // multiply-adds. PReLU as max(z, 0) + slope min(z, 0): exact, branch-free.
-    using Float4 = float __attribute__((vector_size(16)));
-    template <int N>
-    static void denseLayer(const Layer& layer, const float* w, const float* a, float* z) {
-        constexpr int kVectors = N / 4;
-        const float* bias = w + layer.in * N;
-        Float4 acc[kVectors];
-        for (int k = 0; k < kVectors; ++k) __builtin_memcpy(&acc[k], bias + 4 * k, sizeof(Float4));
-        for (int j = 0; j < layer.in; ++j) {
-            const Float4 x = {a[j], a[j], a[j], a[j]};
-            const float* column = w + j * N;
-            for (int k = 0; k < kVectors; ++k) {
-                Float4 c;
-                __builtin_memcpy(&c, column + 4 * k, sizeof(Float4));
-                acc[k] += c * x;
-            }
-        }
-        if (layer.prelu) {
-            const float* slope = bias + N;
-            const Float4 zero = {0, 0, 0, 0};
-            for (int k = 0; k < kVectors; ++k) {
-                Float4 s;
-                __builtin_memcpy(&s, slope + 4 * k, sizeof(Float4));
-                const Float4 positive = acc[k] > zero ? acc[k] : zero;
-                const Float4 negative = acc[k] < zero ? acc[k] : zero;
-                acc[k] = positive + s * negative;
-            }
-        }
-        for (int k = 0; k < kVectors; ++k) __builtin_memcpy(z + 4 * k, &acc[k], sizeof(Float4));
-    }
-
-    template <int N>
-    static void dispatchLayer(const Layer& layer, const float* w, const float* a, float* z) {
-        if constexpr (N <= MaxWidth) {
-            if (layer.outPadded == N) return denseLayer<N>(layer, w, a, z);
-            dispatchLayer<N + kLanes>(layer, w, a, z);
-        }
-    }
-
-    std::array<Layer, kMaxLayers> layers_{};
+    std::array<FixedMlpLayer, kMaxLayers> layers_{};
     int layerCount_ = 0;
+    FixedMlpKernel kernel_{};
     OutputFunction output_ = OutputFunction::Identity;
-    alignas(32) std::array<float, Capacity> params_{};
+    alignas(64) std::array<float, Capacity> params_{};
 };
 
 // The yarn model's two evaluators (yarn_bsdf.h) and their inputs: float

@@ -1,0 +1,185 @@
+// weft/yarn/fixed_mlp.cpp — FixedMlp's forward pass in float32 SIMD, one
+// kernel per instruction set (Google Highway, dynamic dispatch).
+//
+// Highway compiles this file once per target (hwy/foreach_target.h re-includes
+// it with HWY_TARGET set to SSSE3, SSE4, AVX2, AVX3 = AVX-512 and the portable
+// EMU128); HWY_EXPORT builds the table and HWY_DYNAMIC_DISPATCH picks the
+// entry of the best target the CPU has. The dispatch happens once, when a
+// FixedMlp is constructed (fixedMlpKernel()): the FixedMlp keeps the kernel's
+// function pointer and pads its weights to that kernel's vector width, so a
+// forward pass is one indirect call.
+//
+// The kernel (one input vector, latency-bound): a layer's outputs are
+// `vectors` SIMD vectors of accumulators, processed in blocks of up to 3 or
+// 4 vectors; each input j is broadcast from memory and multiply-added with
+// the stored column W[:, j]. One accumulator set per input would make a chain
+// of `in` dependent FMAs (4 cycles each) per vector; four sets take the
+// inputs j with j mod 4 = s, so the 21-input layers' chains are 6 FMAs long,
+// and the sets are
+// summed pairwise at the end. The vectors are arrays of Highway vectors, which SVE and
+// RVV (sizeless types) do not allow: those targets are disabled below, and
+// Arm builds run NEON.
+#include "weft/yarn/fixed_mlp.h"
+
+#ifndef HWY_DISABLED_TARGETS
+#define HWY_DISABLED_TARGETS (HWY_SVE | HWY_SVE2 | HWY_SVE_256 | HWY_SVE2_128 | HWY_RVV)
+#endif
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "weft/yarn/fixed_mlp.cpp"
+#include <hwy/foreach_target.h>  // must come before highway.h
+
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace weft {
+namespace HWY_NAMESPACE {
+namespace {
+
+namespace hn = hwy::HWY_NAMESPACE;
+
+using Tag = hn::CappedTag<float, FixedMlpKernel::kMaxLanes>;
+using Vector = hn::Vec<Tag>;
+
+// Four accumulator sets, in every kernel: each output lane then goes through
+// the same operations in the same order whatever the vector width, so the
+// AVX2 and AVX-512 kernels (all kernels with FMA) give the same bits and a
+// render does not depend on which of them the CPU runs. A block of one or
+// two vectors has 4 or 8 independent chains (two FMA ports, latency 4); a
+// block holds at most as many vectors as 4 sets of them fit in half the
+// vector registers (AVX-512 has 32, the others 16). (8 sets for one or two
+// AVX-512 vectors were slower: the extra column pointers spill.)
+constexpr int kSets = 4;
+constexpr int kBlockVectors = (HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL) ? 4 : 3;
+
+// acc[v] += w[column, v lanes) x for one input x (column = its weights).
+template <int kVectors>
+HWY_INLINE void multiplyAdd(const float* HWY_RESTRICT column, float x, Vector* acc) {
+    const Tag d;
+    const int lanes = static_cast<int>(hn::Lanes(d));
+    const Vector broadcast = hn::Set(d, x);
+    for (int v = 0; v < kVectors; ++v)
+        acc[v] = hn::MulAdd(hn::Load(d, column + v * lanes), broadcast, acc[v]);
+}
+
+template <int kVectors>
+HWY_INLINE void add(Vector* acc, const Vector* other) {
+    for (int v = 0; v < kVectors; ++v) acc[v] = hn::Add(acc[v], other[v]);
+}
+
+// z[0, kVectors lanes) = (prelu) (bias + sum_j w[j stride + .] a[j]) for one
+// block of kVectors vectors of outputs; w, bias and slope point at the
+// block's first output (slope is null without PReLU). The sets are written
+// out and every loop has a compile-time trip count, so that the compiler
+// unrolls them and the accumulators stay in registers.
+template <int kVectors>
+HWY_INLINE void denseBlock(const float* HWY_RESTRICT w, int stride, int in,
+                           const float* HWY_RESTRICT bias, const float* HWY_RESTRICT slope,
+                           const float* HWY_RESTRICT a, float* HWY_RESTRICT z) {
+    const Tag d;
+    const int lanes = static_cast<int>(hn::Lanes(d));
+    Vector acc0[kVectors], acc1[kVectors], acc2[kVectors], acc3[kVectors];
+    for (int v = 0; v < kVectors; ++v) {
+        acc0[v] = hn::Load(d, bias + v * lanes);
+        acc1[v] = hn::Zero(d);
+        acc2[v] = hn::Zero(d);
+        acc3[v] = hn::Zero(d);
+    }
+    const float* column = w;
+    int j = 0;
+    for (; j + kSets <= in; j += kSets, column += kSets * stride) {
+        multiplyAdd<kVectors>(column, a[j], acc0);
+        multiplyAdd<kVectors>(column + stride, a[j + 1], acc1);
+        multiplyAdd<kVectors>(column + 2 * stride, a[j + 2], acc2);
+        multiplyAdd<kVectors>(column + 3 * stride, a[j + 3], acc3);
+    }
+    // The last in mod kSets inputs, one per set (still independent chains).
+    if (j < in) multiplyAdd<kVectors>(column, a[j], acc0);
+    if (j + 1 < in) multiplyAdd<kVectors>(column + stride, a[j + 1], acc1);
+    if (j + 2 < in) multiplyAdd<kVectors>(column + 2 * stride, a[j + 2], acc2);
+    // The sum of the sets, pairwise.
+    add<kVectors>(acc0, acc2);
+    add<kVectors>(acc1, acc3);
+    add<kVectors>(acc0, acc1);
+    if (slope) {
+        const Vector zero = hn::Zero(d);
+        for (int v = 0; v < kVectors; ++v)
+            acc0[v] = hn::MulAdd(hn::Load(d, slope + v * lanes), hn::Min(acc0[v], zero),
+                                 hn::Max(acc0[v], zero));
+    }
+    for (int v = 0; v < kVectors; ++v) hn::Store(acc0[v], d, z + v * lanes);
+}
+
+void denseLayer(const FixedMlpLayer& layer, const float* HWY_RESTRICT params,
+                const float* HWY_RESTRICT a, float* HWY_RESTRICT z) {
+    const Tag d;
+    const int lanes = static_cast<int>(hn::Lanes(d));
+    const int stride = layer.outPadded;
+    const float* w = params + layer.offset;
+    const float* bias = w + layer.in * stride;
+    const float* slope = layer.prelu ? bias + stride : nullptr;
+    const int vectors = stride / lanes;
+    for (int v = 0; v < vectors; v += kBlockVectors) {
+        const int o = v * lanes;
+        const float* s = slope ? slope + o : nullptr;
+        switch (std::min(kBlockVectors, vectors - v)) {
+            case 1:
+                denseBlock<1>(w + o, stride, layer.in, bias + o, s, a, z + o);
+                break;
+            case 2:
+                denseBlock<2>(w + o, stride, layer.in, bias + o, s, a, z + o);
+                break;
+            case 3:
+                denseBlock<3>(w + o, stride, layer.in, bias + o, s, a, z + o);
+                break;
+            default:
+                denseBlock<4>(w + o, stride, layer.in, bias + o, s, a, z + o);
+                break;
+        }
+    }
+}
+
+void forward(const FixedMlpLayer* layers, int layerCount, const float* params, const float* x,
+             float* a, float* b, float* z) {
+    const float* input = x;
+    for (int l = 0; l < layerCount; ++l) {
+        float* output = l + 1 == layerCount ? z : (l % 2 == 0 ? a : b);
+        denseLayer(layers[l], params, input, output);
+        input = output;
+    }
+}
+
+}  // namespace
+
+FixedMlpKernel selectKernel() {
+    FixedMlpKernel kernel;
+    kernel.forward = &forward;
+    kernel.lanes = static_cast<int>(hn::Lanes(Tag()));
+    kernel.fusedMultiplyAdd = HWY_NATIVE_FMA != 0;
+    kernel.target = hwy::TargetName(HWY_TARGET);
+    return kernel;
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace weft
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace weft {
+
+HWY_EXPORT(selectKernel);
+
+FixedMlpKernel fixedMlpKernel() { return HWY_DYNAMIC_DISPATCH(selectKernel)(); }
+
+std::vector<FixedMlpKernel> fixedMlpKernels() {
+    std::vector<FixedMlpKernel> kernels;
+    for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
+        hwy::SetSupportedTargetsForTest(target);
+        kernels.push_back(HWY_DYNAMIC_DISPATCH(selectKernel)());
+    }
+    hwy::SetSupportedTargetsForTest(0);
+    return kernels;
+}
+
+}  // namespace weft
+#endif  // HWY_ONCE

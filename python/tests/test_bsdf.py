@@ -191,9 +191,17 @@ def test_yarn_delta_lobe_and_p_t(root):
     wi = np.array([0.0, math.sin(math.radians(75)), math.cos(math.radians(75))])
     pt = yarn.p_t(wi)
     assert isinstance(pt, float) and 0.05 < pt < 0.5  # fleece: about 0.16
-    # P(T) is the fraction of samples that pick the delta lobe.
-    lobes = yarn.sample_seeded(wi, 20000, seed=2)["lobe"]
+    # The fitted sampler picks the delta lobe with probability P(T), weight 1.
+    fitted = weft.YarnModel.load(root / "models" / "fleece.json", sampling="fitted")
+    lobes = fitted.sample_seeded(wi, 20000, seed=2)["lobe"]
     assert abs(np.mean(lobes == 0) - pt) < 0.02
+    # The tabulated one (default) picks it with its own P_T and weight P(T) / P_T.
+    samples = yarn.sample_seeded(wi, 20000, seed=2)
+    delta = samples["lobe"] == 0
+    assert 0.02 < np.mean(delta) < 0.98
+    assert np.all(samples["weight"][delta] == samples["weight"][delta][0, 0])
+    pick = pt / samples["weight"][delta][0, 0]
+    assert abs(np.mean(delta) - pick) < 0.02
     s = yarn.sample(wi, np.array([0.0, 0.5, 0.5]))  # u[0] = 0 picks the delta T lobe
     assert s["lobe"] == 0 and s["pdf"] == 0.0
     np.testing.assert_allclose(s["wo"], -wi, rtol=0, atol=1e-15)

@@ -90,8 +90,8 @@ TEST_F(RenderCliTest, CosineYarnSampling) {
     EXPECT_EQ(nlohmann::json::parse(readFile(path("tabulated.json"))).at("yarn_sampling"),
               "tabulated");
     EXPECT_NE(readImage(path("tabulated.exr")).pixels, image.pixels);
-    ASSERT_EQ(run("render scene.json --spp 2 --yarn-sampling fitted --quiet --out fitted.exr").status,
-              0);
+    ASSERT_EQ(
+        run("render scene.json --spp 2 --yarn-sampling fitted --quiet --out fitted.exr").status, 0);
     EXPECT_EQ(nlohmann::json::parse(readFile(path("fitted.json"))).at("yarn_sampling"), "fitted");
     EXPECT_NE(readImage(path("fitted.exr")).pixels, image.pixels);
     expectUserError(run("render scene.json --spp 1 --yarn-sampling x --out x.exr"),

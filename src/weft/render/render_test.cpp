@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -165,11 +166,51 @@ TEST_F(RenderTest, NextEventEstimationAgreesWithBsdfSamplingOnly) {
             EXPECT_NEAR(a.mean, b.mean, 4.5 * se + 1e-4)
                 << renderModeName(mode) << " ray " << r << ": NEE " << a.mean << " +- "
                 << a.standardError << ", BSDF only " << b.mean << " +- " << b.standardError;
-            // NEE + MIS should not be noisier than BSDF sampling alone here.
-            EXPECT_LT(a.standardError, 1.5 * b.standardError)
+            // NEE + MIS should not be noisier than BSDF sampling alone here,
+            // unless both are already below 0.2 % of the mean (where the yarn's
+            // sampler alone is that good, e.g. on paths that cross the ply by T).
+            EXPECT_LT(a.standardError, std::max(1.5 * b.standardError, 2e-3 * a.mean))
                 << renderModeName(mode) << " ray " << r;
             EXPECT_GT(a.mean, 0.0);
         }
+    }
+}
+
+// A near-white yarn (the shipped cotton model, C_TT = 0.999) under a constant
+// sky, where paths are long: with sample weights that stay near the albedo at
+// every bounce, the variance of an N-sample pixel estimate falls as 1/N; a
+// heavy-tailed weight makes small-N estimates miss the rare large paths, so
+// the measured variance falls more slowly (issue 17: neural c = relMSE x spp
+// grew with spp). Independent estimates at N and 4N samples along rays on the
+// yarn: the ratio of their variances must be 4 within its sampling error.
+TEST_F(RenderTest, NearWhiteYarnVarianceFallsAsOneOverSpp) {
+    const std::string cotton = std::string(WEFT_SOURCE_DIR) + "/models/cotton.json";
+    const std::string lights = R"([{"type": "constant", "radiance": [1, 1, 1]}])";
+    const Scene s(scene(cotton, lights), RenderMode::Neural, true);
+    const auto rays = raysOnYarn(s, 3);
+    ASSERT_EQ(rays.size(), 3u);
+    const int repeats = static_cast<int>(scaled(240)), n = 4;
+    for (size_t r = 0; r < rays.size(); ++r) {
+        double variance[2];
+        for (int level = 0; level < 2; ++level) {
+            const int samples = level == 0 ? n : 4 * n;
+            double sum = 0, sum2 = 0;
+            for (int k = 0; k < repeats; ++k) {
+                const double mean =
+                    estimate(s, rays[r].first, rays[r].second, samples, true,
+                             static_cast<uint64_t>(100000 * r + 1000 * level + k + 1))
+                        .mean;
+                sum += mean, sum2 += mean * mean;
+            }
+            variance[level] = (sum2 - sum * sum / repeats) / (repeats - 1);
+        }
+        const double ratio = variance[0] / variance[1];
+        // Each variance has relative standard error about sqrt(2 / (repeats - 1)).
+        const double spread = 4 * std::sqrt(2.0 * 2.0 / (repeats - 1));
+        std::printf("ray %zu: variance at %d spp %.3g, at %d spp %.3g, ratio %.2f\n", r, n,
+                    variance[0], 4 * n, variance[1], ratio);
+        EXPECT_GT(ratio, 4 * std::exp(-spread)) << "ray " << r;
+        EXPECT_LT(ratio, 4 * std::exp(spread)) << "ray " << r;
     }
 }
 

@@ -1,50 +1,90 @@
 #!/usr/bin/env python3
-"""bench/table2.py: the paper's Table 2 and Fig. 8/9 on this machine, plus the ablations.
+"""bench/table2.py: the paper's Table 2 and Fig. 8/9 on this machine, in chunks.
 
-For each preset x scene (closeup, weave, knit; `weft scene` with the shipped
-models/<preset>.json) it renders, each in its own `weft render` process:
-  - a converged fiber-mode reference and a converged neural render (REF spp);
-  - for each mode, renders at REF/16 and REF/4 spp with other seeds, whose
-    relative MSE against the mode's own converged image gives the time to
-    reach relative MSE 0.01 (equal quality, below);
-  - an equal-time fiber render: fiber mode given the neural time to 0.01;
+One chunk is one material (preset) and one scene (closeup, weave, knit;
+`weft scene` with the shipped models/<preset>.json, a 3 x 3 patch for weave
+and knit). A chunk renders, each in its own `weft render` process:
+  - a converged fiber-mode reference and a converged neural render (N spp,
+    seed 1); neural mode uses the renderer's default --yarn-sampling
+    (tabulated), which the chunk records;
+  - a ladder per mode: renders at N/64, N/16 and N/4 spp (seeds 10, 11, 12),
+    compared with the mode's own converged image (see "Noise" below);
+  - an equal-time pair: fiber mode given the time neural mode needs to reach
+    relative MSE 0.01, and the neural render at that spp (seed 3);
 and compares (weft compare): neural vs fiber reference (SSIM, relative MSE,
-heatmap) and the equal-time fiber render vs its reference. Memory: Embree
-geometry + BVH bytes and peak resident bytes of the reference renders.
+heatmap), the equal-time renders vs the fiber reference. Memory: Embree
+geometry + BVH bytes and peak resident bytes of the reference renders. It
+writes RESULTS/table2/<preset>-<scene>.json (meant to be committed: every
+number of the row, the ladder, and the settings: size, spp, patch, seeds,
+threads, yarn sampling, machine, date, weft commit and binary hash) and the
+row's figure RESULTS/table2/<preset>-<scene>.png (reference | neural |
+heatmap of 1 - SSIM | equal-time fiber), then assembles the table.
 
-Time to relative MSE 0.01. Two independent renders at n and N spp of the
-same mode differ by relMSE ~ c (1/n + 1/N) (Monte Carlo variance falls as
-1/spp; the converged image's own noise is the 1/N term), so
-c = relMSE / (1/n + 1/N) and a render reaches relative MSE 0.01 against the
-true image at n* = c / 0.01 spp, i.e. after n* x (seconds per spp) seconds
-(scene build excluded, reported separately). Both ladder levels are
-reported: their c agree when the 1/spp law holds.
+Assembling (after every chunk, or alone with --assemble, which renders
+nothing and needs no work folder) reads whatever chunk files exist and writes
+RESULTS/table2.md and .json, plus one Fig. 8/9-style figure per scene,
+RESULTS/table2/fig-<scene>.png (one row per material, from the chunk
+figures). Missing rows are listed with the command that makes them, and
+chunks made with different settings, commits, machines or days are named.
 
-Ablations (paper Fig. 5), on fleece with one gather and one fit
-configuration for all variants: the full model, (a) one naive network over
-the whole RDM (`weft fit --ablation naive`), (b) no analytic R lobe
-(`--ablation no-r-lobe`), (c) the full model with cosine sampling
-(`weft render --yarn-sampling cosine`); each as SSIM against the fiber
-reference and equal-quality time against the full model.
+Noise. Two independent renders at n and N spp of the same mode differ by
+relMSE ~ c (1/n + 1/N) (Monte Carlo variance falls as 1/spp), so each ladder
+level gives c = relMSE / (1/n + 1/N). When the 1/spp law holds, c is the same
+at every level; c growing with spp is a heavy tail (issue 17's target: neural
+c equal within 25 % across the ladder; the table reports max/min of c). The
+top level's c gives each reference's own noise, c / N, reported beside the
+neural vs fiber relative MSE: relMSE(neural ref, fiber ref) ~ model error +
+c_fiber / N + c_neural / N, so "relMSE minus noise" is the model's error.
+Equal quality: a mode reaches relative MSE 0.01 against the true image at
+n* = c / 0.01 spp (c of the top level), i.e. after n* x (seconds per spp of
+the ladder) seconds (scene build excluded, reported separately); the
+speed-up is the ratio of the two modes' times.
+
+Default settings per chunk (each one an option: --size, --ref-spp,
+--fiber-ladder, --neural-ladder, --patch). References at the paper's sample
+counts: 1024 spp, 4096 for silk and cotton. The resolution is the largest of
+256, 192 and 128 pixels square whose estimated run time stays under 40
+minutes on 2 cores (a third of margin under the 60 minute limit for a loaded
+machine and timing noise). The estimate (--plan prints it) takes each mode's
+seconds per spp at 128 x 128 from bench/results/table2-quick.json (2 threads,
+3 x 3 patches, measured before issue 17's sampler and renderer changes, so
+it errs long), scales it by the pixel count, and counts the reference, the
+ladder, the equal-time pair (from the quick table's neural c) and the scene
+builds:
+  256 x 256: every close-up (3-23 min), fleece and polyester weave and knit
+             (16-39 min);
+  192 x 192: silk weave and knit (25 and 27 min; 44 and 48 at 256),
+             gabardine weave (33 min; 58 at 256);
+  128 x 128: cotton weave (41 min) and knit, gabardine knit (25 min; 56 at
+             192: its neural c of 33 makes the equal-time pair long).
+Cotton knit at 4096 spp does not fit at 128 x 128 with the full fiber ladder
+(about 59 min): its fiber ladder stops at N/16 (64, 256 spp; about 50 min).
+Fiber c of cotton was flat across the quick ladder (10.6, 12.6), so its top
+level loses little.
 
 Everything is cached under the work folder (scene folders, renders, their
-JSON statistics, comparisons, gathers and fits); a step is redone only when
-its parameters change, so an interrupted run resumes where it stopped.
+JSON statistics, comparisons); a step is redone only when its command line
+changes, so an interrupted chunk resumes where it stopped. A chunk whose
+result file already records the same settings is not run again (--redo).
 
-    bench/table2.py [--quick] [--work DIR] [--weft build/release/weft]
-                    [--presets fleece,...] [--scenes closeup,weave,knit] [--threads 0]
+    bench/table2.py --chunk gabardine,knit [--size PX] [--ref-spp N] [--threads 0]
+    bench/table2.py --assemble            # table2.md, .json and figures from the chunk files
+    bench/table2.py --plan                # the chunks' command lines and estimated minutes
+    bench/table2.py                       # every chunk of --presets x --scenes, then assemble
+    bench/table2.py --quick               # the one-run quick table (below)
+  common: [--work DIR] [--results DIR] [--weft build/release/weft]
 
---quick: 128 x 128, 256 spp references, 3 x 3 patches, ablations on the
-close-up from a 2M-path gather with a shortened fit: 42 minutes on 2 cores
-(measured; the equal-time renders of the slowly converging cotton and
-gabardine patches take a third of it). The full version: 256 x 256, 1024 spp (4096 for silk and cotton, as
-the paper), 4 x 4 patches, ablations on all three scenes from a 16M-path
-gather with the default fit: hours.
-Writes bench/results/table2.md (table2-quick.md) and .json, and one figure per
-scene in bench/results/table2/ (table2-quick/): reference | neural | heatmap
-(1 - SSIM) | equal-time fiber.
+--quick (unchanged): 128 x 128, 256 spp references, ladder N/16 and N/4,
+3 x 3 patches, all presets and scenes in one run, plus the paper's Fig. 5
+ablations (naive network, no R lobe, cosine sampling) on the fleece close-up
+from a 2M-path gather with a shortened fit: 42 minutes on 2 cores
+(measured). Writes RESULTS/table2-quick.md, .json and RESULTS/table2-quick/.
+The chunked table has no ablations.
 """
 import argparse
+import datetime
+import glob
+import hashlib
 import json
 import os
 import shutil
@@ -56,6 +96,37 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PRESETS = ["fleece", "silk", "polyester", "cotton", "gabardine"]
 SCENES = ["closeup", "weave", "knit"]
 TARGET_REL_MSE = 0.01
+# The paper's reference sample counts (Table 2).
+PAPER_REF_SPP = {"fleece": 1024, "silk": 4096, "polyester": 1024, "cotton": 4096,
+                 "gabardine": 1024}
+# Default image side per chunk (see the docstring for the estimates behind it).
+DEFAULT_SIZE = {
+    ("fleece", "closeup"): 256, ("fleece", "weave"): 256, ("fleece", "knit"): 256,
+    ("silk", "closeup"): 256, ("silk", "weave"): 192, ("silk", "knit"): 192,
+    ("polyester", "closeup"): 256, ("polyester", "weave"): 256, ("polyester", "knit"): 256,
+    ("cotton", "closeup"): 256, ("cotton", "weave"): 128, ("cotton", "knit"): 128,
+    ("gabardine", "closeup"): 256, ("gabardine", "weave"): 192, ("gabardine", "knit"): 128,
+}
+# Ladder levels as divisors of the reference spp.
+DEFAULT_LADDER = (64, 16, 4)
+DEFAULT_FIBER_LADDER = {("cotton", "knit"): (64, 16)}
+DEFAULT_PATCH = 3
+SEEDS = {"reference": 1, "ladder": 10, "equal_time": 3}
+CHUNK_FORMAT = 1
+BUDGET_MINUTES = 60
+
+
+def chunk_defaults(preset, kind):
+    return {"size": DEFAULT_SIZE[(preset, kind)], "ref_spp": PAPER_REF_SPP[preset],
+            "patch": DEFAULT_PATCH,
+            "fiber_ladder": list(DEFAULT_FIBER_LADDER.get((preset, kind), DEFAULT_LADDER)),
+            "neural_ladder": list(DEFAULT_LADDER)}
+
+
+def ladder_spp(ref_spp, divisors):
+    """The ladder's spp levels, ascending, without repeats, each below ref_spp."""
+    levels = sorted({max(1, ref_spp // d) for d in divisors})
+    return [n for n in levels if n < ref_spp] or [1]
 
 
 class Bench:
@@ -118,73 +189,85 @@ class Bench:
         return json.loads(self.run(cmd))
 
 
-def convergence(bench, scene, folder, mode, ref_exr, ref_spp, extra=()):
-    """Ladder renders at ref/16 and ref/4 spp: c, spp and seconds to relMSE 0.01."""
+def convergence(bench, scene, folder, mode, ref_exr, ref_spp, divisors, extra=()):
+    """Ladder renders at ref_spp / divisor: c per level, spp and seconds to relMSE 0.01."""
     levels = []
-    for i, spp in enumerate([max(1, ref_spp // 16), max(1, ref_spp // 4)]):
-        stats, exr = bench.render(scene, folder, "%s-%dspp" % (mode, spp), mode, 10 + i, spp=spp,
-                                  extra=extra)
+    for i, spp in enumerate(ladder_spp(ref_spp, divisors)):
+        stats, exr = bench.render(scene, folder, "%s-%dspp" % (mode, spp), mode,
+                                  SEEDS["ladder"] + i, spp=spp, extra=extra)
         rel = bench.compare(exr, ref_exr)["rel_mse"]
         c = rel / (1.0 / spp + 1.0 / ref_spp)
-        levels.append({"spp": spp, "rel_mse": rel, "c": c,
+        levels.append({"spp": spp, "seed": SEEDS["ladder"] + i, "rel_mse": rel, "c": c,
                        "seconds_per_spp": stats["seconds_per_spp"]})
     last = levels[-1]
     spp_target = last["c"] / TARGET_REL_MSE
     seconds_per_spp = sum(l["seconds_per_spp"] * l["spp"] for l in levels) / sum(
         l["spp"] for l in levels)
+    cs = [l["c"] for l in levels]
     return {"levels": levels, "spp_to_target": spp_target,
             "seconds_per_spp": seconds_per_spp,
-            "seconds_to_target": spp_target * seconds_per_spp}
+            "seconds_to_target": spp_target * seconds_per_spp,
+            # max / min of c over the ladder: 1 when variance falls as 1/spp.
+            "c_spread": max(cs) / min(cs) if min(cs) > 0 else float("inf"),
+            # the converged render's own noise: relMSE of it against the true image
+            "reference_noise": last["c"] / ref_spp}
 
 
-def scene_cell(bench, cfg, preset, kind):
-    folder = os.path.join(bench.work, preset, kind)
+def scene_cell(bench, s, preset, kind, folder, figure):
+    """One Table 2 row: renders, comparisons and the row's figure; s holds its settings."""
     model = os.path.join(ROOT, "models", preset + ".json")
     scene_dir = os.path.join(folder, "scene")
-    cmd = [bench.weft, "scene", kind, "--model", model, "--width", str(cfg["size"]),
-           "--height", str(cfg["size"]), "--spp", "1"]
+    cmd = [bench.weft, "scene", kind, "--model", model, "--width", str(s["size"]),
+           "--height", str(s["size"]), "--spp", "1"]
     if kind != "closeup":
-        cmd += ["--size", str(cfg["patch"])]
+        cmd += ["--size", str(s["patch"])]
 
     def make(d):
         bench.run(cmd + ["--out", os.path.join(d, "s")])
 
     bench.cached(scene_dir, {"cmd": cmd[1:]}, make)
     scene = os.path.join(scene_dir, "s", "scene.json")
-    ref_spp = cfg["ref_spp_hard"] if preset in ("silk", "cotton") else cfg["ref_spp"]
+    ref_spp = s["ref_spp"]
+    seed = SEEDS["reference"]
 
-    fiber_stats, fiber_ref = bench.render(scene, folder, "fiber-ref", "fiber", 1, spp=ref_spp)
-    neural_stats, neural_ref = bench.render(scene, folder, "neural-ref", "neural", 1, spp=ref_spp)
-    fiber_eq = convergence(bench, scene, folder, "fiber", fiber_ref, ref_spp)
-    neural_eq = convergence(bench, scene, folder, "neural", neural_ref, ref_spp)
+    fiber_stats, fiber_ref = bench.render(scene, folder, "fiber-ref", "fiber", seed, spp=ref_spp)
+    neural_stats, neural_ref = bench.render(scene, folder, "neural-ref", "neural", seed,
+                                            spp=ref_spp)
+    fiber_eq = convergence(bench, scene, folder, "fiber", fiber_ref, ref_spp, s["fiber_ladder"])
+    neural_eq = convergence(bench, scene, folder, "neural", neural_ref, ref_spp,
+                            s["neural_ladder"])
     heatmap = os.path.join(folder, "heatmap.png")
     quality = bench.compare(neural_ref, fiber_ref, heatmap)
     # Equal time: fiber mode given the time the neural render needs for relMSE 0.01.
     eq_seconds = max(neural_eq["seconds_to_target"], 0.01)
-    eq_stats, eq_exr = bench.render(scene, folder, "fiber-equal-time", "fiber", 3,
-                                    seconds=eq_seconds)
+    eq_stats, eq_exr = bench.render(scene, folder, "fiber-equal-time", "fiber",
+                                    SEEDS["equal_time"], seconds=eq_seconds)
     eq_quality = bench.compare(eq_exr, fiber_ref)
     neural_eq_stats, neural_eq_exr = bench.render(
-        scene, folder, "neural-equal-time", "neural", 3,
+        scene, folder, "neural-equal-time", "neural", SEEDS["equal_time"],
         spp=max(1, int(round(neural_eq["spp_to_target"]))))
     neural_eq_quality = bench.compare(neural_eq_exr, fiber_ref)
 
-    figure = os.path.join(cfg["figures"], "%s-%s.png" % (preset, kind))
+    os.makedirs(os.path.dirname(figure), exist_ok=True)
     bench.run([bench.weft, "montage", fiber_ref, neural_ref, heatmap, eq_exr, "--out", figure])
+    noise = fiber_eq["reference_noise"] + neural_eq["reference_noise"]
     return {
-        "preset": preset, "scene": kind, "ref_spp": ref_spp, "size": cfg["size"],
+        "preset": preset, "scene": kind, "ref_spp": ref_spp, "size": s["size"],
+        "yarn_sampling": neural_stats.get("yarn_sampling"),
+        "threads_used": fiber_stats.get("threads"),
         "scene_stats": {"fiber": fiber_stats["scene"], "neural": neural_stats["scene"]},
         "ssim": quality["ssim"], "rel_mse": quality["rel_mse"],
         # relMSE of two converged renders = their difference + each one's noise
         # (c / N): what is left after the noise is the neural model's error.
-        "rel_mse_minus_noise": quality["rel_mse"] - (fiber_eq["levels"][-1]["c"] +
-                                                     neural_eq["levels"][-1]["c"]) / ref_spp,
+        "rel_mse_minus_noise": quality["rel_mse"] - noise,
         "fiber": {"seconds_per_spp": fiber_stats["seconds_per_spp"],
+                  "seconds": fiber_stats["seconds"],
                   "build_seconds": fiber_stats["scene"]["build_seconds"],
                   "embree_bytes": fiber_stats["scene"]["geometry_bvh_bytes"],
                   "peak_resident_bytes": fiber_stats["peak_resident_bytes"],
                   "equal_quality": fiber_eq},
         "neural": {"seconds_per_spp": neural_stats["seconds_per_spp"],
+                   "seconds": neural_stats["seconds"],
                    "build_seconds": neural_stats["scene"]["build_seconds"],
                    "embree_bytes": neural_stats["scene"]["geometry_bvh_bytes"],
                    "peak_resident_bytes": neural_stats["peak_resident_bytes"],
@@ -198,7 +281,7 @@ def scene_cell(bench, cfg, preset, kind):
         "memory_ratio": fiber_stats["scene"]["geometry_bvh_bytes"] /
                         neural_stats["scene"]["geometry_bvh_bytes"],
         "rss_ratio": fiber_stats["peak_resident_bytes"] / neural_stats["peak_resident_bytes"],
-        "figure": os.path.relpath(figure, ROOT),
+        "figure": os.path.basename(os.path.dirname(figure)) + "/" + os.path.basename(figure),
     }
 
 
@@ -263,7 +346,8 @@ def ablations(bench, cfg, cells):
                     f.write(text)
             stats, ref = bench.render(scene, vdir, "ref", "neural", 1, spp=cell["ref_spp"],
                                       extra=extra)
-            eq = convergence(bench, scene, vdir, "neural", ref, cell["ref_spp"], extra=extra)
+            eq = convergence(bench, scene, vdir, "neural", ref, cell["ref_spp"], QUICK_LADDER,
+                              extra=extra)
             quality = bench.compare(ref, fiber_ref, os.path.join(vdir, "heatmap.png"))
             results[name] = {"ssim": quality["ssim"], "rel_mse": quality["rel_mse"],
                              "seconds_per_spp": stats["seconds_per_spp"], "equal_quality": eq,
@@ -279,149 +363,519 @@ def ablations(bench, cfg, cells):
     return rows
 
 
+QUICK_LADDER = (16, 4)
+
+
+def git_out(args, cwd):
+    try:
+        r = subprocess.run(["git"] + args, cwd=cwd, capture_output=True, text=True, timeout=60)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    return r.stdout.strip() if r.returncode == 0 else None
+
+
+def provenance(weft):
+    """Which weft made the numbers, and where: recorded in every chunk file."""
+    top = git_out(["rev-parse", "--show-toplevel"], os.path.dirname(os.path.realpath(weft)))
+    commit = dirty = None
+    if top:
+        commit = git_out(["rev-parse", "HEAD"], top)
+        dirty = bool(git_out(["status", "--porcelain", "--", "src", "CMakeLists.txt"], top))
+    digest = hashlib.sha256()
+    with open(weft, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    version = subprocess.run([weft, "--version"], capture_output=True, text=True).stdout.strip()
+    cpu = "unknown CPU"
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return {
+        # HEAD of the git checkout the binary sits in (the binary may be older:
+        # its mtime and hash are beside it); source_dirty: uncommitted changes under src/.
+        "weft_commit": commit, "weft_source_dirty": dirty, "weft_version": version,
+        "weft_binary_sha256": digest.hexdigest()[:16],
+        "weft_binary_mtime": datetime.datetime.fromtimestamp(
+            os.path.getmtime(weft), datetime.timezone.utc).isoformat(timespec="seconds"),
+        "script_commit": git_out(["rev-parse", "HEAD"], ROOT),
+        "script_dirty": bool(git_out(["status", "--porcelain", "--", "bench/table2.py"], ROOT)),
+        "machine": "%s, %d cores, %s" % (os.uname().machine, os.cpu_count(), cpu),
+    }
+
+
+def shown_path(path):
+    rel = os.path.relpath(path)
+    return path if rel.startswith("..") else rel
+
+
+def now():
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+
+
+def load_quick(results):
+    """Cells of table2-quick.json by (preset, scene), for the time estimates; {} if none."""
+    for folder in (results, os.path.join(ROOT, "bench", "results")):
+        path = os.path.join(folder, "table2-quick.json")
+        if os.path.exists(path):
+            with open(path) as f:
+                data = json.load(f)
+            return {(c["preset"], c["scene"]): c for c in data["cells"]}
+    return {}
+
+
+def estimate_minutes(quick, preset, kind, s):
+    """Expected chunk minutes from the quick table's seconds per spp (2 threads, 128 px, 3 x 3)."""
+    q = quick.get((preset, kind))
+    if q is None:
+        return None
+    scale = (s["size"] / q["size"]) ** 2
+    seconds = 0.0
+    for mode, ladder in (("fiber", s["fiber_ladder"]), ("neural", s["neural_ladder"])):
+        spp = s["ref_spp"] + sum(ladder_spp(s["ref_spp"], ladder))
+        seconds += spp * q[mode]["seconds_per_spp"] * scale
+        renders = 2 + len(ladder_spp(s["ref_spp"], ladder))  # reference, ladder, equal time
+        seconds += renders * q[mode]["build_seconds"]
+    # The equal-time pair: neural at its spp to relMSE 0.01, fiber for the same time.
+    c = max(l["c"] for l in q["neural"]["equal_quality"]["levels"])
+    seconds += 2 * c / TARGET_REL_MSE * q["neural"]["seconds_per_spp"] * scale
+    return seconds / 60
+
+
+def chunk_command(preset, kind, extra=""):
+    return "bench/table2.py --chunk %s,%s%s" % (preset, kind, extra)
+
+
 def mb(n):
     return "%.3g" % (n / 1e6)
 
 
-def write_tables(cfg, cells, ablation_rows, out_md):
-    lines = ["# Table 2 on this machine%s" % (" (--quick)" if cfg["quick"] else ""), "",
-             "Written by `bench/table2.py%s` in one run (%s, %d threads). Renders of %d x %d "
-             "pixels; references at %d spp (%d for silk and cotton). relMSE minus noise: "
-             "the relative MSE of the two converged renders less both renders' own noise "
-             "(c / N, from the ladder), an estimate of the model's error alone. Times are render "
-             "seconds at equal quality: the time for each mode to reach relative MSE %.2f "
-             "against its own converged image (estimated from renders at 1/16 and 1/4 of the "
-             "reference spp, see the script). Memory: Embree geometry + BVH (and peak RSS "
-             "of the whole process)." % (cfg["arguments"], cfg["machine"],
-                                         cfg["threads"], cfg["size"], cfg["size"],
-                                         cfg["ref_spp"], cfg["ref_spp_hard"], TARGET_REL_MSE),
-             "",
-             "| material | scene | SSIM neural vs fiber ref | relMSE neural vs ref (minus "
-             "noise) | fiber s (EQ) "
-             "| neural s (EQ) | speed-up | fiber s/spp | neural s/spp | fiber build s "
-             "| fiber MB | neural MB | memory ratio | RSS ratio | equal-time fiber SSIM / relMSE "
-             "| equal-time neural SSIM / relMSE |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+def c_levels(eq):
+    return ", ".join("%d: %.3g" % (l["spp"], l["c"]) for l in eq["levels"])
+
+
+def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
+                 ablation_paths=0, figure_note=""):
+    """table2*.md and .json from result cells (chunk files or one --quick run)."""
+    lines = ["# " + title, "", caption, ""]
+    chunks = [c for c in cells if "settings" in c]
+    if chunks:
+        notes = []
+        for label, key in (("weft commits", lambda c: (c["provenance"]["weft_commit"] or "?")[:10]
+                            + (" (src dirty)" if c["provenance"]["weft_source_dirty"] else "")),
+                           ("weft binaries (sha256)",
+                            lambda c: c["provenance"]["weft_binary_sha256"]),
+                           ("machines", lambda c: c["provenance"]["machine"]),
+                           ("thread counts", lambda c: str(c["threads_used"])),
+                           ("yarn samplings", lambda c: str(c["yarn_sampling"]))):
+            values = {}
+            for c in chunks:
+                values.setdefault(key(c), []).append("%s %s" % (c["preset"], c["scene"]))
+            if len(values) > 1:
+                notes.append("- The chunks come from %d %s: %s. Rows from different ones are "
+                             "not strictly comparable (times above all)." % (
+                                 len(values), label, "; ".join(
+                                     "%s: %s" % (v, ", ".join(rows))
+                                     for v, rows in sorted(values.items()))))
+        days = sorted({c["run"]["finished"][:10] for c in chunks})
+        notes.append("- Chunks made %s%s; settings, commit and date of each in the last table."
+                     % (days[0], "" if len(days) == 1 else " to " + days[-1]))
+        low = ["%s %s (%d)" % (c["preset"], c["scene"], c["ref_spp"]) for c in chunks
+               if c["ref_spp"] < PAPER_REF_SPP[c["preset"]]]
+        if low:
+            notes.append("- References below the paper's sample count (1024; 4096 for silk and "
+                         "cotton): %s." % ", ".join(low))
+        if missing:
+            notes.append("- Missing rows (%d of %d): %s." % (
+                len(missing), len(missing) + len(cells),
+                "; ".join("`%s`" % chunk_command(p, k) for p, k in missing)))
+        lines += notes + [""]
+
+    def targets(c):
+        flags = []
+        if c["scene"] != "closeup" and c["speedup"] < 15:
+            flags.append("speed-up < 15x")
+        if c["memory_ratio"] < 200:
+            flags.append("memory < 200x")
+        if c["ssim"] < 0.97:
+            flags.append("SSIM < 0.97")
+        if c["neural"]["equal_quality"]["c_spread"] > 1.25:
+            flags.append("neural c spread > 1.25")
+        return ", ".join(flags) or "met"
+
+    order = {(p, k): i for i, (p, k) in enumerate((p, k) for p in PRESETS for k in SCENES)}
+    rows = sorted([("cell", c) for c in cells] + [("missing", m) for m in missing],
+                  key=lambda r: order.get((r[1]["preset"], r[1]["scene"]) if r[0] == "cell"
+                                          else r[1], 0))
+    lines += ["## Quality: neural vs the fiber reference, and each reference's own noise", "",
+              "| material | scene | pixels | ref spp | SSIM | relMSE | fiber ref noise c/N "
+              "| neural ref noise c/N | relMSE minus noise | issue 17 targets |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
+    for kind, c in rows:
+        if kind == "missing":
+            lines.append("| %s | %s | *missing: `%s`* | | | | | | | |" % (
+                c[0], c[1], chunk_command(*c)))
+            continue
+        f, n = c["fiber"]["equal_quality"], c["neural"]["equal_quality"]
+        lines.append("| %s | %s | %d | %d | %.3f | %.4f | %.2g | %.2g | %.4f | %s |" % (
+            c["preset"], c["scene"], c["size"], c["ref_spp"], c["ssim"], c["rel_mse"],
+            f["reference_noise"], n["reference_noise"], c["rel_mse_minus_noise"], targets(c)))
+    lines += ["", "## Time at equal quality (relative MSE %.2f) and memory" % TARGET_REL_MSE, "",
+              "| material | scene | fiber s (EQ) | neural s (EQ) | speed-up | fiber s/spp "
+              "| neural s/spp | fiber build s | fiber MB | neural MB | memory ratio | RSS ratio |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for c in cells:
-        f, n, e = c["fiber"], c["neural"], c["equal_time"]
+        f, n = c["fiber"], c["neural"]
         lines.append(
-            "| %s | %s | %.3f | %.4f (%.4f) | %.1f | %.2f | **%.1fx** | %.3f | %.3f | %.1f | %s | %s | "
-            "**%.0fx** | %.1fx | %.3f / %.4f | %.3f / %.4f |" % (
-                c["preset"], c["scene"], c["ssim"], c["rel_mse"], c["rel_mse_minus_noise"],
-                f["equal_quality"]["seconds_to_target"], n["equal_quality"]["seconds_to_target"],
-                c["speedup"], f["seconds_per_spp"], n["seconds_per_spp"], f["build_seconds"],
-                mb(f["embree_bytes"]), mb(n["embree_bytes"]), c["memory_ratio"], c["rss_ratio"],
-                e["fiber_ssim"], e["fiber_rel_mse"], e["neural_ssim"], e["neural_rel_mse"]))
-    lines += ["", "Convergence check (c = relMSE / (1/n + 1/N) at the two ladder levels; equal "
-              "when variance falls as 1/spp):", "",
-              "| material | scene | fiber c (n1, n2) | neural c (n1, n2) | fiber spp to 0.01 "
-              "| neural spp to 0.01 |", "|---|---|---|---|---|---|"]
+            "| %s | %s | %.1f | %.2f | **%.1fx** | %.3f | %.3f | %.1f | %s | %s | **%.0fx** "
+            "| %.1fx |" % (
+                c["preset"], c["scene"], f["equal_quality"]["seconds_to_target"],
+                n["equal_quality"]["seconds_to_target"], c["speedup"], f["seconds_per_spp"],
+                n["seconds_per_spp"], f["build_seconds"], mb(f["embree_bytes"]),
+                mb(n["embree_bytes"]), c["memory_ratio"], c["rss_ratio"]))
+    lines += ["", "## Convergence: c = relMSE / (1/n + 1/N) at each ladder level n (spp: c)",
+              "", "Equal at every level when variance falls as 1/spp; max/min > 1.25 for neural "
+              "mode misses issue 17's target (a heavy tail).", "",
+              "| material | scene | fiber c | fiber max/min | neural c | neural max/min "
+              "| fiber spp to %.2f | neural spp to %.2f |" % (TARGET_REL_MSE, TARGET_REL_MSE),
+              "|---|---|---|---|---|---|---|---|"]
     for c in cells:
         fl, nl = c["fiber"]["equal_quality"], c["neural"]["equal_quality"]
-        lines.append("| %s | %s | %.3g, %.3g | %.3g, %.3g | %.0f | %.0f |" % (
-            c["preset"], c["scene"], fl["levels"][0]["c"], fl["levels"][1]["c"],
-            nl["levels"][0]["c"], nl["levels"][1]["c"], fl["spp_to_target"],
-            nl["spp_to_target"]))
+        lines.append("| %s | %s | %s | %.2f | %s | %s | %.0f | %.0f |" % (
+            c["preset"], c["scene"], c_levels(fl), fl["c_spread"], c_levels(nl),
+            ("%.2f" if nl["c_spread"] <= 1.25 else "**%.2f**") % nl["c_spread"],
+            fl["spp_to_target"], nl["spp_to_target"]))
+    lines += ["", "## Equal time: fiber mode given neural mode's time to relative MSE %.2f"
+              % TARGET_REL_MSE, "",
+              "| material | scene | seconds | fiber spp | fiber SSIM / relMSE | neural spp "
+              "| neural SSIM / relMSE |", "|---|---|---|---|---|---|---|"]
+    for c in cells:
+        e = c["equal_time"]
+        lines.append("| %s | %s | %.1f | %d | %.3f / %.4f | %d | %.3f / %.4f |" % (
+            c["preset"], c["scene"], e["seconds"], e["fiber_spp"], e["fiber_ssim"],
+            e["fiber_rel_mse"], e["neural_spp"], e["neural_ssim"], e["neural_rel_mse"]))
+    if chunks:
+        lines += ["", "## Chunks: settings and provenance", "",
+                  "| material | scene | pixels | patch | ref spp | ladder fiber / neural (spp) "
+                  "| threads | yarn sampling | weft commit | finished (UTC) | minutes "
+                  "(estimate) |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+        for c in chunks:
+            s, p, r = c["settings"], c["provenance"], c["run"]
+            est = r.get("estimated_minutes")
+            lines.append("| %s | %s | %d | %d | %d | %s / %s | %s | %s | %s%s | %s | %.0f (%s) |"
+                         % (c["preset"], c["scene"], s["size"], s["patch"], s["ref_spp"],
+                            ",".join(str(l["spp"]) for l in c["fiber"]["equal_quality"]["levels"]),
+                            ",".join(str(l["spp"]) for l in
+                                     c["neural"]["equal_quality"]["levels"]),
+                            c["threads_used"], c["yarn_sampling"], (p["weft_commit"] or "?")[:10],
+                            " (src dirty)" if p["weft_source_dirty"] else "",
+                            r["finished"].replace("T", " ")[:16], r["wall_seconds"] / 60,
+                            "-" if est is None else "%.0f" % est))
     if ablation_rows:
         lines += ["", "## Ablations (paper Fig. 5), fleece, one gather (%d paths) and one fit "
-                  "configuration for all variants" % cfg["ablation_paths"], "",
+                  "configuration for all variants" % ablation_paths, "",
                   "| scene | variant | SSIM vs fiber ref | relMSE vs fiber ref | s/spp "
                   "| s to relMSE 0.01 | time / full |", "|---|---|---|---|---|---|---|"]
         for r in ablation_rows:
             lines.append("| %s | %s | %.3f | %.4f | %.3f | %.2f | %.2fx |" % (
                 r["scene"], r["variant"], r["ssim"], r["rel_mse"], r["seconds_per_spp"],
                 r["equal_quality"]["seconds_to_target"], r["time_ratio_to_full"]))
-    lines += ["", "Figures (reference | neural | heatmap of 1 - SSIM | equal-time fiber): "
-              "`%s/`." % os.path.relpath(cfg["figures"], ROOT)]
-    if ablation_rows:
-        lines.append("Ablation figures: fiber reference | full | naive | no R lobe | cosine "
-                     "sampling.")
+    if figure_note:
+        lines += ["", figure_note]
     text = "\n".join(lines) + "\n"
     with open(out_md + ".tmp", "w") as f:
         f.write(text)
     os.replace(out_md + ".tmp", out_md)
     out_json = os.path.splitext(out_md)[0] + ".json"
     with open(out_json + ".tmp", "w") as f:
-        json.dump({"config": cfg, "cells": cells, "ablations": ablation_rows}, f, indent=1)
+        json.dump({"cells": cells, "missing": [{"preset": p, "scene": k} for p, k in missing],
+                   "ablations": list(ablation_rows)}, f, indent=1)
     os.replace(out_json + ".tmp", out_json)
     return text
 
 
-def shown_arguments(argv):
-    """The command's flags for the table's caption, without machine-local paths."""
-    shown, skip = [], False
-    for a in argv:
-        if skip:
-            skip = False
-        elif a in ("--weft", "--work"):
-            skip = True
-        elif not a.startswith(("--weft=", "--work=")):
-            shown.append(" " + a)
-    return "".join(shown)
+def chunk_path(folder, preset, kind):
+    return os.path.join(folder, "%s-%s.json" % (preset, kind))
 
 
-def main():
-    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--quick", action="store_true", help="the ~30 minute version")
-    p.add_argument("--weft", default=os.path.join(ROOT, "build", "release", "weft"))
-    p.add_argument("--work", default=None, help="cache folder (default bench/work/table2[-quick])")
-    p.add_argument("--presets", default=",".join(PRESETS))
-    p.add_argument("--scenes", default=",".join(SCENES))
-    p.add_argument("--threads", type=int, default=0)
-    p.add_argument("--no-ablations", action="store_true")
-    p.add_argument("--size", type=int, default=None, help="image side in pixels (overrides)")
-    p.add_argument("--ref-spp", type=int, default=None,
-                   help="spp of the converged renders, every preset (overrides)")
-    p.add_argument("--name", default=None,
-                   help="results name: bench/results/NAME.md, .json and NAME/ (default table2 "
-                        "or table2-quick)")
-    args = p.parse_args()
-    name = args.name or ("table2-quick" if args.quick else "table2")
-    if not name.replace("-", "").replace("_", "").isalnum():
-        sys.exit("table2: --name %r: use letters, digits, '-' and '_'" % name)
-    if args.work is None:
-        args.work = os.path.join(ROOT, "bench", "work", name)
-    if not os.access(args.weft, os.X_OK):
-        sys.exit("table2: %s is not an executable weft (build first, or pass --weft)" % args.weft)
-    presets = [s for s in args.presets.split(",") if s]
-    scenes = [s for s in args.scenes.split(",") if s]
-    for s in presets:
-        if s not in PRESETS:
-            sys.exit("table2: --presets: unknown preset %r (allowed %s)" % (s, ", ".join(PRESETS)))
-    for s in scenes:
-        if s not in SCENES:
-            sys.exit("table2: --scenes: unknown scene %r (allowed %s)" % (s, ", ".join(SCENES)))
-    cfg = {
-        "quick": args.quick, "size": 128 if args.quick else 256, "patch": 3 if args.quick else 4,
-        "ref_spp": 256 if args.quick else 1024, "ref_spp_hard": 256 if args.quick else 4096,
-        "ablation_paths": 2000000 if args.quick else 16000000,
-        "ablation_steps": {"t_net": 20000, "m_net": 40000} if args.quick else {},
-        "ablation_scenes": ["closeup"] if args.quick else SCENES,
-        "threads": args.threads or os.cpu_count(),
-        "machine": "%s, %d cores" % (os.uname().machine, os.cpu_count()),
-        "figures": os.path.join(ROOT, "bench", "results", name),
-        "arguments": shown_arguments(sys.argv[1:]),
-    }
-    if args.size is not None:
-        cfg["size"] = args.size
-    if args.ref_spp is not None:
-        cfg["ref_spp"] = cfg["ref_spp_hard"] = args.ref_spp
-    for key, lo, hi in (("size", 16, 4096), ("ref_spp", 16, 1 << 20)):
-        if not lo <= cfg[key] <= hi:
-            sys.exit("table2: --%s %d is out of range [%d, %d]" % (key.replace("_", "-"), cfg[key],
-                                                                   lo, hi))
+def matching_settings(a, b):
+    keys = ("size", "ref_spp", "patch", "fiber_ladder", "neural_ladder", "seeds")
+    return all(a.get(k) == b.get(k) for k in keys)
+
+
+def run_chunk(bench, args, folder, preset, kind, s, quick):
+    """Renders one (material, scene) chunk and writes its result file; returns its path."""
+    path = chunk_path(folder, preset, kind)
+    settings = dict(s, seeds={"reference": SEEDS["reference"],
+                              "ladder": SEEDS["ladder"], "equal_time": SEEDS["equal_time"]},
+                    threads=args.threads)
+    if os.path.exists(path) and not args.redo:
+        with open(path) as f:
+            old = json.load(f)
+        if matching_settings(old.get("settings", {}), settings):
+            bench.say("%s %s: %s already holds these settings (--redo to run again)" % (
+                preset, kind, shown_path(path)))
+            return path
+    estimate = estimate_minutes(quick, preset, kind, s)
+    bench.say("%s %s: %d x %d, %d spp references, ladders %s / %s%s" % (
+        preset, kind, s["size"], s["size"], s["ref_spp"],
+        ladder_spp(s["ref_spp"], s["fiber_ladder"]), ladder_spp(s["ref_spp"], s["neural_ladder"]),
+        "" if estimate is None else ", about %.0f minutes on 2 cores" % estimate))
+    started, t0 = now(), time.time()
+    figure = os.path.join(folder, "%s-%s.png" % (preset, kind))
+    cell = scene_cell(bench, s, preset, kind, os.path.join(bench.work, preset, kind), figure)
+    cell["settings"] = settings
+    cell["provenance"] = provenance(bench.weft)
+    cell["run"] = {"started": started, "finished": now(), "wall_seconds": time.time() - t0,
+                   "estimated_minutes": estimate, "command": chunk_command(
+                       preset, kind, shown_arguments(sys.argv[1:], drop=("--chunk", "--presets", "--scenes")))}
+    cell["format"] = CHUNK_FORMAT
+    os.makedirs(folder, exist_ok=True)
+    with open(path + ".tmp", "w") as f:
+        json.dump(cell, f, indent=1)
+    os.replace(path + ".tmp", path)
+    bench.say("%s %s: %.1f minutes, wrote %s" % (preset, kind, cell["run"]["wall_seconds"] / 60,
+                                                 shown_path(path)))
+    return path
+
+
+def assemble(results, name, weft):
+    """table2.md, .json and the per-scene figures from the chunk files that exist."""
+    folder = os.path.join(results, name)
+    cells = []
+    for path in sorted(glob.glob(os.path.join(folder, "*-*.json"))):
+        with open(path) as f:
+            cell = json.load(f)
+        if cell.get("format") != CHUNK_FORMAT or (cell.get("preset"), cell.get("scene")) != tuple(
+                os.path.basename(path)[:-5].split("-", 1)):
+            print("table2: skipping %s (not a chunk file of format %d)" % (path, CHUNK_FORMAT),
+                  file=sys.stderr)
+            continue
+        cells.append(cell)
+    order = [(p, k) for p in PRESETS for k in SCENES]
+    cells.sort(key=lambda c: order.index((c["preset"], c["scene"])))
+    have = {(c["preset"], c["scene"]) for c in cells}
+    missing = [pk for pk in order if pk not in have]
+    figures = []
+    can_montage = os.access(weft, os.X_OK)
+    for kind in SCENES:
+        pngs = [os.path.join(results, c["figure"]) for c in cells if c["scene"] == kind]
+        pngs = [p for p in pngs if os.path.exists(p)]
+        out = os.path.join(folder, "fig-%s.png" % kind)
+        if pngs and can_montage:
+            r = subprocess.run([weft, "montage"] + pngs + ["--columns", "1", "--out", out],
+                               capture_output=True, text=True)
+            if r.returncode != 0:
+                sys.exit("table2: weft montage failed: %s" % r.stderr)
+            figures.append("`%s/fig-%s.png` (%s)" % (name, kind, ", ".join(
+                c["preset"] for c in cells if c["scene"] == kind and
+                os.path.exists(os.path.join(results, c["figure"])))))
+    note = ("Figures, one row per material: reference | neural | heatmap of 1 - SSIM | "
+            "equal-time fiber. Per scene: %s. Per row: `%s/<material>-<scene>.png`." % (
+                "; ".join(figures) or "none yet" + ("" if can_montage else
+                                                    " (no weft binary for `weft montage`)"),
+                name))
+    caption = (
+        "Assembled by `bench/table2.py --assemble` from the chunk files in `%s/` (one per "
+        "material and scene, made by `bench/table2.py --chunk MATERIAL,SCENE`). References "
+        "at the paper's sample counts (1024 spp, 4096 for silk and cotton), fiber and neural "
+        "mode each with its own converged render. c = relMSE x spp is measured at each "
+        "ladder level (the render at n spp against the converged render at N spp: c = relMSE "
+        "/ (1/n + 1/N)); a reference's own noise is c / N (c of the top level), and relMSE "
+        "minus noise (neural vs fiber reference less both references' noise) estimates the "
+        "model's error alone. Times are render seconds for each mode to reach relative MSE "
+        "%.2f against its own converged image; memory is Embree geometry + BVH (and peak RSS "
+        "of the whole process). Issue 17's targets: speed-up >= 15x on weave and knit, "
+        "memory ratio >= 200x, SSIM >= 0.97, neural c within 25 %% across the ladder." % (
+            name, TARGET_REL_MSE))
+    text = write_tables("Table 2 on this machine", caption, cells,
+                        os.path.join(results, name + ".md"), missing=missing, figure_note=note)
+    return text, len(cells), missing
+
+
+def run_quick(bench, args, results, name, presets, scenes):
+    """The one-run quick table (unchanged method), with the Fig. 5 ablations."""
+    s = {"size": args.size or 128, "ref_spp": args.ref_spp or 256, "patch": 3,
+         "fiber_ladder": list(QUICK_LADDER), "neural_ladder": list(QUICK_LADDER)}
+    cfg = {"figures": os.path.join(results, name), "ablation_paths": 2000000,
+           "ablation_steps": {"t_net": 20000, "m_net": 40000}, "ablation_scenes": ["closeup"]}
     os.makedirs(cfg["figures"], exist_ok=True)
-    bench = Bench(args)
+    caption = (
+        "Written by `bench/table2.py%s` in one run (%s, %d threads). Renders of %d x %d pixels; "
+        "references at %d spp, every material; ladder at 1/16 and 1/4 of it. c = relMSE / "
+        "(1/n + 1/N) per ladder level; a reference's own noise is c / N; relMSE minus noise: "
+        "the relative MSE of the two converged renders less both references' noise, an "
+        "estimate of the model's error alone. Times are render seconds for each mode to reach "
+        "relative MSE %.2f against its own converged image. Memory: Embree geometry + BVH "
+        "(and peak RSS of the whole process)." % (
+            shown_arguments(sys.argv[1:]), "%s, %d cores" % (os.uname().machine, os.cpu_count()),
+            args.threads or os.cpu_count(), s["size"], s["size"], s["ref_spp"], TARGET_REL_MSE))
+    note = ("Figures (reference | neural | heatmap of 1 - SSIM | equal-time fiber): `%s/`." % name)
+    out_md = os.path.join(results, name + ".md")
     cells = []
     for preset in presets:
         for kind in scenes:
             bench.say("%s %s" % (preset, kind))
-            cells.append(scene_cell(bench, cfg, preset, kind))
-            write_tables(cfg, cells, [], os.path.join(ROOT, "bench", "results", name + ".md"))
+            cells.append(scene_cell(bench, s, preset, kind, os.path.join(bench.work, preset, kind),
+                                    os.path.join(cfg["figures"], "%s-%s.png" % (preset, kind))))
+            write_tables("Table 2 on this machine (--quick)", caption, cells, out_md,
+                         figure_note=note)
     rows = []
     if not args.no_ablations and "fleece" in presets:
         rows = ablations(bench, cfg, cells)
-    text = write_tables(cfg, cells, rows, os.path.join(ROOT, "bench", "results", name + ".md"))
+        note += ("\nAblation figures: fiber reference | full | naive | no R lobe | cosine "
+                 "sampling.")
+    return write_tables("Table 2 on this machine (--quick)", caption, cells, out_md,
+                        ablation_rows=rows, ablation_paths=cfg["ablation_paths"],
+                        figure_note=note)
+
+
+def shown_arguments(argv, drop=(), drop_flags=()):
+    """The command's flags for captions, without machine-local paths (and without `drop`
+    flags with a value and `drop_flags` flags without one)."""
+    shown, skip = [], False
+    local = ("--weft", "--work", "--results") + tuple(drop)
+    for a in argv:
+        if skip:
+            skip = False
+        elif a in local:
+            skip = True
+        elif a in drop_flags:
+            pass
+        elif not a.startswith(tuple(x + "=" for x in local)):
+            shown.append(" " + a)
+    return "".join(shown)
+
+
+def parse_ladder(text, flag):
+    try:
+        divisors = [int(x) for x in text.split(",") if x]
+    except ValueError:
+        divisors = []
+    if not divisors or any(d < 2 or d > 4096 for d in divisors):
+        sys.exit("table2: %s %r: give divisors of the reference spp in [2, 4096], e.g. 64,16,4"
+                 % (flag, text))
+    return divisors
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    what = p.add_mutually_exclusive_group()
+    what.add_argument("--chunk", default=None, metavar="MATERIAL,SCENE",
+                      help="run one chunk, e.g. gabardine,knit, then assemble")
+    what.add_argument("--assemble", action="store_true",
+                      help="only assemble table2.md, .json and figures from the chunk files")
+    what.add_argument("--plan", action="store_true",
+                      help="print each chunk's command line, settings and estimated minutes")
+    what.add_argument("--quick", action="store_true", help="the one-run quick table (42 min)")
+    p.add_argument("--weft", default=os.path.join(ROOT, "build", "release", "weft"))
+    p.add_argument("--work", default=None, help="cache folder (default bench/work/NAME)")
+    p.add_argument("--results", default=os.path.join(ROOT, "bench", "results"),
+                   help="folder of NAME.md, NAME.json and NAME/ (default bench/results)")
+    p.add_argument("--name", default=None,
+                   help="results name: RESULTS/NAME.md, .json and NAME/ (default table2 "
+                        "or table2-quick)")
+    p.add_argument("--presets", default=",".join(PRESETS), help="without --chunk: materials")
+    p.add_argument("--scenes", default=",".join(SCENES), help="without --chunk: scenes")
+    p.add_argument("--threads", type=int, default=0, help="render threads (0: all cores)")
+    p.add_argument("--redo", action="store_true",
+                   help="run a chunk even if its result file records the same settings")
+    p.add_argument("--no-ablations", action="store_true", help="--quick without Fig. 5")
+    p.add_argument("--size", type=int, default=None,
+                   help="image side in pixels (default: per chunk, see --plan; 128 with --quick)")
+    p.add_argument("--ref-spp", type=int, default=None,
+                   help="spp of the converged renders (default 1024, 4096 for silk and cotton; "
+                        "256 with --quick)")
+    p.add_argument("--patch", type=int, default=None,
+                   help="weave and knit: N x N yarns (default %d)" % DEFAULT_PATCH)
+    p.add_argument("--fiber-ladder", default=None, metavar="D1,D2,...",
+                   help="fiber ladder levels as divisors of the reference spp (default "
+                        "64,16,4; 64,16 for cotton knit)")
+    p.add_argument("--neural-ladder", default=None, metavar="D1,D2,...",
+                   help="neural ladder levels as divisors of the reference spp (default 64,16,4)")
+    args = p.parse_args()
+    name = args.name or ("table2-quick" if args.quick else "table2")
+    if not name.replace("-", "").replace("_", "").isalnum():
+        sys.exit("table2: --name %r: use letters, digits, '-' and '_'" % name)
+    results = os.path.abspath(args.results)
+    if args.work is None:
+        args.work = os.path.join(ROOT, "bench", "work", name)
+    for key, lo, hi in (("size", 16, 4096), ("ref_spp", 16, 1 << 20), ("patch", 1, 100)):
+        value = getattr(args, key)
+        if value is not None and not lo <= value <= hi:
+            sys.exit("table2: --%s %d is out of range [%d, %d]" % (key.replace("_", "-"), value,
+                                                                   lo, hi))
+    if args.chunk:
+        parts = args.chunk.split(",")
+        if len(parts) != 2 or parts[0] not in PRESETS or parts[1] not in SCENES:
+            sys.exit("table2: --chunk %r: give MATERIAL,SCENE with MATERIAL in %s and SCENE in %s"
+                     % (args.chunk, ", ".join(PRESETS), ", ".join(SCENES)))
+        chunks = [tuple(parts)]
+    else:
+        presets = [s for s in args.presets.split(",") if s]
+        scenes = [s for s in args.scenes.split(",") if s]
+        for s in presets:
+            if s not in PRESETS:
+                sys.exit("table2: --presets: unknown preset %r (allowed %s)" % (
+                    s, ", ".join(PRESETS)))
+        for s in scenes:
+            if s not in SCENES:
+                sys.exit("table2: --scenes: unknown scene %r (allowed %s)" % (
+                    s, ", ".join(SCENES)))
+        chunks = [(pr, k) for pr in presets for k in scenes]
+
+    def settings(preset, kind):
+        s = chunk_defaults(preset, kind)
+        for key in ("size", "ref_spp", "patch"):
+            if getattr(args, key) is not None:
+                s[key] = getattr(args, key)
+        if args.fiber_ladder:
+            s["fiber_ladder"] = parse_ladder(args.fiber_ladder, "--fiber-ladder")
+        if args.neural_ladder:
+            s["neural_ladder"] = parse_ladder(args.neural_ladder, "--neural-ladder")
+        return s
+
+    if args.plan:
+        quick = load_quick(results)
+        total = 0.0
+        for preset, kind in chunks:
+            s = settings(preset, kind)
+            est = estimate_minutes(quick, preset, kind, s)
+            total += est or 0.0
+            print("%-45s # %d px, %d spp, ladders %s / %s: %s" % (
+                chunk_command(preset, kind, shown_arguments(
+                    sys.argv[1:], drop=("--presets", "--scenes"), drop_flags=("--plan",))),
+                s["size"], s["ref_spp"], ",".join(map(str, s["fiber_ladder"])),
+                ",".join(map(str, s["neural_ladder"])),
+                "no estimate (no table2-quick.json row)" if est is None else
+                "about %.0f min on 2 cores%s" % (est, "" if est <= BUDGET_MINUTES else
+                                                 " (over the %d minute budget)" % BUDGET_MINUTES)))
+        print("# total about %.1f hours" % (total / 60))
+        return
+    if args.assemble:
+        text, count, missing = assemble(results, name, os.path.abspath(args.weft))
+        print(text)
+        print("table2: %d chunk(s), %d missing; wrote %s" % (
+            count, len(missing), os.path.join(results, name + ".md")), file=sys.stderr)
+        return
+    if not os.access(args.weft, os.X_OK):
+        sys.exit("table2: %s is not an executable weft (build first, or pass --weft)" % args.weft)
+    bench = Bench(args)
+    if args.quick:
+        print(run_quick(bench, args, results, name, sorted({c[0] for c in chunks},
+                                                           key=PRESETS.index),
+                        sorted({c[1] for c in chunks}, key=SCENES.index)))
+        return
+    quick = load_quick(results)
+    for preset, kind in chunks:
+        run_chunk(bench, args, os.path.join(results, name), preset, kind,
+                  settings(preset, kind), quick)
+        text, count, missing = assemble(results, name, bench.weft)
+        bench.say("assembled %s: %d chunk(s), %d missing" % (name + ".md", count, len(missing)))
     print(text)
 
 

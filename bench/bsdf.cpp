@@ -56,6 +56,11 @@ const YarnBsdf& rawBsdf() {
     static const YarnBsdf b(model(), gModelPath, YarnBsdfOptions{false});
     return b;
 }
+// With the paper's sampling (eq. 9-11) instead of the tabulated default.
+const YarnBsdf& fittedBsdf() {
+    static const YarnBsdf b(model(), gModelPath, YarnBsdfOptions{true, YarnSampling::Fitted});
+    return b;
+}
 
 constexpr size_t kPairs = 4096;
 
@@ -182,8 +187,9 @@ void YarnSample(benchmark::State& state) {
 // eval, evalPdf or sample on a prepared incident (argument 0, 1, 2), with the
 // energy guard; sample draws its rejection steps from one running generator,
 // as a path's own.
+// Argument 0: eval, 1: evalPdf, 2: sample; argument 1: tabulated (1) or fitted (0) sampling.
 void YarnPrepared(benchmark::State& state) {
-    const YarnBsdf& bsdf = guardedBsdf();
+    const YarnBsdf& bsdf = state.range(1) != 0 ? guardedBsdf() : fittedBsdf();
     const std::vector<BsdfIncident>& in = preparedIncidents(bsdf);
     const Pairs& p = pairs();
     const int64_t what = state.range(0);
@@ -269,8 +275,11 @@ void MlpForwardBatchOfOne(benchmark::State& state) {
     });
 }
 
+// Argument 2: energy guard and sampling table (the default), 1: the guard
+// alone (fitted sampling), 0: neither.
 void YarnConstruct(benchmark::State& state) {
-    const YarnBsdfOptions options{state.range(0) != 0};
+    const YarnBsdfOptions options{
+        state.range(0) != 0, state.range(0) == 2 ? YarnSampling::Tabulated : YarnSampling::Fitted};
     for (auto _ : state) benchmark::DoNotOptimize(YarnBsdf(model(), gModelPath, options));
 }
 
@@ -317,10 +326,13 @@ const char* describe(const std::string& name) {
         {"YarnPdf", "YarnBsdf::pdf: T network, eq. 10 lobes"},
         {"YarnSample/1", "YarnBsdf::sample: lobe choice, direction, eval and pdf, energy guard"},
         {"YarnSample/0", "YarnBsdf::sample without the energy guard"},
-        {"YarnPrepared/0", "YarnBsdf::eval on a prepared incident (per-wo cost; target <= 1.2)"},
-        {"YarnPrepared/1",
+        {"YarnPrepared/0/1", "YarnBsdf::eval on a prepared incident (per-wo cost; target <= 1.2)"},
+        {"YarnPrepared/1/1",
          "YarnBsdf::evalPdf on a prepared incident (NEE's eval + pdf; target <= 1.5)"},
-        {"YarnPrepared/2", "YarnBsdf::sample on a prepared incident (target <= 2)"},
+        {"YarnPrepared/2/1", "YarnBsdf::sample on a prepared incident (target <= 2)"},
+        {"YarnPrepared/0/0", "the same eval, fitted sampling (paper eq. 9-11)"},
+        {"YarnPrepared/1/0", "the same evalPdf, fitted sampling"},
+        {"YarnPrepared/2/0", "the same sample, fitted sampling"},
         {"YarnMNetwork", "M network alone (evalM: Vec3 in, Rgb out, SIMD kernel)"},
         {"MNetwork/1", "M network alone, FixedMlp::forward on floats (SIMD kernel)"},
         {"MNetwork/0", "M network alone, FixedMlp::forwardScalar on floats (scalar reference)"},
@@ -329,8 +341,9 @@ const char* describe(const std::string& name) {
         {"YarnTNetwork", "T network alone (transmission: Vec3 in, SIMD kernel)"},
         {"YarnRLobe", "R lobe alone (eq. 8 with masking)"},
         {"MlpForwardBatchOfOne", "M network through Mlp<float>::forward, batch of 1"},
-        {"YarnConstruct/1", "YarnBsdf construction with the energy guard table"},
-        {"YarnConstruct/0", "YarnBsdf construction without the guard"},
+        {"YarnConstruct/2", "YarnBsdf construction: energy guard and sampling table (default)"},
+        {"YarnConstruct/1", "YarnBsdf construction with the energy guard table, fitted sampling"},
+        {"YarnConstruct/0", "YarnBsdf construction without the guard, fitted sampling"},
     };
     for (const Entry& e : entries)
         if (name.rfind(e.name, 0) == 0) return e.what;
@@ -353,14 +366,14 @@ BENCHMARK(FiberSample);
 BENCHMARK(YarnEval)->Arg(1)->Arg(0);
 BENCHMARK(YarnPdf);
 BENCHMARK(YarnSample)->Arg(1)->Arg(0);
-BENCHMARK(YarnPrepared)->Arg(0)->Arg(1)->Arg(2);
+BENCHMARK(YarnPrepared)->ArgsProduct({{0, 1, 2}, {1, 0}});
 BENCHMARK(YarnMNetwork);
 BENCHMARK(MNetwork)->Arg(1)->Arg(0);
 BENCHMARK(YarnTNetwork);
 BENCHMARK(TNetwork)->Arg(1)->Arg(0);
 BENCHMARK(YarnRLobe);
 BENCHMARK(MlpForwardBatchOfOne);
-BENCHMARK(YarnConstruct)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+BENCHMARK(YarnConstruct)->Arg(2)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
 int main(int argc, char** argv) {
     std::string md = "bench/results/bsdf.md";
@@ -387,8 +400,8 @@ int main(int argc, char** argv) {
     out << "# Yarn BSDF cost (bench/bsdf)\n\n"
         << "One machine, one thread; CPU time per call over 4096 fixed random (wi, wo) pairs (wi "
            "in the upper hemisphere), median of the repetitions. Model: `"
-        << std::filesystem::path(gModelPath).filename().string()
-        << "` (" << model().mNet.widthsText() << " M network, " << model().tNet.widthsText()
+        << std::filesystem::path(gModelPath).filename().string() << "` ("
+        << model().mNet.widthsText() << " M network, " << model().tNet.widthsText()
         << " T network). Ratios are to FiberBcsdf::eval in the same run. Network kernel: "
         << mNet().target() << " (Highway dynamic dispatch; this CPU runs " << kernelNames()
         << ").\n\n"
@@ -409,12 +422,15 @@ int main(int argc, char** argv) {
             if (row.name == name && fiber > 0) return row.median() / fiber;
         return 0.0;
     };
-    if (ratio("YarnPrepared/0") > 0) {
-        char line[256];
+    if (ratio("YarnPrepared/0/1") > 0) {
+        char line[384];
         std::snprintf(line, sizeof line,
-                      "\nPer-wo cost on a prepared incident / FiberBcsdf::eval: eval %.2f "
-                      "(target <= 1.2), evalPdf %.2f (<= 1.5), sample %.2f (<= 2).\n",
-                      ratio("YarnPrepared/0"), ratio("YarnPrepared/1"), ratio("YarnPrepared/2"));
+                      "\nPer-wo cost on a prepared incident / FiberBcsdf::eval, tabulated "
+                      "sampling: eval %.2f (target <= 1.2), evalPdf %.2f (<= 1.5), sample %.2f "
+                      "(<= 2); fitted sampling: %.2f, %.2f, %.2f.\n",
+                      ratio("YarnPrepared/0/1"), ratio("YarnPrepared/1/1"),
+                      ratio("YarnPrepared/2/1"), ratio("YarnPrepared/0/0"),
+                      ratio("YarnPrepared/1/0"), ratio("YarnPrepared/2/0"));
         out << line;
     }
     if (!md.empty()) {

@@ -167,9 +167,11 @@ TEST_F(RenderTest, NextEventEstimationAgreesWithBsdfSamplingOnly) {
                 << renderModeName(mode) << " ray " << r << ": NEE " << a.mean << " +- "
                 << a.standardError << ", BSDF only " << b.mean << " +- " << b.standardError;
             // NEE + MIS should not be noisier than BSDF sampling alone here,
-            // unless both are already below 0.2 % of the mean (where the yarn's
-            // sampler alone is that good, e.g. on paths that cross the ply by T).
-            EXPECT_LT(a.standardError, std::max(1.5 * b.standardError, 2e-3 * a.mean))
+            // unless its own per-sample relative deviation is already below
+            // 0.3 (where the yarn's sampler alone does even better, e.g. on
+            // paths that cross the ply by T).
+            EXPECT_LT(a.standardError,
+                      std::max(1.5 * b.standardError, 0.3 * a.mean / std::sqrt(samples)))
                 << renderModeName(mode) << " ray " << r;
             EXPECT_GT(a.mean, 0.0);
         }

@@ -141,6 +141,8 @@ class Bsdf {
     }
     // This BSDF with wi fixed.
     BsdfSlice slice(const Vec3& wi) const;
+    // Bytes the BSDF holds (its parameters and tables), for memory reports.
+    virtual size_t memoryBytes() const = 0;
 
   protected:
     Bsdf() = default;

@@ -36,6 +36,8 @@ class ToyBsdf final : public Bsdf {
         return BsdfSample::fromEval(wo, evalPdf(in, wo), 0);
     }
 
+    size_t memoryBytes() const override { return sizeof(*this); }
+
     mutable int prepares = 0;
 
   private:

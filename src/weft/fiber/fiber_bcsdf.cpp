@@ -32,6 +32,11 @@ FiberBcsdf::Angles FiberBcsdf::anglesOf(const Vec3& w) {
     return a;
 }
 
+size_t FiberBcsdf::memoryBytes() const {
+    return sizeof(*this) - 2 * sizeof(LongitudinalGaussian) + gR_.memoryBytes() +
+           gTT_.memoryBytes();
+}
+
 Rgb FiberBcsdf::fresnel(double cosTheta) const {
     const double m = 1.0 - std::clamp(cosTheta, 0.0, 1.0);
     const double k = (m * m) * (m * m) * m;

@@ -45,6 +45,8 @@ class FiberBcsdf final : public Bsdf {
     double pdf(const BsdfIncident& in, const Vec3& wo) const override;
     BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const override;
 
+    size_t memoryBytes() const override;
+
     // Analytic directional albedo F(theta_i) + (1 - F(theta_i)) C_TT.
     Rgb albedo(const Vec3& wi) const;
     // Schlick term F(theta) per channel (paper eq. 4).

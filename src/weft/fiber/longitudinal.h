@@ -22,6 +22,7 @@
 // rate around 0.5 or more for every mu and beta in (0, pi/2].
 #pragma once
 
+#include <cstddef>
 #include <vector>
 
 #include "weft/core/rng.h"
@@ -34,6 +35,10 @@ public:
     explicit LongitudinalGaussian(double beta);
 
     double beta() const { return beta_; }
+    // Bytes of the object and its tables.
+    size_t memoryBytes() const {
+        return sizeof(*this) + (logZ_.size() + dLogZ_.size() + mode_.size()) * sizeof(double);
+    }
 
     // Z(mu), the normaliser; symmetric in mu.
     double normalization(double mu) const;

@@ -168,6 +168,7 @@ nlohmann::json toJson(const RenderStats& s) {
           {"segments", s.scene.segments},
           {"geometry_bvh_bytes", s.scene.embreeBytes},
           {"geometry_bvh_peak_bytes", s.scene.embreePeakBytes},
+          {"material_bytes", s.scene.materialBytes},
           {"build_seconds", s.scene.seconds}}},
     };
 }

@@ -10,9 +10,9 @@
 #include "weft/core/progress.h"
 #include "weft/core/rng.h"
 #include "weft/fiber/fiber_bcsdf.h"
-#include "weft/yarn/yarn_model.h"
 #include "weft/render/curves.h"
 #include "weft/render/yarn_geometry.h"
+#include "weft/yarn/yarn_model.h"
 
 namespace weft::render {
 
@@ -140,6 +140,8 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
     stats_.segments = accel_->segmentCount();
     stats_.embreeBytes = accel_->embreeBytes();
     stats_.embreePeakBytes = accel_->embreePeakBytes();
+    for (const auto& bsdf : bsdfs_)
+        stats_.materialBytes += static_cast<int64_t>(bsdf->memoryBytes());
     stats_.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }

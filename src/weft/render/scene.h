@@ -47,6 +47,7 @@ struct SceneBuildStats {
     int64_t segments = 0;         // round linear curve segments handed to Embree
     int64_t embreeBytes = 0;      // geometry + BVH after the build (memory monitor)
     int64_t embreePeakBytes = 0;  // largest Embree allocation during the build
+    int64_t materialBytes = 0;    // the materials' BSDFs (yarn: networks and tables)
     double seconds = 0;           // building time, model loading included
 };
 

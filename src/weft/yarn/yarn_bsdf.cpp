@@ -81,6 +81,14 @@ const char* yarnSamplingName(YarnSampling sampling) {
     return "fitted";
 }
 
+size_t YarnBsdf::memoryBytes() const {
+    auto bytes = [](const auto& v) { return v.size() * sizeof(v[0]); };
+    return sizeof(*this) - sizeof(LongitudinalGaussian) + peakLongitudinal_.memoryBytes() +
+           rLobe_.fiber().memoryBytes() - sizeof(FiberBcsdf) + bytes(guardReflectance_) +
+           bytes(guardEnergyM_) + bytes(guardCell_) + table_.bytes() + bytes(peakMasking_) +
+           bytes(tableEnergyM_) + bytes(tableEnergyR_);
+}
+
 YarnBsdf YarnBsdf::load(const std::string& path, const YarnBsdfOptions& options) {
     return YarnBsdf(loadYarnModel(path), path, options);
 }
@@ -156,7 +164,8 @@ void YarnBsdf::buildEnergyGuard() {
         energy = energy * calibration_.scales(wi).m;
         guardEnergyM_[node] = energy;
         const double pT = transmissionUpper(wi);
-        // The R table is smooth in fiber angles without the calibration, which is exact at eval time.
+        // The R table is smooth in fiber angles without the calibration, which is exact at eval
+        // time.
         const Rgb kept = keptReflectance(wi) * calibration_.scales(wi).r;
         const Rgb af = rLobe_.fiber().albedo(frame.toLocal(wi));
         for (int c = 0; c < 3; ++c)
@@ -272,18 +281,16 @@ YarnBsdf::Incident YarnBsdf::incident(const Vec3& wi, double pT) const {
     in.thetaI = std::atan2(local.x, cosThetaI);
     double peak = 0;
     if (hasReflection_)
-        peak = 0.5 * (1.0 - pT) *
-               luminance(rLobe_.fiber().fresnel(cosThetaI) * in.rScale) *
+        peak = 0.5 * (1.0 - pT) * luminance(rLobe_.fiber().fresnel(cosThetaI) * in.rScale) *
                table_.blend(in.table, peakMasking_);
     // The table's M term, and its R term (the fiber's TT lobe inside S_R) per unit 1 - P(T).
-    const double rest = table_.blend(in.table, tableEnergyM_) +
-                        (1.0 - pT) * table_.blend(in.table, tableEnergyR_);
+    const double rest =
+        table_.blend(in.table, tableEnergyM_) + (1.0 - pT) * table_.blend(in.table, tableEnergyR_);
     const double continuous = peak + rest;
     // q_R keeps a share wherever S_R may be positive, the table wherever S_M may be.
-    in.pickR = hasReflection_
-                   ? std::clamp(continuous > 0 ? peak / continuous : 0.5, kMinimumShare,
-                                1.0 - kMinimumShare)
-                   : 0.0;
+    in.pickR = hasReflection_ ? std::clamp(continuous > 0 ? peak / continuous : 0.5, kMinimumShare,
+                                           1.0 - kMinimumShare)
+                              : 0.0;
     in.pickT = pT > 0 ? std::min(pT / (pT + continuous), 1.0 - kMinimumShare) : 0.0;
     return in;
 }
@@ -296,8 +303,8 @@ Rgb YarnBsdf::reflectionPeak(const Vec3& wi, const Vec3& wo, const Incident& in)
     const Vec3 li = frame.toLocal(wi), lo = frame.toLocal(wo);
     const double cosThetaI = std::sqrt(li.y * li.y + li.z * li.z);
     const double cosThetaO = std::sqrt(lo.y * lo.y + lo.z * lo.z);
-    const double g = peakLongitudinal_.eval(std::atan2(lo.x, cosThetaO),
-                                            -std::atan2(li.x, cosThetaI));
+    const double g =
+        peakLongitudinal_.eval(std::atan2(lo.x, cosThetaO), -std::atan2(li.x, cosThetaI));
     return rLobe_.fiber().fresnel(cosThetaI) * in.rScale *
            ((1.0 - in.pT) * g * cosThetaO / kTwoPi * rLobe_.masking(wi, wo));
 }
@@ -305,24 +312,25 @@ Rgb YarnBsdf::reflectionPeak(const Vec3& wi, const Vec3& wo, const Incident& in)
 void YarnBsdf::buildSamplingTable() {
     // The table follows the luminance of everything but the R peak, in two
     // terms: S_M and the rest of S_R.
-    table_ = SamplingTable(lobes_.frame(), 2, [this](const Vec3& wi, const std::vector<Vec3>& wo,
-                                                     std::vector<double>& values) {
-        const Incident in = incident(wi, transmissionUpper(wi));
-        for (size_t k = 0; k < wo.size(); ++k) {
-            const Components c = componentsUpper(wi, wo[k], in);
-            values[2 * k] = std::max(0.0, luminance(c.m));
-            values[2 * k + 1] =
-                hasReflection_ ? std::max(0.0, luminance(c.r - reflectionPeak(wi, wo[k], in)))
-                               : 0.0;
-        }
-    });
+    table_ = SamplingTable(
+        lobes_.frame(), 2,
+        [this](const Vec3& wi, const std::vector<Vec3>& wo, std::vector<double>& values) {
+            const Incident in = incident(wi, transmissionUpper(wi));
+            for (size_t k = 0; k < wo.size(); ++k) {
+                const Components c = componentsUpper(wi, wo[k], in);
+                values[2 * k] = std::max(0.0, luminance(c.m));
+                values[2 * k + 1] =
+                    hasReflection_ ? std::max(0.0, luminance(c.r - reflectionPeak(wi, wo[k], in)))
+                                   : 0.0;
+            }
+        });
     // Their energies per node, the R term's per unit 1 - P(T), which can
     // change fast with wi (P(T) does near grazing incidence).
     tableEnergyM_.assign(SamplingTable::kNodes, 0.0);
     tableEnergyR_.assign(SamplingTable::kNodes, 0.0);
     for (int node = 0; node < SamplingTable::kNodes; ++node) {
-        const Vec3 wi = SamplingTable::nodeDirection(lobes_.frame(), node / SamplingTable::kIncidentPhi,
-                                                     node % SamplingTable::kIncidentPhi);
+        const Vec3 wi = SamplingTable::nodeDirection(
+            lobes_.frame(), node / SamplingTable::kIncidentPhi, node % SamplingTable::kIncidentPhi);
         const double kept = 1.0 - transmissionUpper(wi);
         tableEnergyM_[node] = table_.nodeEnergy(node, 0);
         tableEnergyR_[node] = kept > 0 ? table_.nodeEnergy(node, 1) / kept : 0.0;

@@ -156,6 +156,9 @@ class YarnBsdf final : public Bsdf {
     double pdf(const Vec3& wi, const Vec3& wo) const override;
     BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const override;
 
+    // The networks, the energy guard's and the sampling tables.
+    size_t memoryBytes() const override;
+
     // P(T | wi) from the T network (0 for a naive model).
     double transmission(const Vec3& wi) const;
 

@@ -102,5 +102,18 @@ TEST(TabulatedSampling, ShippedModelsWeightsStayNearTheAlbedo) {
     }
 }
 
+// What the renderer reports as a material's memory (Table 2's neural memory):
+// the sampling table under 1 MB, the whole BSDF (networks, energy guard and
+// the longitudinal normalisers' tables as well) under 1.2 MB.
+TEST(TabulatedSampling, SamplingTableIsUnderOneMegabyte) {
+    const YarnBsdf& bsdf = shipped("silk");
+    EXPECT_GT(bsdf.memoryBytes(), bsdf.samplingTable().bytes());
+    EXPECT_GT(bsdf.samplingTable().bytes(), 500000u);
+    EXPECT_LT(bsdf.samplingTable().bytes(), 1000000u);
+    EXPECT_LT(bsdf.memoryBytes(), 1200000u);
+    std::printf("silk: %zu bytes, of which the sampling table %zu\n", bsdf.memoryBytes(),
+                bsdf.samplingTable().bytes());
+}
+
 }  // namespace
 }  // namespace weft

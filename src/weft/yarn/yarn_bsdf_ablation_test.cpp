@@ -15,6 +15,7 @@
 #include "weft/core/test_util.h"
 #include "weft/yarn/yarn_bsdf.h"
 #include "weft/yarn/yarn_integrals.h"
+#include "weft/yarn/yarn_test_util.h"
 
 namespace weft {
 namespace {
@@ -156,7 +157,8 @@ TEST(YarnBsdfCosineSampling, PdfIntegratesToOneMinusTransmission) {
 
 TEST(YarnBsdfCosineSampling, WeightIsEvalOverPdfAndTStaysADelta) {
     const YarnBsdf bsdf = cosineBsdf(fleece());
-    const YarnBsdf fitted(fleece(), "fleece-small.json", YarnBsdfOptions{true, YarnSampling::Fitted});
+    const YarnBsdf fitted(fleece(), "fleece-small.json",
+                          YarnBsdfOptions{true, YarnSampling::Fitted});
     const std::vector<int> lobes = sampleLobes(bsdf, 20000);
     EXPECT_EQ(lobes[YarnBsdf::kLobeR], 0);
     EXPECT_GT(lobes[YarnBsdf::kLobeT], 0);
@@ -186,20 +188,10 @@ TEST(YarnBsdfCosineSampling, SamplingIsChiSquareConsistentWithPdf) {
     const SphereGrid grid{40, 80};
     for (const YarnBsdf* bsdf : {&full, &naive}) {
         for (const Vec3& wi : kIncident) {
-            const int64_t n = testing::scaled(200000);
-            std::vector<double> observed(grid.cells() + 1, 0);
-            Rng rng(11, static_cast<uint64_t>(1e6 * (wi.x + 2 * wi.y + 3 * wi.z) + 1e7));
-            for (int64_t k = 0; k < n; ++k) {
-                const BsdfSample s =
-                    bsdf->sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()}, rng);
-                ASSERT_TRUE(s.valid());
-                observed[s.isDelta ? grid.cells() : grid.cellOf(s.wo)] += 1;
-            }
-            std::vector<double> expected = grid.expectedCounts(
-                [&](const Vec3& w) { return bsdf->pdf(wi, w); }, static_cast<double>(n));
-            // The delta lobe is one more cell, expected n P(T|wi) times.
-            expected.push_back(static_cast<double>(n) * bsdf->transmission(wi));
-            const Chi2Result r = chi2Test(observed, expected);
+            // In the yarn frame; the delta lobe is one more cell (P_T = P(T|wi) here).
+            ASSERT_EQ(bsdf->lobeProbabilities(wi).t, bsdf->transmission(wi));
+            const Chi2Result r =
+                testing::yarnSamplingChi2(*bsdf, wi, grid, testing::scaled(200000), 11, false);
             std::printf("  %s, wi %s: chi2 %.1f, dof %d, p %.3g\n",
                         bsdf == &full ? "full" : "naive",
                         (std::ostringstream() << wi).str().c_str(), r.statistic, r.dof, r.pValue);

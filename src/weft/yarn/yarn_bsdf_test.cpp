@@ -146,24 +146,10 @@ TEST(YarnBsdf, SamplingIsChiSquareConsistentWithPdf) {
     for (const char* name : kModels) {
         for (const YarnSampling sampling : {YarnSampling::Tabulated, YarnSampling::Fitted}) {
             const YarnBsdf bsdf(testModel(name), name, YarnBsdfOptions{true, sampling});
-            const SurfaceFiberFrame& frame = bsdf.surfaceFiberFrame();
             for (const Incident& incident : kIncident) {
                 const Vec3 wi = incident.direction(bsdf);
-                const int64_t n = testing::scaled(200000);
-                std::vector<double> observed(grid.cells() + 1, 0);
-                Rng rng(11, static_cast<uint64_t>(1e6 * (wi.x + 2 * wi.y + 3 * wi.z) + 1e7));
-                for (int64_t k = 0; k < n; ++k) {
-                    const BsdfSample s =
-                        bsdf.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()}, rng);
-                    ASSERT_TRUE(s.valid());
-                    observed[s.isDelta ? grid.cells() : grid.cellOf(frame.toLocal(s.wo))] += 1;
-                }
-                std::vector<double> expected = grid.expectedCounts(
-                    [&](const Vec3& local) { return bsdf.pdf(wi, frame.fromLocal(local)); },
-                    static_cast<double>(n));
-                // The delta lobe is one more cell, expected n P_T times.
-                expected.push_back(static_cast<double>(n) * bsdf.lobeProbabilities(wi).t);
-                const Chi2Result r = chi2Test(observed, expected);
+                const Chi2Result r =
+                    testing::yarnSamplingChi2(bsdf, wi, grid, testing::scaled(200000), 11, true);
                 std::printf("  %s (%s), wi %s: chi2 %.1f, dof %d, p %.3g\n", name,
                             yarnSamplingName(sampling), incident.name, r.statistic, r.dof,
                             r.pValue);

@@ -15,6 +15,7 @@
 #include "weft/core/test_util.h"
 #include "weft/yarn/yarn_bsdf.h"
 #include "weft/yarn/yarn_integrals.h"
+#include "weft/yarn/yarn_test_util.h"
 
 namespace weft {
 namespace {
@@ -51,22 +52,10 @@ TEST(TabulatedSampling, ShippedModelsSampleTheirPdf) {
     for (const char* name : names) {
         const YarnBsdf& bsdf = shipped(name);
         ASSERT_EQ(bsdf.sampling(), YarnSampling::Tabulated);
-        const SurfaceFiberFrame& frame = bsdf.surfaceFiberFrame();
         for (const Vec3& wi : incident) {
-            const int64_t n = testing::scaled(100000);
-            std::vector<double> observed(grid.cells() + 1, 0);
-            Rng rng(7, static_cast<uint64_t>(1e6 * (wi.x + 2 * wi.y + 3 * wi.z) + 1e7));
-            for (int64_t k = 0; k < n; ++k) {
-                const BsdfSample s =
-                    bsdf.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()}, rng);
-                ASSERT_TRUE(s.valid());
-                observed[s.isDelta ? grid.cells() : grid.cellOf(frame.toLocal(s.wo))] += 1;
-            }
-            std::vector<double> expected = grid.expectedCounts(
-                [&](const Vec3& local) { return bsdf.pdf(wi, frame.fromLocal(local)); },
-                static_cast<double>(n));
+            const Chi2Result r =
+                testing::yarnSamplingChi2(bsdf, wi, grid, testing::scaled(100000), 7, true);
             const double pickT = bsdf.lobeProbabilities(wi).t;
-            expected.push_back(static_cast<double>(n) * pickT);
             // The pdf integrates to 1 - P_T (on the rule that resolves the R lobe;
             // its panels do not follow the table's cell edges, which costs it
             // about 2e-3 on a piecewise-constant density: sampling_table_test
@@ -76,7 +65,6 @@ TEST(TabulatedSampling, ShippedModelsSampleTheirPdf) {
             for (size_t k = 0; k < rule.directions.size(); ++k)
                 pdfIntegral += bsdf.pdf(wi, rule.directions[k]) * rule.weights[k];
             EXPECT_NEAR(pdfIntegral, 1 - pickT, 4e-3) << name << " " << wi;
-            const Chi2Result r = chi2Test(observed, expected);
             std::printf("%s, wi %g %g %g: P_T %.3f, chi2 %.1f, dof %d, p %.3g\n", name, wi.x, wi.y,
                         wi.z, pickT, r.statistic, r.dof, r.pValue);
             EXPECT_GT(r.pValue, alpha) << name << " " << wi;

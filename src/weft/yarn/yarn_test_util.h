@@ -1,9 +1,16 @@
 // weft/yarn/yarn_test_util.h — yarn models for the tests of yarn/ and fit/.
 #pragma once
 
-#include <cmath>
-#include <string>
+#include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "weft/core/chi2.h"
+#include "weft/core/rng.h"
+#include "weft/yarn/yarn_bsdf.h"
 #include "weft/yarn/yarn_model.h"
 
 namespace weft::testing {
@@ -21,6 +28,28 @@ inline YarnModel withCalibration(YarnModel model) {
         model.calibration.m[c] = {std::log(2.0), 0, 0, 0.3};  // 1, z, y, x
     }
     return model;
+}
+
+// Chi-square of `n` samples of bsdf.sample(wi) against bsdf.pdf on `grid`,
+// whose cells are taken in the surface fiber frame (`inFiberFrame`, where the
+// R lobe is a band of theta) or the yarn frame; the delta T lobe is one more
+// cell, expected n P_T times. The generator is seeded by `seed` and wi.
+inline Chi2Result yarnSamplingChi2(const YarnBsdf& bsdf, const Vec3& wi, const SphereGrid& grid,
+                                   int64_t n, uint64_t seed, bool inFiberFrame) {
+    const SurfaceFiberFrame identity;
+    const SurfaceFiberFrame& frame = inFiberFrame ? bsdf.surfaceFiberFrame() : identity;
+    std::vector<double> observed(grid.cells() + 1, 0);
+    Rng rng(seed, static_cast<uint64_t>(1e6 * (wi.x + 2 * wi.y + 3 * wi.z) + 1e7));
+    for (int64_t k = 0; k < n; ++k) {
+        const BsdfSample s = bsdf.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()}, rng);
+        if (!s.valid()) ADD_FAILURE() << "invalid sample at wi " << wi;
+        observed[s.isDelta ? grid.cells() : grid.cellOf(frame.toLocal(s.wo))] += 1;
+    }
+    std::vector<double> expected =
+        grid.expectedCounts([&](const Vec3& local) { return bsdf.pdf(wi, frame.fromLocal(local)); },
+                            static_cast<double>(n));
+    expected.push_back(static_cast<double>(n) * bsdf.lobeProbabilities(wi).t);
+    return chi2Test(observed, expected);
 }
 
 }  // namespace weft::testing

@@ -82,7 +82,7 @@ struct BsdfSample {
 // back by get with the same type.
 class BsdfIncident {
   public:
-    static constexpr size_t kStateBytes = 256;
+    static constexpr size_t kStateBytes = 384;
 
     const Vec3& wi() const { return wi_; }
 

@@ -55,10 +55,18 @@ double FiberBcsdf::probabilityR(const Rgb& f) const {
     return total > 0 ? energyR / total : 0.5;
 }
 
-void FiberBcsdf::prepare(const Vec3& wi, BsdfIncident& in) const {
+FiberBcsdf::Incident FiberBcsdf::incident(const Vec3& wi) const {
     const Angles a = anglesOf(wi);
     const Rgb f = fresnel(a.cosTheta);
-    in.emplace(wi, Incident{a, f, probabilityR(f)});
+    return Incident{a, f, probabilityR(f)};
+}
+
+void FiberBcsdf::prepare(const Vec3& wi, BsdfIncident& in) const { in.emplace(wi, incident(wi)); }
+
+Rgb FiberBcsdf::evalPrepared(const Incident& in, const Angles& out) const {
+    Rgb value;
+    evalAndPdf(in, out, &value, nullptr);
+    return value;
 }
 
 void FiberBcsdf::evalAndPdf(const Incident& incident, const Angles& out, Rgb* value,

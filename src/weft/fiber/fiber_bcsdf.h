@@ -52,7 +52,6 @@ class FiberBcsdf final : public Bsdf {
     // Schlick term F(theta) per channel (paper eq. 4).
     Rgb fresnel(double cosTheta) const;
 
-  private:
     // Longitudinal angle of a direction and its projection on the normal
     // plane (y, z); azimuth differences come from dot products of the
     // projections, so no atan2 for phi is needed.
@@ -60,13 +59,19 @@ class FiberBcsdf final : public Bsdf {
         double sinTheta, cosTheta, theta;
         double y, z;
     };
-    // What prepare() stores: all that depends on wi alone.
+    static Angles anglesOf(const Vec3& w);
+    // What prepare() stores: all that depends on wi alone. Public for models
+    // that embed the fiber lobe (the yarn's R lobe) and keep it in their own
+    // incident state: evalPrepared(incident(wi), anglesOf(wo)) == eval(wi, wo).
     struct Incident {
         Angles angles;
         Rgb fresnel;          // F(theta_i)
         double probabilityR;  // of picking the R lobe
     };
-    static Angles anglesOf(const Vec3& w);
+    Incident incident(const Vec3& wi) const;
+    Rgb evalPrepared(const Incident& in, const Angles& out) const;
+
+  private:
     // Probability of picking the R lobe for this incident angle.
     double probabilityR(const Rgb& f) const;
     void evalAndPdf(const Incident& in, const Angles& out, Rgb* value, double* density) const;

@@ -56,18 +56,42 @@ SamplingTable::Incident SamplingTable::rowsOf(double zi) {
     in.gamma = std::max(kWarpWidth * std::sqrt(std::max(0.0, 1.0 - zi * zi)), kWarpWidthMin);
     in.atanLo = std::atan((-1.0 - in.zc) / in.gamma);
     in.atanStep = (std::atan((1.0 - in.zc) / in.gamma) - in.atanLo) / kRows;
+    in.tanStep = std::tan(in.atanStep);
+    in.invGamma = 1.0 / in.gamma;
+    in.invAtanStep = 1.0 / in.atanStep;
     return in;
 }
 
-double SamplingTable::rowEdge(const Incident& in, int k) {
-    if (k <= 0) return -1.0;
-    if (k >= kRows) return 1.0;
-    return std::clamp(in.zc + in.gamma * std::tan(in.atanLo + k * in.atanStep), -1.0, 1.0);
+SamplingTable::RowSpan SamplingTable::spanOf(const Incident& in, int k, double tanLower) {
+    // tanLower = tan(a), a = atanLo + k atanStep in (-pi/2, pi/2); tan(a +
+    // atanStep) = (tanLower + tanStep) / (1 - tanLower tanStep), whose
+    // denominator is > 0 while a + atanStep < pi/2, i.e. for every row but the
+    // last, whose upper edge is 1.
+    RowSpan span;
+    span.row = k;
+    span.z0 = k <= 0 ? -1.0 : std::clamp(in.zc + in.gamma * tanLower, -1.0, 1.0);
+    span.z1 = k + 1 >= kRows ? 1.0
+                             : std::clamp(in.zc + in.gamma * (tanLower + in.tanStep) /
+                                                      (1.0 - tanLower * in.tanStep),
+                                          -1.0, 1.0);
+    return span;
 }
 
-int SamplingTable::rowOf(const Incident& in, double z) {
-    const double t = (std::atan((z - in.zc) / in.gamma) - in.atanLo) / in.atanStep;
-    return std::clamp(static_cast<int>(std::floor(t)), 0, kRows - 1);
+SamplingTable::RowSpan SamplingTable::rowSpan(const Incident& in, int k) {
+    return spanOf(in, k, std::tan(in.atanLo + k * in.atanStep));
+}
+
+SamplingTable::RowSpan SamplingTable::rowAt(const Incident& in, double z) {
+    const double u = (z - in.zc) * in.invGamma, a = std::atan(u);
+    const int row =
+        std::clamp(static_cast<int>(std::floor((a - in.atanLo) * in.invAtanStep)), 0, kRows - 1);
+    // tan of the lower edge's angle a - d from tan(a) = u and tan(d), d in
+    // [0, atanStep) (atanStep < pi / 64): the Taylor series to d^9 is exact to
+    // rounding there (the next term is below 1e-15 d).
+    const double d = a - (in.atanLo + row * in.atanStep), d2 = d * d;
+    const double tanD =
+        d * (1 + d2 * (1.0 / 3 + d2 * (2.0 / 15 + d2 * (17.0 / 315 + d2 * (62.0 / 2835)))));
+    return spanOf(in, row, (u - tanD) / (1.0 + u * tanD));
 }
 
 int SamplingTable::columnOf(double phi) {
@@ -85,7 +109,11 @@ SamplingTable::SamplingTable(const SurfaceFiberFrame& frame, int parts, const Fu
         const Vec3 wi = nodeDirection(frame, node / kIncidentPhi, node % kIncidentPhi);
         const Incident rows = rowsOf(frame.toLocal(wi).x);
         double edges[kRows + 1];
-        for (int k = 0; k <= kRows; ++k) edges[k] = rowEdge(rows, k);
+        for (int k = 0; k < kRows; ++k) {
+            const RowSpan span = rowSpan(rows, k);
+            edges[k] = span.z0;
+            edges[k + 1] = span.z1;
+        }
         // Midpoints of a kSubsamples x kSubsamples grid in (z, phi) per cell.
         std::vector<Vec3> wo;
         wo.reserve(static_cast<size_t>(kCells) * kSubsamples * kSubsamples);
@@ -169,24 +197,24 @@ SamplingTable::Incident SamplingTable::incident(const Vec3& wi) const {
     in.weight[1] = (1 - fa) * fb;
     in.weight[2] = fa * (1 - fb);
     in.weight[3] = fa * fb;
+    for (int n = 0; n < 4; ++n)
+        in.density[n] = in.weight[n] / rowCdf_[static_cast<size_t>(in.node[n]) * (kRows + 1) + kRows];
     return in;
 }
 
 double SamplingTable::pdf(const Incident& in, const Vec3& wo) const {
     const Vec3 local = frame_.toLocal(wo);
     const double z = std::clamp(local.x, -1.0, 1.0);
-    const int row = rowOf(in, z);
-    const double height = rowEdge(in, row + 1) - rowEdge(in, row);
+    const RowSpan span = rowAt(in, z);
+    const double height = span.z1 - span.z0;
     if (!(height > 0)) return 0.0;
-    const int cell = row * kColumns + columnOf(std::atan2(local.y, local.z));
+    const size_t cell =
+        static_cast<size_t>(span.row * kColumns + columnOf(std::atan2(local.y, local.z)));
     const auto& decoded = codeValues();
     double p = 0;
-    for (int n = 0; n < 4; ++n) {
-        if (!(in.weight[n] > 0)) continue;
-        const size_t node = static_cast<size_t>(in.node[n]);
-        p += in.weight[n] * decoded[codes_[node * kCells + cell]] /
-             rowCdf_[node * (kRows + 1) + kRows];
-    }
+    for (int n = 0; n < 4; ++n)
+        if (in.density[n] > 0)
+            p += in.density[n] * decoded[codes_[static_cast<size_t>(in.node[n]) * kCells + cell]];
     return p / (height * kColumnWidth);
 }
 
@@ -209,8 +237,8 @@ Vec3 SamplingTable::sample(const Incident& in, double uNode, double u1, double u
     for (; column + 1 < kColumns && left >= decoded[codes[column]]; ++column)
         left -= decoded[codes[column]];
     const double fz = std::clamp(left / decoded[codes[column]], 0.0, 1.0);
-    const double z0 = rowEdge(in, row), z1 = rowEdge(in, row + 1);
-    const double z = z0 + (z1 - z0) * fz;
+    const RowSpan span = rowSpan(in, row);
+    const double z = span.z0 + (span.z1 - span.z0) * fz;
     const double phi = -kPi + (column + u2) * kColumnWidth;
     return frame_.fromLocal(localOf(z, phi));
 }

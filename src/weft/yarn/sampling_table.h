@@ -63,8 +63,11 @@ class SamplingTable {
     struct Incident {
         double zc = 0, gamma = 1, atanLo = 0,
                atanStep = 1;  // rows: z = zc + gamma tan(atanLo + k atanStep)
+        double tanStep = 0;   // tan(atanStep): the next row edge without another tan
+        double invGamma = 1, invAtanStep = 1;
         int node[4] = {0, 0, 0, 0};
         double weight[4] = {1, 0, 0, 0};
+        double density[4] = {0, 0, 0, 0};  // weight / the node's total mass
     };
 
     // f as a sum of `parts` terms: for one incident direction and many
@@ -100,8 +103,15 @@ class SamplingTable {
 
   private:
     static Incident rowsOf(double zi);
-    static double rowEdge(const Incident& in, int k);
-    static int rowOf(const Incident& in, double z);
+    // Row k and its edges z0 < z1; rowSpan from one tan, rowAt (the row
+    // holding z) from none: the same edges up to rounding.
+    struct RowSpan {
+        int row;
+        double z0, z1;
+    };
+    static RowSpan rowSpan(const Incident& in, int k);
+    static RowSpan rowAt(const Incident& in, double z);
+    static RowSpan spanOf(const Incident& in, int k, double tanLower);
     static int columnOf(double phi);
 
     SurfaceFiberFrame frame_;

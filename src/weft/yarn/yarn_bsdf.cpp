@@ -272,11 +272,12 @@ YarnBsdf::Incident YarnBsdf::incident(const Vec3& wi, double pT) const {
     in.pT = in.pickT = pT;
     in.rScale = s.r * g.r;
     in.mScale = s.m * g.m;
+    const Vec3 local = lobes_.frame().toLocal(wi);
+    if (hasReflection_) in.fiber = rLobe_.fiber().incident(local);
     if (table_.empty()) return in;
     // Tabulated sampling (yarn_bsdf.h): the mixture's weights from the
     // energies of its parts.
     in.table = table_.incident(wi);
-    const Vec3 local = lobes_.frame().toLocal(wi);
     const double cosThetaI = std::sqrt(local.y * local.y + local.z * local.z);
     in.thetaI = std::atan2(local.x, cosThetaI);
     double peak = 0;
@@ -365,15 +366,11 @@ void YarnBsdf::buildSamplingTable() {
     });
 }
 
-double YarnBsdf::continuousPdf(const Vec3& wi, const Vec3& wo, const Incident& in) const {
-    (void)wi;
+double YarnBsdf::continuousPdf(const Vec3& wo, const FiberBcsdf::Angles& out,
+                               const Incident& in) const {
     double d = 0;
-    if (in.pickR > 0 && wo.z > 0) {
-        const Vec3 lo = lobes_.frame().toLocal(wo);
-        const double cosThetaO = std::sqrt(lo.y * lo.y + lo.z * lo.z);
-        d += in.pickR * peakLongitudinal_.eval(std::atan2(lo.x, cosThetaO), -in.thetaI) *
-             cosThetaO * kInvPi;
-    }
+    if (in.pickR > 0 && wo.z > 0)
+        d += in.pickR * peakLongitudinal_.eval(out.theta, -in.thetaI) * out.cosTheta * kInvPi;
     if (in.pickR < 1) d += (1.0 - in.pickR) * table_.pdf(in.table, wo);
     return (1.0 - in.pickT) * d;
 }
@@ -394,13 +391,15 @@ YarnBsdf::LobeProbabilities YarnBsdf::lobeProbabilities(const Vec3& wi) const {
 
 void YarnBsdf::evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rgb* value,
                           double* density) const {
+    const FiberBcsdf::Angles out =
+        value || sampling_ == YarnSampling::Tabulated ? outAngles(wo) : FiberBcsdf::Angles{};
     if (value) {
-        const Components parts = componentsUpper(wi, wo, in);
+        const Components parts = componentsUpper(wi, wo, in, out);
         *value = parts.m;
         if (hasReflection_) *value += parts.r;
     }
     if (density && sampling_ == YarnSampling::Tabulated) {
-        *density = continuousPdf(wi, wo, in);
+        *density = continuousPdf(wo, out, in);
     } else if (density && sampling_ == YarnSampling::Cosine) {
         // Cosine about n on the side of wo, each side with probability 1/2.
         *density = (1.0 - in.pT) * std::fabs(wo.z) * (0.5 * kInvPi);
@@ -463,11 +462,21 @@ YarnBsdf::Components YarnBsdf::components(const Vec3& wi, const Vec3& wo) const 
     return componentsUpper(i, o, incident(i, transmissionUpper(i)));
 }
 
+FiberBcsdf::Angles YarnBsdf::outAngles(const Vec3& wo) const {
+    if (!hasReflection_ || wo.z <= 0) return {};
+    return FiberBcsdf::anglesOf(lobes_.frame().toLocal(wo));
+}
+
 YarnBsdf::Components YarnBsdf::componentsUpper(const Vec3& wi, const Vec3& wo,
                                                const Incident& in) const {
+    return componentsUpper(wi, wo, in, outAngles(wo));
+}
+
+YarnBsdf::Components YarnBsdf::componentsUpper(const Vec3& wi, const Vec3& wo, const Incident& in,
+                                               const FiberBcsdf::Angles& out) const {
     Components c;
     c.pT = in.pT;
-    if (hasReflection_) c.r = rLobe_.eval(wi, wo, in.pT) * in.rScale;
+    if (hasReflection_) c.r = rLobe_.eval(wi, wo, in.fiber, out, in.pT) * in.rScale;
     c.m = evalM(wi, wo) * in.mScale;
     return c;
 }

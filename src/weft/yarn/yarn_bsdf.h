@@ -175,6 +175,7 @@ class YarnBsdf final : public Bsdf {
         // continuous part, of q_R; theta_i in the surface fiber frame; the table's rows and nodes.
         double pickT = 0, pickR = 0, thetaI = 0;
         SamplingTable::Incident table;
+        FiberBcsdf::Incident fiber{};  // the R lobe's fiber state (surface fiber frame)
     };
     // What prepare() stores in a BsdfIncident (which holds wi as given).
     struct Prepared {
@@ -228,6 +229,11 @@ class YarnBsdf final : public Bsdf {
     // S_R and S_M (calibration and guard applied) for wi in the upper
     // hemisphere: the one place where the model's value is put together.
     Components componentsUpper(const Vec3& wi, const Vec3& wo, const Incident& in) const;
+    // The same with wo's angles in the surface fiber frame (outAngles), which
+    // S_R and q_R share.
+    Components componentsUpper(const Vec3& wi, const Vec3& wo, const Incident& in,
+                               const FiberBcsdf::Angles& out) const;
+    FiberBcsdf::Angles outAngles(const Vec3& wo) const;
     // eval and pdf for wi in the upper hemisphere: the one place where both are computed.
     void evalAndPdf(const Vec3& wi, const Vec3& wo, const Incident& in, Rgb* value,
                     double* density) const;
@@ -242,7 +248,7 @@ class YarnBsdf final : public Bsdf {
     // The fiber's R lobe inside S_R (tabulated sampling, above), calibration applied.
     Rgb reflectionPeak(const Vec3& wi, const Vec3& wo, const Incident& in) const;
     // Density of the continuous part of sample() (1 - P_T included).
-    double continuousPdf(const Vec3& wi, const Vec3& wo, const Incident& in) const;
+    double continuousPdf(const Vec3& wo, const FiberBcsdf::Angles& out, const Incident& in) const;
 
     TransmissionMlp tNet_;
     ScatteringMlp mNet_;

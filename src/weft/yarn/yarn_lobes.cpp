@@ -52,6 +52,12 @@ Rgb RLobe::eval(const Vec3& wi, const Vec3& wo, double pT) const {
     return evalFiber(wi, wo) * ((1.0 - pT) * masking(wi, wo));
 }
 
+Rgb RLobe::eval(const Vec3& wi, const Vec3& wo, const FiberBcsdf::Incident& fiberIn,
+                const FiberBcsdf::Angles& out, double pT) const {
+    if (wi.z <= 0 || wo.z <= 0) return Rgb(0.0);
+    return fiber_.evalPrepared(fiberIn, out) * ((1.0 - pT) * masking(wi, wo));
+}
+
 TruncatedGaussian::TruncatedGaussian(double beta) : beta_(beta) {
     if (!(beta > 0 && beta <= kPi)) throw InputError("truncated Gaussian width out of range (0, pi]");
 }

@@ -87,6 +87,11 @@ public:
     Rgb evalFiber(const Vec3& wi, const Vec3& wo) const;
     // The full lobe for a given P(T|wi).
     Rgb eval(const Vec3& wi, const Vec3& wo, double pT) const;
+    // The same with what depends on wi, and wo's angles, computed once (the
+    // yarn BSDF's incident state): fiberIn = fiber().incident(frame().toLocal(wi)),
+    // out = FiberBcsdf::anglesOf(frame().toLocal(wo)).
+    Rgb eval(const Vec3& wi, const Vec3& wo, const FiberBcsdf::Incident& fiberIn,
+             const FiberBcsdf::Angles& out, double pT) const;
 
 private:
     RLobeParams params_;

@@ -31,6 +31,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/json_file.h"
 #include "weft/core/rng.h"
 #include "weft/fiber/fiber_bcsdf.h"
 #include "weft/fiber/fiber_params.h"
@@ -56,8 +57,15 @@ using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecas
 // ---------------------------------------------------------------------------
 // Python objects <-> JSON (parameter, configuration, model and scene dicts).
 
-json jsonFromPy(py::handle h, const std::string& where) {
+// Nesting is limited as for JSON text (core/json_file.h), which also stops a
+// container that holds itself: it would nest without end.
+json jsonFromPy(py::handle h, const std::string& where, int depth = 0) {
     if (h.is_none()) return nullptr;
+    const bool container = py::isinstance<py::dict>(h) || py::isinstance<py::list>(h) ||
+                           py::isinstance<py::tuple>(h);
+    if (container && depth >= kMaxJsonNesting)
+        throw InputError(where + ": nested deeper than " + std::to_string(kMaxJsonNesting) +
+                         " levels (or a dict or list that contains itself)");
     if (py::isinstance<py::bool_>(h)) return h.cast<bool>();
     if (py::isinstance<py::int_>(h)) {
         try {
@@ -76,7 +84,7 @@ json jsonFromPy(py::handle h, const std::string& where) {
                 throw InputError(where + ": dict keys must be strings, got " +
                                  py::repr(item.first).cast<std::string>());
             const std::string key = item.first.cast<std::string>();
-            j[key] = jsonFromPy(item.second, where + "." + key);
+            j[key] = jsonFromPy(item.second, where + "." + key, depth + 1);
         }
         return j;
     }
@@ -84,12 +92,12 @@ json jsonFromPy(py::handle h, const std::string& where) {
         json j = json::array();
         size_t i = 0;
         for (const auto& item : h)
-            j.push_back(jsonFromPy(item, where + "[" + std::to_string(i++) + "]"));
+            j.push_back(jsonFromPy(item, where + "[" + std::to_string(i++) + "]", depth + 1));
         return j;
     }
     // NumPy arrays and scalars (np.float32, np.int64, ...) through tolist().
     if (py::hasattr(h, "tolist") && py::hasattr(h, "dtype"))
-        return jsonFromPy(h.attr("tolist")(), where);
+        return jsonFromPy(h.attr("tolist")(), where, depth);
     throw InputError(where + ": cannot use a value of type " +
                      py::str(py::type::of(h).attr("__name__")).cast<std::string>() +
                      " (expected dict, list, str, number, bool or None)");
@@ -215,7 +223,7 @@ Vec3 directionRow(const Rows& r, size_t i, const char* name) {
         msg << name << " row " << i << ": " << v << " must be a finite non-zero vector";
         throw InputError(msg.str());
     }
-    return normalize(v / largest);
+    return normalizeAnyLength(v);
 }
 
 BsdfSampleInput uniformRow(const Rows& r, size_t i) {

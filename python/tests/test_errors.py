@@ -93,3 +93,26 @@ def test_bad_pipeline_arguments(tmp_path, root):
         weft.render({"film": {"width": 4, "height": 4}})
     with pytest.raises(ValueError, match="sampling"):
         weft.YarnModel.load(root / "models" / "fleece.json", sampling="importance")
+
+
+def test_nested_and_cyclic_structures_raise():
+    # Python's own structures have no nesting limit: weft applies the JSON one (64).
+    deep = []
+    for _ in range(30000):
+        deep = [deep]
+    with pytest.raises(ValueError, match="nested deeper than 64 levels"):
+        weft.render({"camera": deep})
+    cyclic = {"camera": {}}
+    cyclic["camera"]["self"] = cyclic
+    with pytest.raises(ValueError, match="contains itself"):
+        weft.render(cyclic)
+    with pytest.raises(ValueError, match="nested deeper than 64 levels"):
+        weft.YarnModel({"format": deep})
+
+
+def test_subnormal_incident_direction_is_normalised():
+    fiber = weft.FiberBcsdf.preset("fleece")
+    tiny = fiber.sample_seeded([1e-320, 0.0, 0.0], 8, seed=3)
+    unit = fiber.sample_seeded([1.0, 0.0, 0.0], 8, seed=3)
+    for key in unit:
+        np.testing.assert_array_equal(tiny[key], unit[key])

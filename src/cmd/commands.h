@@ -84,6 +84,8 @@ void writeSamples(const Bsdf& bsdf, const Vec3& wi, int64_t count, uint64_t seed
     writeNpy(out, rows.data(), {static_cast<size_t>(count), columns});
 }
 
+// Refuses a negative seed, which CLI11 would wrap around to 2^64 - 1.
+CLI::Validator seedValidator();
 // Adds a seed flag (an unsigned 64-bit integer, default 0; negative values are
 // refused instead of wrapping around) to a command.
 CLI::Option* addSeedOption(CLI::App& app, uint64_t& seed, const std::string& description,

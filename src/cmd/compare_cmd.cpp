@@ -4,6 +4,8 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "commands.h"
 #include "weft/core/file.h"
@@ -24,10 +26,14 @@ void runCompare(const CompareCmdOptions& o) {
     eval::CompareOptions options;
     options.mode = o.perChannel ? eval::SsimMode::PerChannel : eval::SsimMode::Luminance;
     options.exposure = o.exposure;
+    checkOutputsSpareInputs({{"image A", o.a}, {"image B", o.b}},
+                            {{"--heatmap", o.heatmap}, {"--json", o.json}});
     const eval::ImageComparison c = eval::compareImageFiles(o.a, o.b, options);
     const std::string line = eval::toJson(c).dump();
-    if (!o.heatmap.empty()) writePng(o.heatmap, eval::ssimHeatmap(c));
-    if (!o.json.empty()) writeFileAtomic(o.json, line + "\n");
+    std::vector<std::pair<std::string, std::string>> files;
+    if (!o.heatmap.empty()) files.emplace_back(o.heatmap, encodePng(eval::ssimHeatmap(c)));
+    if (!o.json.empty()) files.emplace_back(o.json, line + "\n");
+    writeFilesAtomic(files);
     std::printf("%s\n", line.c_str());
 }
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "weft/core/file.h"
 #include "weft/core/error.h"
 #include "weft/core/image.h"
 #include "weft/core/math.h"
@@ -29,11 +30,14 @@ struct SampleOptions {
 };
 
 void runEval(const EvalOptions& o) {
+    checkOutputsSpareInputs({{"--in", o.in}, {"--params", o.material.paramsFile}},
+                            {{"--out", o.out}});
     const FiberBcsdf fiber(o.material.fiber());
     writeEvalValues(fiber, o.in, o.out);
 }
 
 void runSample(const SampleOptions& o) {
+    checkOutputsSpareInputs({{"--params", o.material.paramsFile}}, {{"--out", o.out}});
     const FiberBcsdf fiber(o.material.fiber());
     const Vec3 wi = parseDirection(o.wi, "--wi");
     writeSamples(fiber, wi, o.count, o.seed, false, o.out);
@@ -50,6 +54,7 @@ struct MapOptions {
 // +pi/2 (top, along the tangent) to -pi/2. Auto-exposed so that the 99th
 // percentile of the values maps to white.
 void runMap(const MapOptions& o) {
+    checkOutputsSpareInputs({{"--params", o.material.paramsFile}}, {{"--out", o.out}});
     const FiberBcsdf fiber(o.material.fiber());
     const Vec3 wi = parseDirection(o.wi, "--wi");
     Image image(o.width, o.width / 2);

@@ -162,9 +162,9 @@ TEST_F(FitCliTest, AblationsFitAndRender) {
             "yarns": [{"curves": "yarn.txt", "radius": 0.03, "plies": 3, "ply_twist": 0.3,
                        "model": ")" + path(model + ".json") +
                                                          R"("}]})");
-        r = run("render " + model + "-scene.json --spp 2 --quiet --out " + model + ".exr");
+        r = run("render " + model + "-scene.json --spp 2 --quiet --out " + model + "-render.exr");
         ASSERT_EQ(r.status, 0) << r.err;
-        const Image image = readImage(path(model + ".exr"));
+        const Image image = readImage(path(model + "-render.exr"));
         double sum = 0;
         for (float v : image.pixels) {
             ASSERT_TRUE(std::isfinite(v)) << model;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "commands.h"
+#include "weft/core/file.h"
 #include "weft/core/error.h"
 #include "weft/fit/fit.h"
 
@@ -61,6 +62,9 @@ void runFit(const FitCliOptions& c) {
         throw InputError("--threads " + std::to_string(config.threads) +
                          " is out of range: allowed [0, 1024]");
     const std::string reportDir = c.report.empty() ? defaultReportDir(c.out) : c.report;
+    checkOutputsSpareInputs({{"--config", c.config}, {"--recalibrate", c.recalibrate}},
+                            {{"--out", c.out}}, {{"--rdm", c.rdm}, {"--reference", c.reference}},
+                            {{"--report", c.noReport ? std::string() : reportDir}});
     requireParentDirectory(c.out, "--out");
     if (!c.noReport) requireParentDirectory(reportDir, "--report");
     const RdmData rdm = loadRdm(c.rdm);

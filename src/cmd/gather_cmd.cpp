@@ -52,6 +52,7 @@ void runGather(const GatherCliOptions& c) {
     o.segmentsPerTwist = c.segmentsPerTwist;
     o.quiet = c.quiet;
     o.validate();
+    checkOutputsSpareInputs({{"--params", c.material.paramsFile}}, {}, {}, {{"--out", c.out}});
     // Before the (long) gather: a bad destination fails now, not after it.
     TempDirCommit out(c.out);
     const GatherResult result = gatherRdm(o);
@@ -73,7 +74,7 @@ void addGatherCommand(CLI::App& app) {
                   "distribution (RDM: P(T | wi), R and M maps) as NumPy arrays");
     o->material.add(*gather, true);
     o->geometry.add(*gather);
-    gather->add_option("--paths", o->paths, "number of random walks (>= 1)")->required();
+    gather->add_option("--paths", o->paths, "number of random walks, in [1, 2^31]")->required();
     addSeedOption(*gather, o->seed, "random seed of the walks (and of the fiber placement)");
     o->plySeedOpt = addSeedOption(*gather, o->plySeed,
                                   "random seed of the fiber placement only (default: --seed); "
@@ -107,6 +108,7 @@ void addGatherCommand(CLI::App& app) {
     slice->add_option("--phi-i", so->phiI, "incident phi in degrees [-180, 180]")->default_val(0);
     slice->add_option("--out", so->out, "output PNG")->required();
     slice->callback([so] {
+        checkOutputsSpareInputs({}, {{"--out", so->out}}, {{"--rdm", so->rdm}});
         const size_t bin = writeRdmSlicePng(so->rdm, so->component, so->thetaI, so->phiI, so->out);
         std::printf("{\"incident_bin\": %zu, \"out\": \"%s\"}\n", bin, so->out.c_str());
     });

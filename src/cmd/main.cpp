@@ -1,11 +1,43 @@
 // weft — neural appearance model for cloth: command-line entry point.
+#include <pthread.h>
+#include <signal.h>
+
+#include <csignal>
 #include <cstdio>
 #include <exception>
+#include <new>
+#include <thread>
 
 #include "commands.h"
 #include "weft/core/error.h"
+#include "weft/core/file.h"
+
+namespace {
+
+// SIGINT, SIGTERM and SIGHUP are blocked in every thread (TBB's workers
+// inherit the mask) and taken by one thread, which deletes the temporary
+// outputs being written (a gather's DIR.tmp.<pid>/, a file's .NAME.tmp.*)
+// and then dies of the same signal: the exit status a shell expects (130
+// for Ctrl-C). Cleaning up there, not in a handler, may use any function.
+void removeTemporaryOutputsOnSignals() {
+    sigset_t signals;
+    sigemptyset(&signals);
+    for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, s);
+    if (pthread_sigmask(SIG_BLOCK, &signals, nullptr) != 0) return;
+    std::thread([signals] {
+        int received = 0;
+        if (sigwait(&signals, &received) != 0) return;
+        weft::removeTemporaryOutputs();
+        std::signal(received, SIG_DFL);
+        pthread_sigmask(SIG_UNBLOCK, &signals, nullptr);  // this thread only
+        std::raise(received);
+    }).detach();
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
+    removeTemporaryOutputsOnSignals();
     CLI::App app{
         "weft: fiber and ply models, RDM gathering, neural yarn fitting and cloth rendering.\n"
         "Run 'weft <command> --help' for the flags of one command.",
@@ -34,6 +66,12 @@ int main(int argc, char** argv) {
         return 2;
     } catch (const weft::InputError& e) {
         std::fprintf(stderr, "weft: error: %s\n", e.what());
+        return 2;
+    } catch (const std::bad_alloc&) {
+        // The budgets (core/limits.h) refuse what they can estimate; this is what they missed.
+        std::fprintf(stderr,
+                     "weft: error: out of memory: the input needs more memory than this machine "
+                     "has (docs/limits.md; WEFT_MEMORY_BUDGET)\n");
         return 2;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "weft: internal error: %s\n", e.what());

@@ -25,6 +25,10 @@ void runMontage(const MontageCmdOptions& o) {
     o.montage.validate();
     if (lowercaseExtension(o.out) != ".png")
         throw InputError("--out " + o.out + ": expected a .png file");
+    std::vector<CommandPath> inputs;
+    for (size_t k = 0; k < o.inputs.size(); ++k)
+        inputs.push_back({"input image " + std::to_string(k + 1), o.inputs[k]});
+    checkOutputsSpareInputs(inputs, {{"--out", o.out}});
     std::vector<Image> images;
     std::vector<bool> linear;
     for (const std::string& path : o.inputs) {

@@ -46,28 +46,29 @@ Vec3 parseVec3(const std::string& text, const std::string& flag) {
     return {v[0], v[1], v[2]};
 }
 
-CLI::Option* addSeedOption(CLI::App& app, uint64_t& seed, const std::string& description,
-                           const std::string& flag) {
+CLI::Validator seedValidator() {
     // CLI11 would wrap "-1" around to 2^64 - 1 for an unsigned option.
-    const CLI::Validator nonNegative(
+    return CLI::Validator(
         [](std::string& text) {
             return text.find('-') == std::string::npos
                        ? std::string()
                        : "a seed is an integer in [0, 2^64 - 1], got " + text;
         },
         "SEED");
+}
+
+CLI::Option* addSeedOption(CLI::App& app, uint64_t& seed, const std::string& description,
+                           const std::string& flag) {
     return app.add_option(flag, seed, description + " (integer >= 0)")
         ->default_val(0)
-        ->check(nonNegative);
+        ->check(seedValidator());
 }
 
 Vec3 parseDirection(const std::string& text, const std::string& flag) {
     const Vec3 v = parseVec3(text, flag);
-    // Scale by the largest component first so that the squared length neither
-    // overflows (1e200) nor underflows (1e-200).
     const double largest = std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
     if (!(largest > 0)) throw InputError(flag + " \"" + text + "\" must be a non-zero vector");
-    return normalize(v / largest);
+    return normalizeAnyLength(v);
 }
 
 // Row `row` of PAIRS as a unit vector; inputs may be float32, so a deviation

@@ -46,6 +46,10 @@ void runRender(const RenderCmdOptions& o) {
     YarnBsdfOptions yarnOptions;
     yarnOptions.sampling = parseYarnSampling(o.yarnSampling, "--yarn-sampling");
     const render::SceneDesc desc = render::loadScene(o.scene);
+    checkOutputsSpareInputs(render::sceneInputs(desc, o.scene),
+                            {{"--out", o.out},
+                             {"--out's PNG", stem + ".png"},
+                             {"--out's statistics", stem + ".json"}});
 
     render::RenderOptions options;
     // Flags override the scene's spp; RenderOptions::validate checks that
@@ -63,8 +67,6 @@ void runRender(const RenderCmdOptions& o) {
     const render::Scene scene(desc, mode, o.quiet, yarnOptions);
     const render::RenderResult result = render::render(scene, options);
 
-    writeExr(o.out, result.image);
-    writePng(stem + ".png", result.image, o.exposure);
     nlohmann::json stats = render::toJson(result.stats);
     stats["scene_file"] = o.scene;
     stats["scene_hash"] = hash;
@@ -74,7 +76,10 @@ void runRender(const RenderCmdOptions& o) {
     stats["exposure"] = o.exposure;
     stats["version"] = WEFT_VERSION;
     stats["outputs"] = {{"exr", o.out}, {"png", stem + ".png"}, {"json", stem + ".json"}};
-    writeFileAtomic(stem + ".json", stats.dump(2) + "\n");
+    // All three or none.
+    writeFilesAtomic({{o.out, encodeExr(result.image, o.out)},
+                      {stem + ".png", encodePng(result.image, o.exposure)},
+                      {stem + ".json", stats.dump(2) + "\n"}});
     if (result.stats.nonFiniteSamples > 0)
         std::fprintf(stderr, "weft: warning: %lld samples were NaN or infinite and were dropped\n",
                      static_cast<long long>(result.stats.nonFiniteSamples));
@@ -114,7 +119,9 @@ void addRenderCommand(CLI::App& app) {
     cmd->add_option("--threads", o->threads, "Worker threads (0: all cores)")
         ->capture_default_str();
     o->seedOpt =
-        cmd->add_option("--seed", o->seed, "Random seed (default: the scene's render.seed)");
+        cmd->add_option("--seed", o->seed,
+                        "Random seed, integer >= 0 (default: the scene's render.seed)")
+            ->check(seedValidator());
     cmd->add_option("--exposure", o->exposure, "PNG exposure in stops (the EXR stays linear)")
         ->capture_default_str();
     cmd->add_flag("--no-nee", o->noNee,

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "commands.h"
+#include "weft/core/file.h"
 #include "weft/core/error.h"
 #include "weft/eval/scene_gen.h"
 
@@ -24,6 +25,8 @@ void runScene(const SceneCmdOptions& o) {
     const eval::SceneKind kind = eval::parseSceneKind(o.kind);
     if (kind == eval::SceneKind::Closeup && o.sizeOpt->count())
         throw InputError("--size applies to weave and knit only (a close-up is one yarn)");
+    checkOutputsSpareInputs({{"--model", o.scene.model}, {"--envmap", o.scene.envmap}}, {}, {},
+                            {{"--out", o.out}});
     const eval::GeneratedScene generated = eval::generateScene(kind, o.scene);
     eval::writeScene(generated, o.out);
     const std::filesystem::path dir(o.out);

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "weft/core/file.h"
 #include "weft/core/error.h"
 #include "weft/core/npy.h"
 #include "weft/gather/rdm_io.h"
@@ -36,11 +37,13 @@ struct CheckOptions {
 };
 
 void runEval(const EvalOptions& o) {
+    checkOutputsSpareInputs({{"--model", o.model}, {"--in", o.in}}, {{"--out", o.out}});
     const YarnBsdf bsdf = YarnBsdf::load(o.model, YarnBsdfOptions{!o.noGuard});
     writeEvalValues(bsdf, o.in, o.out);
 }
 
 void runSample(const SampleOptions& o) {
+    checkOutputsSpareInputs({{"--model", o.model}}, {{"--out", o.out}});
     const YarnBsdf bsdf = YarnBsdf::load(o.model, YarnBsdfOptions{!o.noGuard});
     const Vec3 wi = parseDirection(o.wi, "--wi");
     writeSamples(bsdf, wi, o.count, o.seed, true, o.out);
@@ -50,6 +53,7 @@ void runCheck(const CheckOptions& o) {
     if (o.threads < 0 || o.threads > 1024)
         throw InputError("--threads " + std::to_string(o.threads) +
                          " is out of range: allowed [0, 1024]");
+    checkOutputsSpareInputs({{"--model", o.model}}, {}, {{"--rdm", o.rdm}}, {{"--out", o.out}});
     const YarnModel model = loadYarnModel(o.model);
     const RdmData rdm = loadRdm(o.rdm);
     const nlohmann::json s = checkYarnModel(model, o.model, rdm, {o.minPaths, o.threads}, o.out);

@@ -9,9 +9,14 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <map>
+#include <mutex>
 #include <system_error>
+#include <utility>
+#include <vector>
 
 #include "weft/core/error.h"
+#include "weft/core/limits.h"
 
 namespace weft {
 
@@ -40,12 +45,35 @@ std::pair<std::string, std::string> splitPath(const std::string& path) {
 // temporary name.
 std::atomic<uint64_t> tempCounter{0};
 
+void unlistTemporary(const std::string& path);
+
 // Closes fd (if open) and unlinks the temporary file; keeps errno intact.
 void discardTemp(int fd, const std::string& tempPath) {
     const int saved = errno;
     if (fd >= 0) ::close(fd);
     ::unlink(tempPath.c_str());
+    unlistTemporary(tempPath);
     errno = saved;
+}
+
+// The temporary outputs that exist now (core/file.h: removeTemporaryOutputs).
+struct TemporaryOutputs {
+    std::mutex mutex;
+    std::map<std::string, bool> isDirectory;
+};
+TemporaryOutputs& temporaryOutputs() {
+    static TemporaryOutputs registry;
+    return registry;
+}
+void listTemporary(const std::string& path, bool isDirectory) {
+    TemporaryOutputs& r = temporaryOutputs();
+    const std::lock_guard<std::mutex> lock(r.mutex);
+    r.isDirectory[path] = isDirectory;
+}
+void unlistTemporary(const std::string& path) {
+    TemporaryOutputs& r = temporaryOutputs();
+    const std::lock_guard<std::mutex> lock(r.mutex);
+    r.isDirectory.erase(path);
 }
 
 std::string stripTrailingSlashes(std::string p) {
@@ -55,7 +83,11 @@ std::string stripTrailingSlashes(std::string p) {
 
 }  // namespace
 
-void writeFileAtomic(const std::string& path, std::string_view bytes) {
+namespace {
+
+// Writes `bytes` to a new temporary sibling of `path` (listed until renamed or
+// removed) and returns its name; InputError naming `path` on failure.
+std::string writeTemporarySibling(const std::string& path, std::string_view bytes) {
     if (path.empty()) throw InputError("cannot write a file with an empty path");
     const auto [dir, base] = splitPath(path);
     if (base.empty()) throw InputError("cannot write '" + path + "': the path names a directory");
@@ -64,6 +96,7 @@ void writeFileAtomic(const std::string& path, std::string_view bytes) {
 
     const int fd = ::open(tempPath.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd < 0) fail("cannot write", path, errno);
+    listTemporary(tempPath, false);
 
     size_t done = 0;
     while (done < bytes.size()) {
@@ -88,15 +121,131 @@ void writeFileAtomic(const std::string& path, std::string_view bytes) {
         discardTemp(-1, tempPath);
         fail("cannot write", path, err);
     }
+    return tempPath;
+}
+
+void renameTemporary(const std::string& tempPath, const std::string& path) {
     if (::rename(tempPath.c_str(), path.c_str()) != 0) {
         const int err = errno;
         discardTemp(-1, tempPath);
         fail("cannot write", path, err);
     }
+    unlistTemporary(tempPath);
+}
+
+}  // namespace
+
+void writeFileAtomic(const std::string& path, std::string_view bytes) {
+    renameTemporary(writeTemporarySibling(path, bytes), path);
+}
+
+void writeFilesAtomic(const std::vector<std::pair<std::string, std::string>>& files) {
+    // What would make a rename fail after the others: refused before any is written.
+    for (const auto& [path, bytes] : files) {
+        std::error_code ec;
+        if (std::filesystem::is_directory(path, ec))
+            throw InputError("cannot write '" + path + "': it is a directory");
+    }
+    std::vector<std::string> temps;
+    try {
+        for (const auto& [path, bytes] : files) temps.push_back(writeTemporarySibling(path, bytes));
+    } catch (...) {
+        for (const std::string& t : temps) discardTemp(-1, t);
+        throw;
+    }
+    // Every file is complete on disk: the renames are all that is left.
+    for (size_t k = 0; k < files.size(); ++k) {
+        try {
+            renameTemporary(temps[k], files[k].first);
+        } catch (...) {
+            for (size_t j = k + 1; j < temps.size(); ++j) discardTemp(-1, temps[j]);
+            throw;
+        }
+    }
+}
+
+namespace {
+
+std::filesystem::path resolved(const std::string& path) {
+    std::error_code ec;
+    std::filesystem::path p = std::filesystem::weakly_canonical(path, ec);
+    if (ec) p = std::filesystem::absolute(path, ec).lexically_normal();
+    return p;
+}
+
+bool sameFile(const std::filesystem::path& a, const std::filesystem::path& b) {
+    if (a == b) return true;
+    std::error_code ec;
+    return std::filesystem::equivalent(a, b, ec) && !ec;
+}
+
+// `inner` is `outer` or lies below it.
+bool within(const std::filesystem::path& inner, const std::filesystem::path& outer) {
+    auto o = outer.begin(), i = inner.begin();
+    for (; o != outer.end(); ++o, ++i)
+        if (i == inner.end() || *i != *o) return false;
+    return true;
+}
+
+[[noreturn]] void refuseOverwrite(const CommandPath& output, const CommandPath& input,
+                                  const char* how) {
+    throw InputError(output.role + " '" + output.path + "' would " + how + " " + input.role + " '" +
+                     input.path + "', an input of the same command: choose another " +
+                     "output path");
+}
+
+}  // namespace
+
+void checkOutputsSpareInputs(const std::vector<CommandPath>& inputFiles,
+                             const std::vector<CommandPath>& outputFiles,
+                             const std::vector<CommandPath>& inputDirs,
+                             const std::vector<CommandPath>& outputDirs) {
+    for (size_t k = 0; k < outputFiles.size(); ++k) {
+        const CommandPath& out = outputFiles[k];
+        if (out.path.empty()) continue;
+        const std::filesystem::path o = resolved(out.path);
+        for (size_t j = 0; j < k; ++j)
+            if (!outputFiles[j].path.empty() && sameFile(o, resolved(outputFiles[j].path)))
+                throw InputError(outputFiles[j].role + " '" + outputFiles[j].path + "' and " +
+                                 out.role + " '" + out.path + "' name the same file");
+        for (const CommandPath& in : inputFiles)
+            if (!in.path.empty() && sameFile(o, resolved(in.path)))
+                refuseOverwrite(out, in, "replace");
+        for (const CommandPath& in : inputDirs) {
+            if (in.path.empty()) continue;
+            const std::filesystem::path d = resolved(in.path);
+            std::error_code ec;
+            if (sameFile(o, d) || (within(o, d) && std::filesystem::exists(o, ec)))
+                refuseOverwrite(out, in, "replace a file of");
+        }
+    }
+    for (const CommandPath& out : outputDirs) {
+        if (out.path.empty()) continue;
+        const std::filesystem::path o = resolved(out.path);
+        for (const auto* inputs : {&inputFiles, &inputDirs})
+            for (const CommandPath& in : *inputs)
+                if (!in.path.empty() &&
+                    (within(resolved(in.path), o) || sameFile(o, resolved(in.path))))
+                    refuseOverwrite(out, in, "replace (as a directory written whole)");
+    }
+}
+
+void removeTemporaryOutputs() {
+    TemporaryOutputs& r = temporaryOutputs();
+    const std::lock_guard<std::mutex> lock(r.mutex);
+    for (const auto& [path, isDirectory] : r.isDirectory) {
+        std::error_code ec;
+        if (isDirectory)
+            std::filesystem::remove_all(path, ec);
+        else
+            ::unlink(path.c_str());
+    }
+    r.isDirectory.clear();
 }
 
 std::string readFile(const std::string& path) {
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    // O_NONBLOCK: opening a FIFO without a writer must not block (it is refused below).
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
     if (fd < 0) fail("cannot read", path, errno);
     struct stat st {};
     if (::fstat(fd, &st) != 0) {
@@ -108,8 +257,23 @@ std::string readFile(const std::string& path) {
         ::close(fd);
         fail("cannot read", path, EISDIR);
     }
+    // A device or FIFO (a link to /dev/zero) could be endless: regular files only.
+    if (!S_ISREG(st.st_mode)) {
+        ::close(fd);
+        throw InputError("cannot read '" + path +
+                         "': not a regular file (a device, FIFO or socket); weft reads regular "
+                         "files only");
+    }
+    const uint64_t limit = maxInputBytes();
+    if (static_cast<uint64_t>(st.st_size) > limit) {
+        ::close(fd);
+        throw InputError("cannot read '" + path +
+                         "': " + byteText(static_cast<double>(st.st_size)) +
+                         ", over the input size limit of " + byteText(static_cast<double>(limit)) +
+                         " (set WEFT_MAX_INPUT_BYTES to change it; docs/limits.md)");
+    }
     std::string out;
-    if (S_ISREG(st.st_mode) && st.st_size > 0) out.reserve(static_cast<size_t>(st.st_size));
+    out.reserve(static_cast<size_t>(st.st_size));
     char buf[1 << 16];
     for (;;) {
         const ssize_t n = ::read(fd, buf, sizeof buf);
@@ -120,6 +284,12 @@ std::string readFile(const std::string& path) {
             fail("cannot read", path, err);
         }
         if (n == 0) break;
+        // The file may grow while it is read: keep the bound.
+        if (out.size() + static_cast<size_t>(n) > limit) {
+            ::close(fd);
+            throw InputError("cannot read '" + path + "': it grew past the input size limit of " +
+                             byteText(static_cast<double>(limit)) + " while being read");
+        }
         out.append(buf, static_cast<size_t>(n));
     }
     ::close(fd);
@@ -145,12 +315,14 @@ TempDirCommit::TempDirCommit(std::string finalPath)
     std::filesystem::remove_all(tempPath_, ec);
     if (ec) throw InputError("cannot remove stale directory '" + tempPath_ + "': " + ec.message());
     if (::mkdir(tempPath_.c_str(), 0777) != 0) fail("cannot create directory", tempPath_, errno);
+    listTemporary(tempPath_, true);
 }
 
 TempDirCommit::~TempDirCommit() {
     if (committed_) return;
     std::error_code ec;  // Never throw from a destructor; a leftover is harmless.
     std::filesystem::remove_all(tempPath_, ec);
+    unlistTemporary(tempPath_);
 }
 
 void TempDirCommit::commit() {
@@ -176,6 +348,7 @@ void TempDirCommit::commit() {
         if (!oldPath.empty()) ::rename(oldPath.c_str(), finalPath_.c_str());
         fail("cannot rename '" + tempPath_ + "' to", finalPath_, err);
     }
+    unlistTemporary(tempPath_);
     committed_ = true;
     if (!oldPath.empty()) {
         fs::remove_all(oldPath, ec);

@@ -9,6 +9,8 @@
 
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 namespace weft {
 
@@ -18,12 +20,43 @@ namespace weft {
 // (missing or unwritable directory, disk full, `path` is a directory...).
 void writeFileAtomic(const std::string& path, std::string_view bytes);
 
+// Several files that belong together (an image, its PNG and its statistics):
+// each (path, bytes) is first written to its temporary sibling, then all are
+// renamed into place, so a failure while writing leaves every target as it
+// was. (A failure of a rename itself, which writing first makes unlikely,
+// leaves the earlier files replaced.)
+void writeFilesAtomic(const std::vector<std::pair<std::string, std::string>>& files);
+
+// Deletes every temporary file or directory that writeFileAtomic,
+// writeFilesAtomic or TempDirCommit is writing now; for a signal handler's
+// thread (the CLI's SIGINT / SIGTERM, src/cmd/main.cpp), so that an
+// interrupted command leaves no DIR.tmp.<pid>/ or .NAME.tmp.* behind.
+void removeTemporaryOutputs();
+
+// A path a command reads or writes, and what it is in messages ("--in", "the
+// scene's yarns[0].curves", "--out's PNG").
+struct CommandPath {
+    std::string role, path;
+};
+// No output of a command may replace one of its inputs: InputError naming both
+// when an output file is an input file, or an output directory (written
+// whole, replacing what was there) is or holds an input, or an output file
+// lies in an input directory in place of one of its files; nor may two output
+// files be the same. Paths compare
+// after resolving links, "." and ".." (and existing files by identity, so a
+// hard link counts). Empty paths are skipped.
+void checkOutputsSpareInputs(const std::vector<CommandPath>& inputFiles,
+                             const std::vector<CommandPath>& outputFiles,
+                             const std::vector<CommandPath>& inputDirs = {},
+                             const std::vector<CommandPath>& outputDirs = {});
+
 // The extension of `path` with its dot, in lower case ("a/B.EXR" -> ".exr"; "" if none),
 // for picking a reader by file type.
 std::string lowercaseExtension(const std::string& path);
 
 // The whole file as bytes; InputError naming `path` if it is missing, a
-// directory or unreadable.
+// directory, not a regular file (a device or FIFO), larger than
+// maxInputBytes() (core/limits.h) or unreadable.
 std::string readFile(const std::string& path);
 
 // RAII helper for writing a whole output directory atomically.
@@ -37,7 +70,7 @@ std::string readFile(const std::string& path);
 // is never called (e.g. an exception unwinds), the destructor deletes the
 // temporary directory. Errors are InputError naming the path.
 class TempDirCommit {
-public:
+  public:
     explicit TempDirCommit(std::string finalPath);
     ~TempDirCommit();
     TempDirCommit(const TempDirCommit&) = delete;
@@ -51,7 +84,7 @@ public:
     // Moves the temporary directory to finalPath(); may be called once.
     void commit();
 
-private:
+  private:
     std::string finalPath_, tempPath_;
     bool committed_ = false;
 };

@@ -1,8 +1,6 @@
 #include "weft/core/file.h"
 
 #include <gtest/gtest.h>
-
-#include "weft/core/test_util.h"
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -15,6 +13,7 @@
 #include <vector>
 
 #include "weft/core/error.h"
+#include "weft/core/test_util.h"
 
 namespace weft {
 namespace {
@@ -23,7 +22,7 @@ using namespace std::string_view_literals;
 namespace fs = std::filesystem;
 
 class FileTest : public testing::TempDirTest {
-protected:
+  protected:
     // Names of the entries of dir (not recursive), sorted.
     static std::vector<std::string> entries(const fs::path& dir) {
         std::vector<std::string> names;
@@ -31,7 +30,6 @@ protected:
         std::sort(names.begin(), names.end());
         return names;
     }
-
 };
 
 using testing::expectInputError;
@@ -97,6 +95,105 @@ TEST_F(FileTest, ReadFailuresNamePath) {
     const std::string missing = path("missing.txt");
     expectInputError([&] { readFile(missing); }, {missing, "No such file or directory"});
     expectInputError([&] { readFile(dir_.string()); }, {dir_.string(), "Is a directory"});
+}
+
+// Devices and FIFOs could be endless (a link to /dev/zero) or block (a FIFO
+// without a writer): refused at once, naming the path.
+TEST_F(FileTest, ReadRefusesFilesThatAreNotRegular) {
+    expectInputError([] { readFile("/dev/zero"); }, {"'/dev/zero'", "not a regular file"});
+    const std::string link = path("zero.json");
+    fs::create_symlink("/dev/zero", link);
+    expectInputError([&] { readFile(link); }, {link, "not a regular file"});
+    const std::string fifo = path("fifo.bcc");
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    expectInputError([&] { readFile(fifo); }, {fifo, "not a regular file"});
+}
+
+TEST_F(FileTest, ReadRefusesFilesOverTheSizeLimit) {
+    const std::string file = path("big.txt");
+    writeFileAtomic(file, std::string(2000, 'x'));
+    ASSERT_EQ(::setenv("WEFT_MAX_INPUT_BYTES", "1K", 1), 0);
+    expectInputError([&] { readFile(file); },
+                     {file, "2.0 KB, over the input size limit of 1.0 KB", "WEFT_MAX_INPUT_BYTES"});
+    ASSERT_EQ(::setenv("WEFT_MAX_INPUT_BYTES", "2000", 1), 0);
+    EXPECT_EQ(readFile(file).size(), 2000u);
+    ASSERT_EQ(::setenv("WEFT_MAX_INPUT_BYTES", "lots", 1), 0);
+    expectInputError([&] { readFile(file); }, {"WEFT_MAX_INPUT_BYTES = \"lots\"", "suffix"});
+    ::unsetenv("WEFT_MAX_INPUT_BYTES");
+}
+
+TEST_F(FileTest, OutputsThatWouldReplaceInputsAreRefused) {
+    writeFileAtomic(path("scene.json"), "{}");
+    fs::create_directory(path("rdm"));
+    writeFileAtomic(path("rdm/meta.json"), "{}");
+    const std::vector<CommandPath> inputs = {{"the scene file", path("scene.json")}};
+    // Through "..", a symbolic link and a hard link: the same file each time.
+    fs::create_symlink(path("scene.json"), path("link.json"));
+    fs::create_hard_link(path("scene.json"), path("hard.json"));
+    for (const std::string& out :
+         {path("scene.json"), path("rdm/../scene.json"), path("link.json"), path("hard.json")})
+        expectInputError(
+            [&] {
+                checkOutputsSpareInputs(inputs, {{"--out", out}});
+            },
+            {"--out '" + out + "' would replace the scene file", "scene.json"});
+    checkOutputsSpareInputs(inputs, {{"--out", path("other.json")}, {"--png", ""}});
+    // Two outputs naming one file.
+    expectInputError(
+        [&] {
+            checkOutputsSpareInputs({}, {{"--a", path("x")}, {"--b", path("rdm/../x")}});
+        },
+        {"--a", "--b", "name the same file"});
+    // An output file in place of a file of an input directory; a new file there is fine.
+    expectInputError(
+        [&] {
+            checkOutputsSpareInputs({}, {{"--out", path("rdm/meta.json")}},
+                                    {{"--rdm", path("rdm")}});
+        },
+        {"would replace a file of --rdm"});
+    checkOutputsSpareInputs({}, {{"--out", path("rdm/slice.png")}}, {{"--rdm", path("rdm")}});
+    // An output directory that is or holds an input.
+    expectInputError(
+        [&] {
+            checkOutputsSpareInputs({}, {}, {{"--rdm", path("rdm")}}, {{"--out", path("rdm")}});
+        },
+        {"--out", "--rdm"});
+    expectInputError(
+        [&] {
+            checkOutputsSpareInputs(inputs, {}, {}, {{"--out", dir_.string()}});
+        },
+        {"the scene file"});
+    checkOutputsSpareInputs(inputs, {}, {{"--rdm", path("rdm")}}, {{"--out", path("new")}});
+}
+
+// All files or none: a file that cannot be written leaves the others as they were.
+TEST_F(FileTest, WriteFilesAtomicIsAllOrNothing) {
+    writeFileAtomic(path("a.exr"), "old a");
+    fs::create_directory(path("dir.png"));  // a directory: the PNG cannot be written there
+    expectInputError(
+        [&] {
+            writeFilesAtomic(
+                {{path("a.exr"), "new a"}, {path("dir.png"), "png"}, {path("a.json"), "{}"}});
+        },
+        {"dir.png"});
+    EXPECT_EQ(readFile(path("a.exr")), "old a");
+    EXPECT_FALSE(fs::exists(path("a.json")));
+    EXPECT_EQ(entries(dir_), (std::vector<std::string>{"a.exr", "dir.png"}));
+    writeFilesAtomic({{path("a.exr"), "new a"}, {path("a.json"), "{}"}});
+    EXPECT_EQ(readFile(path("a.exr")), "new a");
+    EXPECT_EQ(readFile(path("a.json")), "{}");
+}
+
+// What a signal handler's thread removes: the temporary outputs being written now.
+TEST_F(FileTest, RemoveTemporaryOutputsDeletesWhatIsBeingWritten) {
+    TempDirCommit out(path("gather"));
+    writeFileAtomic(out.path() + "/count.npy", "x");
+    ASSERT_TRUE(fs::exists(out.path()));
+    removeTemporaryOutputs();
+    EXPECT_FALSE(fs::exists(out.path()));
+    writeFileAtomic(path("kept.txt"), "done");  // finished files are not listed
+    removeTemporaryOutputs();
+    EXPECT_EQ(readFile(path("kept.txt")), "done");
 }
 
 TEST_F(FileTest, ConcurrentWritersNeverTearTheFile) {

@@ -17,6 +17,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/limits.h"
 
 namespace weft {
 
@@ -26,12 +27,20 @@ namespace {
     throw InputError("cannot read image '" + path + "': " + reason);
 }
 
-void checkPixelCount(const std::string& path, int64_t width, int64_t height) {
+}  // namespace
+
+void checkImageSize(const std::string& path, int64_t width, int64_t height) {
     if (width < 1 || height < 1 || width > kMaxImagePixels / height)
         failRead(path, "size " + std::to_string(width) + " x " + std::to_string(height) +
                            " is empty or larger than " + std::to_string(kMaxImagePixels) +
                            " texels (corrupt header?)");
+    // The float RGB image and the decoder's own buffer (up to as much again).
+    checkMemoryBudget(static_cast<double>(width) * height * 24.0,
+                      "reading image '" + path + "' (" + std::to_string(width) + " x " +
+                          std::to_string(height) + ")");
 }
+
+namespace {
 
 Image readExr(const std::string& path, const std::string& bytes) {
     try {
@@ -41,7 +50,7 @@ Image readExr(const std::string& path, const std::string& bytes) {
         const Imath::Box2i dataWindow = file.header().dataWindow();
         const int64_t width = int64_t(dataWindow.max.x) - dataWindow.min.x + 1;
         const int64_t height = int64_t(dataWindow.max.y) - dataWindow.min.y + 1;
-        checkPixelCount(path, width, height);
+        checkImageSize(path, width, height);
 
         const Imf::ChannelList& channels = file.header().channels();
         const bool hasRgb =
@@ -154,7 +163,7 @@ Image readHdr(const std::string& path, const std::string& bytes) {
     int width = 0, height = 0, channels = 0;
     if (!stbi_info_from_memory(data, size, &width, &height, &channels))
         failRead(path, std::string("bad Radiance header (") + stbi_failure_reason() + ")");
-    checkPixelCount(path, width, height);
+    checkImageSize(path, width, height);
     // A scanline takes 4 bytes per texel, or, run-length encoded (widths 8 to
     // 32767), at least 4 header bytes and 2 bytes per run of up to 127 values
     // of each of its 4 channels: a header claiming more texels than the file
@@ -190,11 +199,17 @@ Image readImage(const std::string& path) {
     const std::string ext = lowercaseExtension(path);
     if (ext != ".exr" && ext != ".hdr")
         failRead(path, "unsupported extension '" + ext + "' (expected .exr or .hdr)");
-    const std::string bytes = readFile(path);
+    return decodeImage(readFile(path), path);
+}
+
+Image decodeImage(const std::string& bytes, const std::string& path) {
+    const std::string ext = lowercaseExtension(path);
+    if (ext != ".exr" && ext != ".hdr")
+        failRead(path, "unsupported extension '" + ext + "' (expected .exr or .hdr)");
     return ext == ".exr" ? readExr(path, bytes) : readHdr(path, bytes);
 }
 
-void writeExr(const std::string& path, const Image& image) {
+std::string encodeExr(const Image& image, const std::string& path) {
     checkImage(image, "cannot write OpenEXR image '" + path + "'");
     std::string bytes;
     try {
@@ -219,7 +234,11 @@ void writeExr(const std::string& path, const Image& image) {
     } catch (const Iex::BaseExc& e) {
         throw InputError("cannot write OpenEXR image '" + path + "': " + e.what());
     }
-    writeFileAtomic(path, bytes);
+    return bytes;
+}
+
+void writeExr(const std::string& path, const Image& image) {
+    writeFileAtomic(path, encodeExr(image, path));
 }
 
 }  // namespace weft

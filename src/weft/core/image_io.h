@@ -25,15 +25,25 @@ namespace weft {
 // corrupt rather than allocated.
 inline constexpr int64_t kMaxImagePixels = int64_t(1) << 28;
 
+// Refuses (InputError naming `path`) an image header of width x height texels
+// that is empty, over kMaxImagePixels, or whose decoding would exceed the
+// memory budget (core/limits.h): checked before any texel is allocated.
+void checkImageSize(const std::string& path, int64_t width, int64_t height);
+
 // Reads a linear RGB image, OpenEXR (.exr) or Radiance RGBE (.hdr); the
 // extension picks the reader (case-insensitive). Values are returned as
 // stored (no validation). InputError naming the file for a missing,
 // unreadable, truncated or corrupt file, an unknown extension, or more than
 // kMaxImagePixels texels.
 Image readImage(const std::string& path);
+// The same on the file's bytes; `path` picks the reader by its extension and
+// names the file in errors.
+Image decodeImage(const std::string& bytes, const std::string& path);
 // Writes linear RGB as an OpenEXR file with 32-bit float R, G, B channels,
 // atomically (temp file + rename). InputError naming the file for an image
 // that fails checkImage or a file that cannot be written.
 void writeExr(const std::string& path, const Image& image);
+// The bytes writeExr writes (`path` only names the file in errors).
+std::string encodeExr(const Image& image, const std::string& path);
 
 }  // namespace weft

@@ -1,23 +1,29 @@
-// weft/core/json_file.h — reading a JSON input file with a clear error.
+// weft/core/json_file.h — parsing a JSON input strictly, with a clear error.
+//
+// Every JSON input (scene.json, model.json, fiber parameters, the fit
+// configuration, an RDM's meta.json) goes through parseJsonText, which is
+// stricter than nlohmann::json::parse:
+//   - a key that repeats in one object is an error (the default keeps the last);
+//   - nesting deeper than kMaxJsonNesting levels is refused before any tree is
+//     built (recursive code would otherwise walk a hostile depth);
+//   - a number beyond double's range (1e400) is an error at its position;
+// and every error is an InputError naming the source and the line:column
+// ("model.json:3:14: malformed JSON: ...") or the JSON path of a duplicate key.
 #pragma once
 
 #include <nlohmann/json.hpp>
 #include <string>
-
-#include "weft/core/error.h"
-#include "weft/core/file.h"
+#include <string_view>
 
 namespace weft {
 
-// The parsed file; InputError naming `path` (and the byte offset of a syntax
-// error) when it is missing, unreadable or malformed.
-inline nlohmann::json readJsonFile(const std::string& path) {
-    const std::string text = readFile(path);
-    try {
-        return nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw InputError(path + ": malformed JSON at byte " + std::to_string(e.byte) + ": " + e.what());
-    }
-}
+// A real input nests a handful of levels (a model's network layers: 4).
+constexpr int kMaxJsonNesting = 64;
+
+// `source` names the input in messages (a path, or "scene" for a document in memory).
+nlohmann::json parseJsonText(std::string_view text, const std::string& source);
+
+// readFile (core/file.h: regular files within the size limit) + parseJsonText.
+nlohmann::json readJsonFile(const std::string& path);
 
 }  // namespace weft

@@ -37,6 +37,14 @@ constexpr Vec3 cross(const Vec3& a, const Vec3& b) {
 }
 inline double length(const Vec3& a) { return std::sqrt(dot(a, a)); }
 inline Vec3 normalize(const Vec3& a) { return a / length(a); }
+// The unit vector along any finite non-zero v, however long or short: scaled
+// by its largest component first (so the squared length neither overflows nor
+// underflows), dividing each component, since 1 / s overflows for a
+// sub-normal s. v must be finite and non-zero.
+inline Vec3 normalizeAnyLength(const Vec3& v) {
+    const double largest = std::fmax(std::fabs(v.x), std::fmax(std::fabs(v.y), std::fabs(v.z)));
+    return normalize(Vec3{v.x / largest, v.y / largest, v.z / largest});
+}
 inline bool isFinite(const Vec3& a) {
     return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }

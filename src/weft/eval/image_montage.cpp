@@ -28,10 +28,18 @@ void MontageOptions::validate() const {
 
 Image readMontageInput(const std::string& path) {
     if (lowercaseExtension(path) != ".png") return readImage(path);
-    const std::string bytes = readFile(path);
+    return decodePng(readFile(path), path);
+}
+
+Image decodePng(const std::string& bytes, const std::string& path) {
     if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
         throw InputError("cannot read PNG image '" + path + "': file too large");
     int w = 0, h = 0, channels = 0;
+    // The header first: a 16384 x 16384 PNG is refused before it is decoded.
+    if (!stbi_info_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
+                               static_cast<int>(bytes.size()), &w, &h, &channels))
+        throw InputError("cannot read PNG image '" + path + "': " + stbi_failure_reason());
+    checkImageSize(path, w, h);
     std::unique_ptr<stbi_uc, void (*)(void*)> data(
         stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
                               static_cast<int>(bytes.size()), &w, &h, &channels, 3),

@@ -1,7 +1,5 @@
 #include "weft/eval/scene_gen.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -18,6 +16,7 @@
 #include "weft/core/json_message.h"
 #include "weft/core/math.h"
 #include "weft/render/camera.h"
+#include "weft/render/lights.h"
 #include "weft/yarn/yarn_model.h"
 
 namespace weft::eval {
@@ -179,9 +178,12 @@ void SceneOptions::validate() const {
         if (ext != ".exr" && ext != ".hdr")
             throw InputError("--envmap " + envmap +
                              ": expected an .exr or .hdr lat-long environment map");
-        std::error_code ec;
-        if (!fs::is_regular_file(envmap, ec) || ::access(envmap.c_str(), R_OK) != 0)
-            throw InputError("--envmap " + envmap + ": not a readable file");
+        // Loaded as the renderer will load it: a truncated or corrupt map fails here.
+        try {
+            render::EnvironmentLight::load(envmap, 1.0, 0.0);
+        } catch (const InputError& e) {
+            throw InputError(std::string("--envmap: ") + e.what());
+        }
     }
     try {
         loadYarnModel(model);

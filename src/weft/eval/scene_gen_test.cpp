@@ -444,7 +444,11 @@ TEST_F(SceneGenFiles, ReplacesAnEarlierSceneOnly) {
 }
 
 TEST_F(SceneGenFiles, EnvmapReplacesTheSky) {
-    writeFileAtomic(path("studio.HDR"), "#?RADIANCE\n");
+    // A 4 x 2 Radiance map, flat RGBE texels of 1.0 (the upper-case
+    // extension counts as .hdr).
+    std::string hdr = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 4\n";
+    for (int k = 0; k < 8; ++k) hdr += "\x80\x80\x80\x81";
+    writeFileAtomic(path("studio.HDR"), hdr);
     SceneOptions o = options(2);
     o.envmap = path("studio.HDR");
     const GeneratedScene g = knitScene(o);
@@ -453,6 +457,10 @@ TEST_F(SceneGenFiles, EnvmapReplacesTheSky) {
     EXPECT_EQ(g.scene.lights[0].file, path("studio.HDR"));
     o.envmap = path("missing.exr");
     expectInputError([&] { knitScene(o); }, {"--envmap", "missing.exr"});
+    // The map is loaded as the renderer will load it: a header alone fails now.
+    writeFileAtomic(path("cut.hdr"), "#?RADIANCE\n");
+    o.envmap = path("cut.hdr");
+    expectInputError([&] { knitScene(o); }, {"--envmap", "cut.hdr"});
     o.envmap = path("studio.png");
     expectInputError([&] { knitScene(o); }, {"--envmap", "studio.png", ".exr", ".hdr"});
 }

@@ -258,7 +258,10 @@ TEST(FiberParams, ValidationNamesFieldAndRange) {
     expectError(p, "c_tt[2]");
     p = good;
     p.betaRDeg = 0;
-    expectError(p, "beta_r_deg = 0 is out of range: allowed (0, 90] degrees");
+    expectError(p, "beta_r_deg = 0 is out of range: allowed [0.1, 90] degrees");
+    // Positive but so narrow that eval underflows to 0 everywhere (issue 18).
+    p.betaRDeg = 1e-300;
+    expectError(p, "beta_r_deg = 1e-300 is out of range: allowed [0.1, 90] degrees");
     p = good;
     p.betaTTDeg = 90.5;
     expectError(p, "beta_tt_deg");
@@ -294,17 +297,17 @@ TEST(FiberParams, JsonIsStrict) {
     j = good;
     j["gamma_tt_deg"] = "wide";
     expectError(j,
-                "x.json: gamma_tt_deg: expected a number in (0, 90] degrees, got the string "
+                "x.json: gamma_tt_deg: expected a number in [0.1, 90] degrees, got the string "
                 "\"wide\"");
     j = good;
     j["c_tt"] = {0.1, -0.2, 0.3};
     expectError(j, "x.json: c_tt[1] = -0.2 is out of range: allowed [0, 1]");
     j = good;
     j["beta_r_deg"] = std::numeric_limits<double>::quiet_NaN();
-    expectError(j, "x.json: beta_r_deg: expected a finite number in (0, 90] degrees, got nan");
+    expectError(j, "x.json: beta_r_deg: expected a finite number in [0.1, 90] degrees, got nan");
     j = good;
     j["beta_tt_deg"] = 90.5;
-    expectError(j, "x.json: beta_tt_deg = 90.5 is out of range: allowed (0, 90] degrees");
+    expectError(j, "x.json: beta_tt_deg = 90.5 is out of range: allowed [0.1, 90] degrees");
     // One number stands for all three channels; the path names the object in a larger file.
     j = good;
     j["c_r"] = 0.25;

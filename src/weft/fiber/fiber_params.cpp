@@ -15,7 +15,9 @@ namespace {
 
 // The allowed values, shared by validate() and the JSON reader.
 const NumberRange kAttenuationRange = NumberRange::closed(0, 1);
-const NumberRange kAngleRange = NumberRange::openClosed(0, 90).with("degrees");
+// Narrower lobes than 0.1 degrees are far below what fibers show, and at the
+// extreme (1e-300 degrees) eval underflows to 0 everywhere: a silently black fiber.
+const NumberRange kAngleRange = NumberRange::closed(0.1, 90).with("degrees");
 
 void checkAngle(double deg, const char* field, const std::string& source) {
     if (!std::isfinite(deg) || !kAngleRange.contains(deg))

@@ -4,9 +4,9 @@
 // DESIGN.md 3):
 //   c_r          [r,g,b] in [0,1]  Schlick reflectance at normal incidence (C_R)
 //   c_tt         [r,g,b] in [0,1]  transmission attenuation (C_TT)
-//   beta_r_deg   (0, 90]           longitudinal width of R, degrees
-//   beta_tt_deg  (0, 90]           longitudinal width of TT, degrees
-//   gamma_tt_deg (0, 90]           azimuthal width of TT, degrees (kappa = 1/gamma^2)
+//   beta_r_deg   [0.1, 90]         longitudinal width of R, degrees
+//   beta_tt_deg  [0.1, 90]         longitudinal width of TT, degrees
+//   gamma_tt_deg [0.1, 90]         azimuthal width of TT, degrees (kappa = 1/gamma^2)
 // JSON form: {"c_r":[r,g,b],"c_tt":[r,g,b],"beta_r_deg":x,"beta_tt_deg":x,"gamma_tt_deg":x};
 // unknown keys are an error. The paper's Table 3 materials (these and the ply
 // geometry) are the presets of yarn/material_preset.h.

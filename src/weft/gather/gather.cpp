@@ -14,6 +14,7 @@
 #include "weft/core/curve_io.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/limits.h"
 #include "weft/core/math.h"
 #include "weft/core/npy.h"
 #include "weft/core/progress.h"
@@ -42,14 +43,19 @@ constexpr int64_t kChunk = 1024;  // paths per task
 }  // namespace
 
 void GatherOptions::validate() const {
-    if (paths < 1)
-        throw InputError("paths = " + std::to_string(paths) + " is out of range: allowed >= 1");
+    // Each path adds a weight of at most 1 to a cell, so 2^31 paths cannot
+    // overflow the fixed-point accumulators.
+    checkRange("paths =", paths, 1, kMaxPaths, " (the fixed-point sums hold 2^31 paths)");
     checkRange("max depth =", maxDepth, 1, 1000000);
     checkRange("threads =", threads, 0, 1024, " (0: all cores)");
     PeriodicPlyTracer::validateSegmentsPerTwist(segmentsPerTwist);
     fiber.validate();
     ply.validate();
     bins.validate();
+    // The R and M maps: int64 sums while gathering, float results, and their
+    // copies on the way to disk: about 96 bytes per cell.
+    checkMemoryBudget(static_cast<double>(bins.incidentCount()) * bins.outgoingCount() * 96.0,
+                      "the RDM's bins (" + bins.toString() + ")");
 }
 
 GatherResult gatherRdm(const GatherOptions& o) {
@@ -196,7 +202,9 @@ GatherResult gatherRdm(const GatherOptions& o) {
 }
 
 void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& out) {
-    const auto file = [&](const char* name) { return (std::filesystem::path(out.path()) / name).string(); };
+    const auto file = [&](const char* name) {
+        return (std::filesystem::path(out.path()) / name).string();
+    };
     const RdmBins& b = r.bins;
     const size_t ti = b.thetaI, pi = b.phiI, to = b.thetaO, po = b.phiO;
     writeNpy(file("count.npy"), r.count.data(), {ti, pi});
@@ -259,7 +267,8 @@ nlohmann::json gatherMetadata(const GatherResult& r, const GatherOptions& o) {
           {"rdm_r", "float32 (TI,PI,TO,PO,3): R weight / count / outgoing solid angle"},
           {"rdm_m", "float32 (TI,PI,TO,PO,3): M weight / count / outgoing solid angle"},
           {"truncated", "float64 (TI,PI,3): weight of paths cut at max_depth / count"},
-          {"depth", "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}}};
+          {"depth",
+           "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}}};
 }
 
 }  // namespace weft

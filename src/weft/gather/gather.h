@@ -33,11 +33,15 @@
 
 namespace weft {
 
+// The most random walks of one gather: the RDM's fixed-point accumulators
+// (2^-32 units in int64) hold 2^31 unit-weight paths per cell.
+constexpr int64_t kMaxPaths = int64_t{1} << 31;
+
 struct GatherOptions {
     FiberParams fiber;
     PlyParams ply;
     std::string material;  // preset name, or the params file, for the record
-    int64_t paths = 0;     // >= 1
+    int64_t paths = 0;     // in [1, kMaxPaths]
     uint64_t seed = 0;                  // random walks (and fiber placement unless plySeed is set)
     std::optional<uint64_t> plySeed;    // fiber placement; default: seed
     RdmBins bins;

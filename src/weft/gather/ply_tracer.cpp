@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "weft/core/error.h"
+#include "weft/core/limits.h"
 #include "weft/core/math.h"
 
 namespace weft {
@@ -35,8 +36,8 @@ ExcludeContext makeContext(int excludedFiber) {
 
 // One Embree query over [0, tfar]; returns the hit distance and sets *fiber,
 // or returns a negative value when nothing is hit.
-double intersect(RTCScene scene, ExcludeContext& ctx, const Vec3& org, const Vec3& dir,
-                 double tfar, int* fiber) {
+double intersect(RTCScene scene, ExcludeContext& ctx, const Vec3& org, const Vec3& dir, double tfar,
+                 int* fiber) {
     RTCRayHit rh;
     initRay(rh, org, dir, tfar);
     rtcIntersect1(scene, &ctx.context, &rh);
@@ -72,13 +73,19 @@ PeriodicPlyTracer::PeriodicPlyTracer(const PlyGeometry& ply, int segmentsPerTwis
     const double dz = straight ? (period_ + 2.0 * margin_) / (points - 1 - (cubic ? 2 : 0)) : step;
     const double zStart = straight && cubic ? z0 - dz : z0;
 
+    // Per control point: the float4 vertex, the double copy in lines_, an
+    // index and a flag, and Embree's BVH (about 100 bytes per segment).
+    checkMemoryBudget(static_cast<double>(ply_.centres.size()) * points * 150.0,
+                      "the explicit ply (" + std::to_string(ply_.centres.size()) + " fibers x " +
+                          std::to_string(points) + " points)");
     scene_ = rtcNewScene(device_.get());
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
     lines_.resize(ply_.centres.size());
     for (int i = 0; i < static_cast<int>(ply_.centres.size()); ++i) {
-        RTCGeometry geom = rtcNewGeometry(device_.get(), cubic ? RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE
-                                                               : RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE);
+        RTCGeometry geom =
+            rtcNewGeometry(device_.get(), cubic ? RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE
+                                                : RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE);
         auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
             geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), points));
         auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
@@ -108,7 +115,8 @@ PeriodicPlyTracer::PeriodicPlyTracer(const PlyGeometry& ply, int segmentsPerTwis
         rtcCommitGeometry(geom);
         const unsigned id = rtcAttachGeometry(scene_, geom);
         rtcReleaseGeometry(geom);
-        if (id != static_cast<unsigned>(i)) throw std::runtime_error("unexpected Embree geometry id");
+        if (id != static_cast<unsigned>(i))
+            throw std::runtime_error("unexpected Embree geometry id");
         segments_ += segments;
     }
     rtcCommitScene(scene_);

@@ -48,7 +48,12 @@ RdmData loadRdm(const std::string& dir) {
     if (!b.is_array() || b.size() != 4 || !b[0].is_number_integer() || !b[1].is_number_integer() ||
         !b[2].is_number_integer() || !b[3].is_number_integer())
         throw InputError(metaPath + ": \"bins\" must be four integers [TI, PI, TO, PO]");
-    d.bins = {b[0].get<int>(), b[1].get<int>(), b[2].get<int>(), b[3].get<int>()};
+    // Through double: get<int> would wrap 2^32 + 22 around to 22.
+    const auto count = [&](int k) {
+        const double v = b[k].get<double>();
+        return v >= 0 && v <= 1e9 ? static_cast<int>(v) : -1;  // -1: validate() names it
+    };
+    d.bins = {count(0), count(1), count(2), count(3)};
     try {
         d.bins.validate();
     } catch (const InputError& e) {

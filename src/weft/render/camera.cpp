@@ -7,9 +7,11 @@
 namespace weft::render {
 
 ViewAxes viewAxes(const Vec3& forward, const Vec3& up) {
+    // Either vector may be sub-normal or huge (scene_file.cpp has checked that
+    // they are finite, non-zero and not parallel).
     ViewAxes a;
-    a.forward = normalize(forward);
-    a.right = normalize(cross(a.forward, up));
+    a.forward = normalizeAnyLength(forward);
+    a.right = normalize(cross(a.forward, normalizeAnyLength(up)));
     a.up = cross(a.right, a.forward);
     return a;
 }

@@ -9,6 +9,7 @@
 #include "weft/core/image_io.h"
 #include "weft/core/math.h"
 #include "weft/core/sampling.h"
+#include "weft/render/scene_limits.h"
 
 namespace weft::render {
 
@@ -92,10 +93,11 @@ EnvironmentLight::EnvironmentLight(Image image, double scale, double rotateDeg,
         for (int x = 0; x < w; ++x)
             for (int c = 0; c < 3; ++c) {
                 const double v = image_.pixels[3 * (size_t(y) * w + x) + c];
-                if (!(std::isfinite(v) && v >= 0))
+                if (!(std::isfinite(v) && v >= 0 && v * scale <= kMaxRadiance))
                     throw InputError(what + ": texel (x " + std::to_string(x) + ", y " +
                                      std::to_string(y) + ") channel " + "RGB"[c] + " = " +
-                                     format(v) + " must be finite and >= 0");
+                                     format(v) + " must be finite, >= 0 and, times scale " +
+                                     format(scale) + ", at most " + format(kMaxRadiance));
             }
     cosRot_ = std::cos(rotateRad_);
     sinRot_ = std::sin(rotateRad_);

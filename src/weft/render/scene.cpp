@@ -4,8 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <sstream>
 
 #include "weft/core/error.h"
+#include "weft/core/limits.h"
 #include "weft/core/math.h"
 #include "weft/core/progress.h"
 #include "weft/core/rng.h"
@@ -51,6 +53,37 @@ double largestRadius(const Curve& curve, const YarnDesc& yarn) {
            static_cast<double>(*std::max_element(curve.radii.begin(), curve.radii.end()));
 }
 
+// What the geometry costs per segment: Embree's curve and BVH (about 60
+// bytes), the tube's own copy and the framed curve it came from.
+constexpr double kBytesPerSegment = 160;
+
+std::string geometryName(const SceneDesc& desc, size_t yarn, RenderMode mode) {
+    return (desc.path.empty() ? std::string("scene") : desc.path) + ": yarns[" +
+           std::to_string(yarn) + "] (" + desc.yarns[yarn].curves + "): the " +
+           renderModeName(mode) + " geometry up to this yarn";
+}
+
+// Every curve point, times the yarn's scale, within kMaxSceneCoordinate
+// (scene_file.h): Embree works in float.
+void checkCurveExtent(const CurveSet& set, const SceneDesc& desc, size_t yarn) {
+    const double limit = kMaxSceneCoordinate / desc.yarns[yarn].scale;
+    for (size_t c = 0; c < set.curves.size(); ++c) {
+        const std::vector<Vec3>& points = set.curves[c].points;
+        for (size_t k = 0; k < points.size(); ++k) {
+            const Vec3& p = points[k];
+            if (std::fabs(p.x) <= limit && std::fabs(p.y) <= limit && std::fabs(p.z) <= limit)
+                continue;
+            std::ostringstream msg;
+            msg << (desc.path.empty() ? std::string("scene") : desc.path) << ": yarns[" << yarn
+                << "] (" << desc.yarns[yarn].curves << "): curve " << c << ", point " << k << " "
+                << p << " times scale " << desc.yarns[yarn].scale
+                << " is out of range: allowed coordinates within +-" << kMaxSceneCoordinate
+                << " scene units";
+            throw InputError(msg.str());
+        }
+    }
+}
+
 [[noreturn]] void tooMuchGeometry(const SceneDesc& desc, size_t yarn, RenderMode mode) {
     throw InputError((desc.path.empty() ? std::string("scene") : desc.path) + ": yarns[" +
                      std::to_string(yarn) + "] (" + desc.yarns[yarn].curves + "): the " +
@@ -69,6 +102,11 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
       height_(desc.film.height),
       accel_(std::make_unique<TubeAccel>()) {
     const auto start = std::chrono::steady_clock::now();
+    // The film: double RGB sums while rendering, then the float image and its
+    // EXR and PNG encodings: about 56 bytes per pixel.
+    checkMemoryBudget(static_cast<double>(width_) * height_ * 56.0,
+                      (desc.path.empty() ? std::string("scene") : desc.path) + ": the film (" +
+                          std::to_string(width_) + " x " + std::to_string(height_) + ")");
     for (const LightDesc& light : desc.lights) lights_.push_back(makeLight(light));
     if (lights_.empty()) lights_.push_back(std::make_unique<EnvironmentLight>(skyLight()));
 
@@ -79,6 +117,7 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
     std::vector<int> yarnMaterial;
     for (const YarnDesc& yarn : desc.yarns) {
         curveSets.push_back(readCurves(yarn.curves));
+        checkCurveExtent(curveSets.back(), desc, curveSets.size() - 1);
         stats_.curves += static_cast<int64_t>(curveSets.back().curves.size());
         stats_.curvePoints += static_cast<int64_t>(curveSets.back().pointCount());
         auto [it, inserted] = materialOf.try_emplace(yarn.model, static_cast<int>(plyOf.size()));
@@ -115,6 +154,8 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
                                     (mode == RenderMode::Neural ? 1 : fibers.fibers);
             if (static_cast<double>(planned) + estimate > static_cast<double>(kMaxSceneSegments))
                 tooMuchGeometry(desc, y, mode);
+            checkMemoryBudget((static_cast<double>(planned) + estimate) * kBytesPerSegment,
+                              geometryName(desc, y, mode));
             const FramedCurve centre =
                 frameCurve(curves[c], yarn.scale, yarn.radius, step, yarn.curves, c);
             const std::vector<FramedCurve> plies = plyCurves(centre, yarn.plies, yarn.plyTwist);

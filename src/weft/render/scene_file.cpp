@@ -14,6 +14,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/json_reader.h"
 
@@ -22,12 +23,6 @@ namespace weft::render {
 namespace {
 
 using nlohmann::json;
-
-// A real scene nests 3 deep (lights[i].center); the limit only keeps hostile
-// input from building deep trees that recursive code (copy, dump) would walk.
-constexpr int kMaxNesting = 64;
-// A syntax error's detail is cut here: a message should not echo megabytes.
-constexpr size_t kMaxSyntaxDetail = 200;
 
 constexpr int kMaxFilmSide = 16384;
 constexpr int kMaxSpp = 1 << 20;
@@ -44,168 +39,24 @@ std::string joinNames(std::initializer_list<const char*> names) {
     return out;
 }
 
-// "FILE:LINE:COLUMN" of the byte at `index` (1-based line and column; the
-// end of the text when index is past it).
-std::string textPosition(std::string_view text, const std::string& source, size_t index) {
-    index = std::min(index, text.size());
-    const std::string_view before = text.substr(0, index);
-    const size_t line = 1 + static_cast<size_t>(std::count(before.begin(), before.end(), '\n'));
-    const size_t lineStart = before.rfind('\n');
-    const size_t column = index - (lineStart == std::string_view::npos ? 0 : lineStart + 1) + 1;
-    return source + ":" + std::to_string(line) + ":" + std::to_string(column);
-}
-
-// nlohmann's message without its "[json.exception...] parse error at line L,
-// column C: " prefix (we print our own position), cut to a sane length.
-std::string syntaxDetail(const std::string& what) {
-    std::string detail = what;
-    if (!detail.empty() && detail.front() == '[') {
-        const size_t close = detail.find("] ");
-        if (close != std::string::npos) detail.erase(0, close + 2);
-    }
-    if (detail.rfind("parse error", 0) == 0) {
-        const size_t colon = detail.find(": ");
-        if (colon != std::string::npos) detail.erase(0, colon + 2);
-    }
-    if (detail.size() > kMaxSyntaxDetail) detail = detail.substr(0, kMaxSyntaxDetail) + "...";
-    return detail;
-}
-
-// Rejects nesting deeper than kMaxNesting before the parser builds the tree.
-void checkNesting(std::string_view text, const std::string& source) {
-    int depth = 0;
-    bool inString = false, escaped = false;
-    for (size_t i = 0; i < text.size(); ++i) {
-        const char c = text[i];
-        if (inString) {
-            if (escaped) {
-                escaped = false;
-            } else if (c == '\\') {
-                escaped = true;
-            } else if (c == '"') {
-                inString = false;
-            }
-        } else if (c == '"') {
-            inString = true;
-        } else if (c == '[' || c == '{') {
-            if (++depth > kMaxNesting)
-                throw InputError(textPosition(text, source, i) + ": JSON nested deeper than " +
-                                 std::to_string(kMaxNesting) + " levels");
-        } else if ((c == ']' || c == '}') && depth > 0) {
-            --depth;
-        }
-    }
-}
-
-// Builds the tree like nlohmann's own DOM parser, but a key that repeats in
-// one object is an error (the default keeps the last silently) and the byte
-// position of a syntax error is kept for a line:column message.
-class StrictSax final : public nlohmann::json_sax<json> {
-  public:
-    bool null() override { return add(json(nullptr)); }
-    bool boolean(bool v) override { return add(json(v)); }
-    bool number_integer(number_integer_t v) override { return add(json(v)); }
-    bool number_unsigned(number_unsigned_t v) override { return add(json(v)); }
-    bool number_float(number_float_t v, const string_t&) override { return add(json(v)); }
-    bool string(string_t& v) override { return add(json(std::move(v))); }
-    bool binary(binary_t& v) override { return add(json::binary(std::move(v))); }
-
-    bool start_object(std::size_t) override { return open(json::object()); }
-    bool start_array(std::size_t) override { return open(json::array()); }
-    bool end_object() override { return close(); }
-    bool end_array() override { return close(); }
-
-    bool key(string_t& k) override {
-        Frame& top = stack_.back();
-        auto& object = top.container->get_ref<json::object_t&>();
-        if (object.count(k) != 0) {
-            duplicate_ = "duplicate key " + jsonString(k);
-            duplicatePath_ = openPath();
-            return false;
-        }
-        top.slot = &object[k];
-        top.key = std::move(k);
-        return true;
-    }
-
-    // position counts the bytes read. A syntax error stops on the offending
-    // byte; a number overflow (406) is reported after the number, whose text
-    // is lastToken: point at its first digit instead.
-    bool parse_error(std::size_t position, const std::string& lastToken,
-                     const nlohmann::json::exception& e) override {
-        const bool overflow = e.id == 406 && lastToken.size() <= position;
-        errorIndex_ = overflow ? position - lastToken.size() : (position == 0 ? 0 : position - 1);
-        errorDetail_ = syntaxDetail(e.what());
-        return false;
-    }
-
-    json& root() { return root_; }
-    // "duplicate key \"k\"" ("" for none), and the JSON path of its object.
-    const std::string& duplicate() const { return duplicate_; }
-    const std::string& duplicatePath() const { return duplicatePath_; }
-    size_t errorIndex() const { return errorIndex_; }
-    const std::string& errorDetail() const { return errorDetail_; }
-
-  private:
-    struct Frame {
-        json* container;
-        json* slot = nullptr;  // object: the value of the current key
-        std::string key;
-    };
-
-    // Places a value in the open container (or as the root); `placed` is where it landed.
-    bool add(json v, json** placed = nullptr) {
-        json* at = &root_;
-        if (stack_.empty()) {
-            root_ = std::move(v);
-        } else if (Frame& top = stack_.back(); top.container->is_array()) {
-            top.container->push_back(std::move(v));
-            at = &top.container->back();
-        } else {
-            *top.slot = std::move(v);
-            at = top.slot;
-        }
-        if (placed != nullptr) *placed = at;
-        return true;
-    }
-    bool open(json container) {
-        json* placed = nullptr;
-        add(std::move(container), &placed);
-        stack_.push_back(Frame{placed, nullptr, {}});
-        return true;
-    }
-    bool close() {
-        stack_.pop_back();
-        return true;
-    }
-    // JSON path of the innermost open container ("" for the root).
-    std::string openPath() const {
-        std::string path;
-        for (size_t i = 0; i + 1 < stack_.size(); ++i) {
-            const Frame& f = stack_[i];
-            path = f.container->is_array() ? jsonIndexPath(path, f.container->size() - 1)
-                                           : jsonChildPath(path, f.key);
-        }
-        return path;
-    }
-
-    json root_;
-    std::vector<Frame> stack_;
-    std::string duplicate_, duplicatePath_;
-    size_t errorIndex_ = 0;
-    std::string errorDetail_;
-};
-
 // Scene value kinds over the shared strict reader (core/json_reader.h).
 
+// Lengths and scales: Embree works in float, so a scene is kept within
+// kMaxSceneCoordinate and its lengths within a factor 1e12 of each other.
+const NumberRange lengthRange =
+    NumberRange::closed(kMinSceneLength, kMaxSceneCoordinate).with("scene units");
+
+// A point or vector, each coordinate within kMaxSceneCoordinate.
 Vec3 readVec3(const JsonObjectReader& r, std::string_view key) {
-    const std::vector<double> v = r.numbers(key, 3);
+    const std::vector<double> v = r.numbers(
+        key, 3, NumberRange::closed(-kMaxSceneCoordinate, kMaxSceneCoordinate).with("scene units"));
     return {v[0], v[1], v[2]};
 }
 
-// Linear RGB radiance, each channel >= 0.
+// Linear RGB radiance, each channel in [0, kMaxRadiance].
 Rgb readRadiance(const JsonObjectReader& r, std::string_view key) {
-    const std::vector<double> v = r.numbers(key, 3, NumberRange::atLeast(0), "(r, g, b)");
+    const std::vector<double> v =
+        r.numbers(key, 3, NumberRange::closed(0, kMaxRadiance), "(r, g, b)");
     return {v[0], v[1], v[2]};
 }
 
@@ -231,13 +82,6 @@ std::string readFileName(const JsonObjectReader& r, std::string_view key,
     return (std::filesystem::path(baseDir) / name).string();
 }
 
-// v / its largest component: a direction whose length neither overflows nor
-// underflows (from and to may be huge or a denormal apart). Zero stays zero.
-Vec3 scaledDirection(const Vec3& v) {
-    const double m = std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
-    return m > 0 ? v / m : v;
-}
-
 CameraDesc readCamera(const JsonObjectReader& scene) {
     const JsonObjectReader r = scene.object("camera", {"from", "to", "up", "fov_deg"});
     CameraDesc c;
@@ -255,14 +99,10 @@ CameraDesc readCamera(const JsonObjectReader& scene) {
     const Vec3 view = c.to - c.from;
     if (c.from == c.to)
         r.failOutOfRange("to", vectorText(c.to), "any point other than camera.from");
-    if (!isFinite(view))
-        throwJsonError(r.source(), "",
-                       "camera.to - camera.from overflows (the points are too far apart): "
-                       "allowed a difference within the double range");
-    const Vec3 d = normalize(scaledDirection(view));
-    const Vec3 up = scaledDirection(c.up);
-    const double upLength = length(up);
-    if (upLength == 0 || length(cross(d, up)) < kMinUpSine * upLength)
+    // From and to (within kMaxSceneCoordinate) may be a sub-normal distance
+    // apart; up may be tiny.
+    const Vec3 d = normalizeAnyLength(view);
+    if (c.up == Vec3{0, 0, 0} || length(cross(d, normalizeAnyLength(c.up))) < kMinUpSine)
         r.failOutOfRange("up", vectorText(c.up),
                          "any vector not parallel to camera.to - camera.from");
     return c;
@@ -306,7 +146,7 @@ LightDesc readLight(JsonObjectReader r, const std::string& baseDir) {
     LightDesc l;
     l.type = kTypes[r.oneOf("type", {typeName(kTypes[0]), typeName(kTypes[1]), typeName(kTypes[2]),
                                      typeName(kTypes[3])})];
-    const NumberRange scale = NumberRange::atLeast(0);
+    const NumberRange scale = NumberRange::closed(0, kMaxRadiance);
     switch (l.type) {
         case Type::Sky:
             r.allowKeys({"type", "scale"});
@@ -315,13 +155,14 @@ LightDesc readLight(JsonObjectReader r, const std::string& baseDir) {
         case Type::Envmap:
             r.allowKeys({"type", "file", "scale", "rotate_deg"});
             l.file = readFileName(r, "file", baseDir, {".exr", ".hdr"});
-            if (r.has("rotate_deg")) l.rotateDeg = r.number("rotate_deg");
+            if (r.has("rotate_deg"))
+                l.rotateDeg = r.number("rotate_deg", NumberRange::closed(-3600, 3600));
             if (r.has("scale")) l.scale = r.number("scale", scale);
             break;
         case Type::Sphere:
             r.allowKeys({"type", "center", "radius", "radiance"});
             l.center = readVec3(r, "center");
-            l.radius = r.number("radius", NumberRange::greaterThan(0));
+            l.radius = r.number("radius", lengthRange);
             l.radiance = readRadiance(r, "radiance");
             break;
         case Type::Constant:
@@ -337,8 +178,8 @@ YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
     YarnDesc y;
     y.curves = readFileName(r, "curves", baseDir, {".bcc", ".txt", ".obj"});
     y.model = readFileName(r, "model", baseDir, {});
-    if (r.has("scale")) y.scale = r.number("scale", NumberRange::greaterThan(0));
-    if (r.has("radius")) y.radius = r.number("radius", NumberRange::greaterThan(0));
+    if (r.has("scale")) y.scale = r.number("scale", lengthRange);
+    if (r.has("radius")) y.radius = r.number("radius", lengthRange);
     if (r.has("plies")) y.plies = static_cast<int>(r.integer("plies", {1, kMaxPlies}));
     if (r.has("ply_twist"))
         y.plyTwist = r.number("ply_twist", NumberRange::closed(-kMaxPlyTwist, kMaxPlyTwist));
@@ -386,15 +227,8 @@ SceneDesc parseScene(const json& j, const std::string& pathForErrors, const std:
 
 SceneDesc parseSceneText(std::string_view text, const std::string& pathForErrors,
                          const std::string& baseDir) {
-    const std::string source = pathForErrors.empty() ? "scene" : pathForErrors;
-    checkNesting(text, source);
-    StrictSax sax;
-    if (!json::sax_parse(text.begin(), text.end(), &sax)) {
-        if (!sax.duplicate().empty()) throwJsonError(source, sax.duplicatePath(), sax.duplicate());
-        throw InputError(textPosition(text, source, sax.errorIndex()) +
-                         ": malformed JSON: " + sax.errorDetail());
-    }
-    return parseScene(sax.root(), pathForErrors, baseDir);
+    return parseScene(parseJsonText(text, pathForErrors.empty() ? "scene" : pathForErrors),
+                      pathForErrors, baseDir);
 }
 
 SceneDesc loadScene(const std::string& path) {
@@ -454,6 +288,21 @@ json toJson(const SceneDesc& scene) {
     }
     j["yarns"] = std::move(yarns);
     return j;
+}
+
+std::vector<CommandPath> sceneInputs(const SceneDesc& scene, const std::string& scenePath) {
+    std::vector<CommandPath> inputs;
+    if (!scenePath.empty()) inputs.push_back({"the scene file", scenePath});
+    for (size_t i = 0; i < scene.lights.size(); ++i)
+        if (scene.lights[i].type == LightDesc::Type::Envmap)
+            inputs.push_back(
+                {"the scene's lights[" + std::to_string(i) + "].file", scene.lights[i].file});
+    for (size_t i = 0; i < scene.yarns.size(); ++i) {
+        const std::string yarn = "the scene's yarns[" + std::to_string(i) + "].";
+        inputs.push_back({yarn + "curves", scene.yarns[i].curves});
+        inputs.push_back({yarn + "model", scene.yarns[i].model});
+    }
+    return inputs;
 }
 
 std::string sceneHash(const SceneDesc& scene) {

@@ -28,8 +28,10 @@
 #include <string_view>
 #include <vector>
 
+#include "weft/core/file.h"
 #include "weft/core/rgb.h"
 #include "weft/core/vec.h"
+#include "weft/render/scene_limits.h"
 
 namespace weft::render {
 
@@ -96,6 +98,11 @@ SceneDesc loadScene(const std::string& path);
 // The scene as JSON with every key written (defaults included) and paths as
 // stored; parseScene(toJson(s), ...) gives back s (a round-trip test).
 nlohmann::json toJson(const SceneDesc& scene);
+
+// Every file a render of the scene reads: the scene file itself
+// (`scenePath`, when not empty), each yarn's curves and model, each envmap,
+// named by their JSON paths (for core/file.h's checkOutputsSpareInputs).
+std::vector<CommandPath> sceneInputs(const SceneDesc& scene, const std::string& scenePath);
 
 // 16 hex digits identifying what a render of the scene depends on: the
 // canonical JSON of the scene (toJson, with paths replaced by the files'

@@ -1,6 +1,8 @@
 #include "weft/yarn/network.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "weft/core/error.h"
@@ -67,6 +69,36 @@ void NetworkWeights::validate(const std::string& name, int in, int out, OutputFu
     if (output != required)
         throw InputError(name + ".output: the yarn BSDF needs \"" + toString(required) + "\" (" +
                          why + "), got \"" + toString(output) + "\"");
+}
+
+void NetworkWeights::checkFiniteOnUnitInputs(const std::string& name) const {
+    // The inputs are unit-vector components (|x| <= 1), so |z_o| <= |b_o| +
+    // sum_j |w_oj| bound_j layer by layer (a PReLU scales by at most
+    // max(1, |a|)). Far below float's 3.4e38, no input can make the float
+    // inference overflow.
+    constexpr double kMaxActivation = 1e30;
+    std::vector<double> bound(static_cast<size_t>(inputs()), 1.0), next;
+    for (size_t l = 0; l < layers.size(); ++l) {
+        const NetworkLayer& layer = layers[l];
+        next.assign(static_cast<size_t>(layer.out), 0.0);
+        for (int o = 0; o < layer.out; ++o) {
+            double z = std::fabs(layer.bias[o]);
+            for (int j = 0; j < layer.in; ++j) z += std::fabs(layer.w(o, j)) * bound[j];
+            if (layer.hasPrelu())
+                z *= std::max(1.0, std::fabs(static_cast<double>(layer.prelu[o])));
+            if (!(z <= kMaxActivation)) {
+                char text[32];
+                std::snprintf(text, sizeof text, "%.3g", z);
+                throw InputError(name + ".layers[" + std::to_string(l) + "]: output " +
+                                 std::to_string(o) + " can reach " + text +
+                                 " for unit-vector inputs (weights, biases or PReLU slopes too "
+                                 "large): allowed at most 1e30, where float inference stays "
+                                 "finite");
+            }
+            next[o] = z;
+        }
+        bound.swap(next);
+    }
 }
 
 NetworkWeights NetworkWeights::initialised(const std::vector<int>& widths,

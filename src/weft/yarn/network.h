@@ -47,6 +47,12 @@ struct NetworkWeights {
     // sizes, and the output function `output` (`why` says what needs it).
     void validate(const std::string& name, int inputs, int outputs, OutputFunction output,
                   const char* why) const;
+    // InputError starting with `name` unless every value inside the network
+    // stays within 1e30 for any inputs in [-1, 1] (a bound from the weights'
+    // magnitudes), so that float inference cannot overflow whatever the
+    // direction. The file format holds any float; the runtime BSDF
+    // (yarn_bsdf.h) refuses networks that fail this.
+    void checkFiniteOnUnitInputs(const std::string& name) const;
 
     // The trainer's initialisation (PyTorch's Linear default): weights and
     // biases U(-1/sqrt(in), 1/sqrt(in)), PReLU slopes 0.25, from `seed`;

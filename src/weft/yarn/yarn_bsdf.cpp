@@ -20,6 +20,9 @@ namespace {
 const YarnModel& validated(const YarnModel& model, const std::string& source) {
     try {
         model.validate();
+        // The file format holds any float; inference must stay finite.
+        model.tNet.checkFiniteOnUnitInputs("t_net");
+        model.mNet.checkFiniteOnUnitInputs("m_net");
     } catch (const InputError& e) {
         throw InputError(source + ": " + e.what());
     }

@@ -310,7 +310,39 @@ TEST_F(YarnModelFile, NaNInTextIsAParseError) {
     text.replace(at, text.find(',', at) - at, "NaN");
     writeFileAtomic(path("model.json"), text);
     expectInputError([&] { loadYarnModel(path("model.json")); },
-                     {path("model.json"), "malformed JSON at byte"});
+                     {path("model.json") + ":", ": malformed JSON"});
+}
+
+// model.json is parsed as strictly as scene.json (core/json_file.h).
+TEST_F(YarnModelFile, DuplicateKeysAndOverflowingNumbersAreInputErrors) {
+    saveYarnModel(sampleModel(), path("good.json"));
+    const std::string text = readFile(path("good.json"));
+    std::string duplicate = text;
+    duplicate.insert(duplicate.find('{') + 1, "\"version\": 1, ");
+    writeFileAtomic(path("model.json"), duplicate);
+    expectInputError([&] { loadYarnModel(path("model.json")); },
+                     {path("model.json"), "duplicate key \"version\""});
+    std::string huge = text;
+    const size_t at = huge.find("\"bias\": [") + 9;
+    huge.replace(at, huge.find(',', at) - at, "1e400");
+    writeFileAtomic(path("model.json"), huge);
+    expectInputError([&] { loadYarnModel(path("model.json")); },
+                     {path("model.json") + ":", "number overflow parsing '1e400'"});
+}
+
+// A weight that float can hold but whose products overflow it: refused at
+// load, since no input could then be trusted to give a finite value (issue 18).
+TEST(YarnModel, NetworksMustStayFiniteOverTheirDomain) {
+    // sampleModel() stores float's extremes (a round-trip test): a file may.
+    expectInputError([] { sampleModel().mNet.checkFiniteOnUnitInputs("m_net"); },
+                     {"m_net.layers[0]: output 0 can reach", "allowed at most 1e30"});
+    NetworkWeights t = NetworkWeights::initialised({3, 7, 7, 1}, OutputFunction::Sigmoid, 11);
+    t.checkFiniteOnUnitInputs("t_net");
+    t.layers[0].bias[0] = 1e20f;
+    t.checkFiniteOnUnitInputs("t_net");
+    t.layers[1].weight[0] = 1e20f;
+    expectInputError([&] { t.checkFiniteOnUnitInputs("t_net"); },
+                     {"t_net.layers[1]: output 0 can reach 1e+40"});
 }
 
 TEST(YarnModel, VersionAndFormat) {
@@ -413,7 +445,7 @@ TEST_F(YarnModelFile, TruncatedFile) {
     const std::string text = readFile(path("model.json"));
     writeFileAtomic(path("model.json"), text.substr(0, text.size() / 2));
     expectInputError([&] { loadYarnModel(path("model.json")); },
-                     {path("model.json"), "malformed JSON at byte"});
+                     {path("model.json") + ":", ": malformed JSON"});
     writeFileAtomic(path("model.json"), "");
     expectInputError([&] { loadYarnModel(path("model.json")); },
                      {path("model.json"), "malformed JSON"});

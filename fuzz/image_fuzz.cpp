@@ -1,0 +1,25 @@
+// libFuzzer harness: the image readers. The first byte picks OpenEXR or
+// Radiance HDR (core/image_io.h: envmaps, `weft compare`) or PNG
+// (eval/image_montage.h: `weft montage`).
+#include "fuzz_util.h"
+#include "weft/core/image_io.h"
+#include "weft/eval/image_montage.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    if (size == 0) return 0;
+    const std::string bytes = weft::fuzz::bytesOf(data + 1, size - 1);
+    weft::fuzz::expectOnlyInputErrors([&] {
+        switch (data[0] % 3) {
+            case 0:
+                weft::decodeImage(bytes, "fuzz.exr");
+                break;
+            case 1:
+                weft::decodeImage(bytes, "fuzz.hdr");
+                break;
+            default:
+                weft::eval::decodePng(bytes, "fuzz.png");
+                break;
+        }
+    });
+    return 0;
+}

@@ -42,7 +42,146 @@ void checkImageSize(const std::string& path, int64_t width, int64_t height) {
 
 namespace {
 
+constexpr size_t kMalformed = ~size_t{0};
+
+// The bytes OpenEXR 3.1 reads for an attribute value of `type` at `at` (at
+// most `size` of them are there): fixed for the fixed-size types, parsed for
+// the channel list, the preview and string vectors (whose readers ignore the
+// size field or allocate what the value claims), `size` for the others
+// (strings, opaque and unknown types, read as `size` bytes); kMalformed for a
+// value that runs past `size`.
+size_t exrAttributeBytes(const std::string& type, const std::string& bytes, size_t at, size_t size,
+                         size_t maxName, size_t* channels) {
+    static const std::pair<const char*, size_t> kFixed[] = {
+        {"box2i", 16},      {"box2f", 16},   {"chromaticities", 32},
+        {"compression", 1}, {"double", 8},   {"envmap", 1},
+        {"float", 4},       {"int", 4},      {"keycode", 28},
+        {"lineOrder", 1},   {"m33f", 36},    {"m33d", 72},
+        {"m44f", 64},       {"m44d", 128},   {"rational", 8},
+        {"tiledesc", 9},    {"timecode", 8}, {"v2i", 8},
+        {"v2f", 8},         {"v2d", 16},     {"v3i", 12},
+        {"v3f", 12},        {"v3d", 24},     {"deepImageState", 1}};
+    for (const auto& [name, fixed] : kFixed)
+        if (type == name) return fixed;
+    const size_t end = at + size;
+    const auto u32 = [&](size_t k) {
+        uint32_t v = 0;
+        for (int b = 3; b >= 0; --b) v = v << 8 | static_cast<unsigned char>(bytes[k + b]);
+        return v;
+    };
+    if (type == "chlist") {
+        // Entries: name, then pixel type, linear flag, 3 reserved, x and y
+        // sampling (16 bytes); an empty name ends the list.
+        size_t p = at;
+        for (;;) {
+            const size_t nul = bytes.find('\0', p);
+            if (nul == std::string::npos || nul >= end || nul - p > maxName) return kMalformed;
+            if (nul == p) return nul + 1 - at;
+            ++*channels;
+            p = nul + 1 + 16;
+            if (p > end) return kMalformed;
+        }
+    }
+    if (type == "preview") {
+        // Width and height, then 4 bytes per texel, which OpenEXR allocates.
+        if (size < 8) return kMalformed;
+        const uint64_t texels = uint64_t{u32(at)} * u32(at + 4);
+        return texels <= (size - 8) / 4 ? static_cast<size_t>(8 + 4 * texels) : kMalformed;
+    }
+    if (type == "stringvector") {
+        // Strings with an int32 length each, which OpenEXR allocates.
+        size_t p = at;
+        while (p < end) {
+            if (p + 4 > end) return kMalformed;
+            const uint32_t length = u32(p);
+            if (length > end - p - 4) return kMalformed;
+            p += 4 + length;
+        }
+        return size;
+    }
+    if (type == "floatvector") return size % 4 == 0 ? size : kMalformed;
+    return size;
+}
+
+// Walks the OpenEXR header(s) before OpenEXR reads them: OpenEXR allocates
+// what an attribute's size field and the data window claim (its line-offset
+// table has one entry per scanline block), so a corrupt header could ask for
+// gigabytes. Every attribute must fit in the file, and each part's data window
+// must pass checkImageSize, before any of that is allocated.
+void checkExrHeaders(const std::string& path, const std::string& bytes) {
+    const auto corrupt = [&](const std::string& why) { failRead(path, "corrupt header: " + why); };
+    if (bytes.size() < 8 || static_cast<unsigned char>(bytes[0]) != 0x76 ||
+        static_cast<unsigned char>(bytes[1]) != 0x2f ||
+        static_cast<unsigned char>(bytes[2]) != 0x31 ||
+        static_cast<unsigned char>(bytes[3]) != 0x01)
+        failRead(path, "not an OpenEXR file (bad magic number)");
+    const auto u32 = [&](size_t at) {
+        uint32_t v = 0;
+        for (int k = 3; k >= 0; --k) v = v << 8 | static_cast<unsigned char>(bytes[at + k]);
+        return v;
+    };
+    const bool multipart = (u32(4) & 0x1000) != 0;
+    // Names and types are at most 31 characters, 255 with the long-names flag;
+    // OpenEXR reads a longer one in pieces, so such a file is refused here.
+    const size_t maxName = (u32(4) & 0x400) != 0 ? 255 : 31;
+    size_t at = 8;
+    // A null-terminated string of at most maxName characters starting at `at`.
+    const auto readString = [&](const char* what) {
+        const size_t end = bytes.find('\0', at);
+        if (end == std::string::npos || end - at > maxName)
+            corrupt(std::string(what) + " unterminated or longer than " + std::to_string(maxName) +
+                    " characters");
+        std::string text = bytes.substr(at, end - at);
+        at = end + 1;
+        return text;
+    };
+    for (int part = 0;; ++part) {
+        if (part > 0 && (!multipart || (at < bytes.size() && bytes[at] == '\0'))) break;
+        int64_t width = 0, height = 0;
+        size_t channels = 0;
+        double tileArea = 0;
+        for (;;) {
+            const std::string name = readString("attribute name");
+            if (name.empty()) break;
+            const std::string type = readString("attribute type");
+            if (at + 4 > bytes.size()) corrupt("attribute '" + name + "' has no size");
+            const uint32_t size = u32(at);
+            at += 4;
+            if (size > bytes.size() - at)
+                corrupt("attribute '" + name + "' claims " + std::to_string(size) +
+                        " bytes, the file has " + std::to_string(bytes.size() - at) + " left");
+            const size_t used = exrAttributeBytes(type, bytes, at, size, maxName, &channels);
+            if (used != size)
+                corrupt("attribute '" + name + "' of type '" + type + "' has size " +
+                        std::to_string(size) + " but holds " +
+                        (used == kMalformed ? std::string("a malformed value")
+                                            : std::to_string(used) + " bytes"));
+            if (name == "dataWindow" && type == "box2i") {
+                const auto i32 = [&](size_t k) { return static_cast<int32_t>(u32(at + 4 * k)); };
+                width = int64_t{i32(2)} - i32(0) + 1;
+                height = int64_t{i32(3)} - i32(1) + 1;
+                checkImageSize(path, width, height);
+            }
+            if (name == "tiles" && type == "tiledesc")
+                tileArea = static_cast<double>(u32(at)) * static_cast<double>(u32(at + 4));
+            at += size;
+        }
+        // OpenEXR's decompressor holds up to 256 scanlines (DWAB) of every
+        // channel (4 bytes a sample), twice, whatever the image's height; a
+        // tiled file one tile, whatever its claimed size.
+        checkMemoryBudget(std::max(static_cast<double>(width) *
+                                       static_cast<double>(std::max<int64_t>(height, 256)),
+                                   tileArea) *
+                              static_cast<double>(std::max<size_t>(channels, 1)) * 8.0,
+                          "reading image '" + path + "' (" + std::to_string(width) + " x " +
+                              std::to_string(height) + ", " + std::to_string(channels) +
+                              " channels, OpenEXR's buffers)");
+        if (!multipart) break;
+    }
+}
+
 Image readExr(const std::string& path, const std::string& bytes) {
+    checkExrHeaders(path, bytes);
     try {
         Imf::StdISStream stream;
         stream.str(bytes);

@@ -168,6 +168,40 @@ TEST_F(ImageFiles, MissingWrongOrGarbageFilesAreInputErrors) {
     expectInputError([&] { readImage(path("dir.exr")); }, {path("dir.exr")});
 }
 
+// OpenEXR allocates what a header claims (an attribute's size, one line
+// offset per scanline block of the data window): weft checks those claims
+// against the file and the limits first. tests/data/fuzz/ holds the libFuzzer
+// findings that asked OpenEXR for more than 1 GB (issue 18).
+TEST_F(ImageFiles, ExrHeadersClaimingHugeAllocationsAreInputErrors) {
+    // Its attribute size; an attribute name longer than 31 characters that
+    // OpenEXR would read in pieces; a 6.4 million texel wide, one-line image
+    // whose ZIP decompressor wanted 1.2 GB (16 lines of the claimed width).
+    for (const char* file :
+         {"exr-header-oom.exr", "exr-long-name-oom.exr", "exr-decompressor-oom.exr"}) {
+        const std::string finding =
+            readFile(std::string(WEFT_SOURCE_DIR) + "/tests/data/fuzz/" + file);
+        expectInputError([&] { decodeImage(finding, "finding.exr"); }, {"'finding.exr'"});
+    }
+    const std::string magic("\x76\x2f\x31\x01\x02\x00\x00\x00", 8);
+    const auto attribute = [](const std::string& name, const std::string& type,
+                              const std::string& value, uint32_t size) {
+        std::string a = name + '\0' + type + '\0';
+        for (int k = 0; k < 4; ++k) a += static_cast<char>(size >> (8 * k) & 0xff);
+        return a + value;
+    };
+    expectInputError(
+        [&] { decodeImage(magic + attribute("comment", "string", "x", 0x7fffffff), "a.exr"); },
+        {"a.exr", "corrupt header: attribute 'comment' claims 2147483647 bytes"});
+    std::string box;
+    for (int32_t v : {0, 0, 99999, 99999})
+        for (int k = 0; k < 4; ++k)
+            box += static_cast<char>(static_cast<uint32_t>(v) >> (8 * k) & 0xff);
+    expectInputError(
+        [&] { decodeImage(magic + attribute("dataWindow", "box2i", box, 16) + '\0', "b.exr"); },
+        {"b.exr", "100000 x 100000", "larger than"});
+    expectInputError([&] { decodeImage(std::string("\x76\x2f\x31", 3), "c.exr"); }, {"c.exr"});
+}
+
 TEST_F(ImageFiles, TruncatedFilesAreInputErrors) {
     Image image(37, 23);
     Rng rng(21, 21);

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <string>
@@ -31,7 +33,32 @@ Image readMontageInput(const std::string& path) {
     return decodePng(readFile(path), path);
 }
 
+namespace {
+
+// stb reserves what a PNG chunk's length field claims before reading it (up
+// to 2 GB): every chunk must fit in the file first.
+void checkPngChunks(const std::string& bytes, const std::string& path) {
+    static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    if (bytes.size() < 8 || std::memcmp(bytes.data(), kSignature, 8) != 0)
+        throw InputError("cannot read PNG image '" + path + "': not a PNG file (bad signature)");
+    for (size_t at = 8; at + 12 <= bytes.size();) {
+        uint32_t length = 0;
+        for (int k = 0; k < 4; ++k)
+            length = length << 8 | static_cast<unsigned char>(bytes[at + k]);
+        if (length > bytes.size() - at - 12)
+            throw InputError("cannot read PNG image '" + path + "': chunk at byte " +
+                             std::to_string(at) + " claims " + std::to_string(length) +
+                             " bytes, the file has " + std::to_string(bytes.size() - at - 12) +
+                             " left (truncated or corrupt)");
+        if (bytes.compare(at + 4, 4, "IEND") == 0) break;
+        at += 12 + length;
+    }
+}
+
+}  // namespace
+
 Image decodePng(const std::string& bytes, const std::string& path) {
+    checkPngChunks(bytes, path);
     if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
         throw InputError("cannot read PNG image '" + path + "': file too large");
     int w = 0, h = 0, channels = 0;

@@ -117,5 +117,16 @@ TEST_F(MontageFiles, BadInputsNameTheFileOrFlag) {
         {"at most 64"});
 }
 
+// A chunk length that stb would reserve (1.9 GB) before reading: the libFuzzer
+// finding of issue 18 (tests/data/fuzz/); and a header claiming more texels
+// than the memory budget allows.
+TEST_F(MontageFiles, PngHeadersClaimingHugeAllocationsAreInputErrors) {
+    const std::string finding =
+        readFile(std::string(WEFT_SOURCE_DIR) + "/tests/data/fuzz/png-chunk-oom.png");
+    expectInputError([&] { decodePng(finding, "finding.png"); },
+                     {"cannot read PNG image 'finding.png'", "claims", "truncated or corrupt"});
+    expectInputError([&] { decodePng("GIF89a", "g.png"); }, {"g.png", "not a PNG file"});
+}
+
 }  // namespace
 }  // namespace weft::eval

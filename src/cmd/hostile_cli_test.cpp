@@ -56,6 +56,13 @@ TEST_F(HostileCliTest, ExtremeSceneNumbersAreRefusedOrHandled) {
     writeScene("sky.json", camera(), R"([{"type": "sky", "scale": 1e308}])");
     expectUserError(run("render sky.json --out a.exr"),
                     {"sky.json", "scale = 1e+308", "[0, 1e+06]"});
+    // A curve point beyond the range, once scaled.
+    writeFileAtomic(path("far.txt"), "0 0 0\n1000001 0 0\n");
+    writeFileAtomic(path("far-curve.json"), R"({"camera": )" + std::string(camera()) + R"(,
+        "yarns": [{"curves": "far.txt", "radius": 0.03, "model": ")" + kFleece + R"("}]})");
+    expectUserError(run("render far-curve.json --out a.exr"),
+                    {"far-curve.json: yarns[0]", "curve 0, point 1 (1000001, 0, 0) times scale 1",
+                     "within +-1e+06 scene units"});
     // Legitimate, however small: a tiny up vector and a sub-normal view distance.
     writeScene("up.json", R"({"from": [0, 0, 1], "to": [0, 0, 0], "up": [0, 1e-300, 0]})");
     writeScene("close.json", R"({"from": [0, 0, 0], "to": [0, 0, 5e-324], "up": [0, 1, 0]})");

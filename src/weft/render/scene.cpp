@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "weft/core/error.h"
+#include "weft/core/json_message.h"
 #include "weft/core/limits.h"
 #include "weft/core/math.h"
 #include "weft/core/progress.h"
@@ -75,8 +76,9 @@ void checkCurveExtent(const CurveSet& set, const SceneDesc& desc, size_t yarn) {
                 continue;
             std::ostringstream msg;
             msg << (desc.path.empty() ? std::string("scene") : desc.path) << ": yarns[" << yarn
-                << "] (" << desc.yarns[yarn].curves << "): curve " << c << ", point " << k << " "
-                << p << " times scale " << desc.yarns[yarn].scale
+                << "] (" << desc.yarns[yarn].curves << "): curve " << c << ", point " << k << " ("
+                << formatNumber(p.x) << ", " << formatNumber(p.y) << ", " << formatNumber(p.z)
+                << ") times scale " << formatNumber(desc.yarns[yarn].scale)
                 << " is out of range: allowed coordinates within +-" << kMaxSceneCoordinate
                 << " scene units";
             throw InputError(msg.str());

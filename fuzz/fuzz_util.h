@@ -12,8 +12,8 @@
 
 namespace weft::fuzz {
 
-// The input as bytes, and the same without its first byte, which some
-// harnesses spend on choosing a reader.
+// The input as bytes (harnesses that pick a reader by the first byte pass
+// the rest).
 inline std::string bytesOf(const uint8_t* data, size_t size) {
     return std::string(reinterpret_cast<const char*>(data), size);
 }

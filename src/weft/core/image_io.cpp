@@ -44,6 +44,13 @@ namespace {
 
 constexpr size_t kMalformed = ~size_t{0};
 
+// The OpenEXR header's unsigned 32-bit little-endian number at `at`.
+uint32_t littleEndian32(const std::string& bytes, size_t at) {
+    uint32_t v = 0;
+    for (int k = 3; k >= 0; --k) v = v << 8 | static_cast<unsigned char>(bytes[at + k]);
+    return v;
+}
+
 // The bytes OpenEXR 3.1 reads for an attribute value of `type` at `at` (at
 // most `size` of them are there): fixed for the fixed-size types, parsed for
 // the channel list, the preview and string vectors (whose readers ignore the
@@ -64,11 +71,7 @@ size_t exrAttributeBytes(const std::string& type, const std::string& bytes, size
     for (const auto& [name, fixed] : kFixed)
         if (type == name) return fixed;
     const size_t end = at + size;
-    const auto u32 = [&](size_t k) {
-        uint32_t v = 0;
-        for (int b = 3; b >= 0; --b) v = v << 8 | static_cast<unsigned char>(bytes[k + b]);
-        return v;
-    };
+    const auto u32 = [&](size_t k) { return littleEndian32(bytes, k); };
     if (type == "chlist") {
         // Entries: name, then pixel type, linear flag, 3 reserved, x and y
         // sampling (16 bytes); an empty name ends the list.
@@ -115,11 +118,7 @@ void checkExrHeaders(const std::string& path, const std::string& bytes) {
         static_cast<unsigned char>(bytes[2]) != 0x31 ||
         static_cast<unsigned char>(bytes[3]) != 0x01)
         failRead(path, "not an OpenEXR file (bad magic number)");
-    const auto u32 = [&](size_t at) {
-        uint32_t v = 0;
-        for (int k = 3; k >= 0; --k) v = v << 8 | static_cast<unsigned char>(bytes[at + k]);
-        return v;
-    };
+    const auto u32 = [&](size_t at) { return littleEndian32(bytes, at); };
     const bool multipart = (u32(4) & 0x1000) != 0;
     // Names and types are at most 31 characters, 255 with the long-names flag;
     // OpenEXR reads a longer one in pieces, so such a file is refused here.

@@ -559,9 +559,7 @@ py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object
 py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, const py::object& spp,
                    const py::object& seconds, int threads, const py::object& seed, bool nee,
                    const std::string& yarnSampling, const py::object& baseDir, bool quiet) {
-    if (modeName != "neural" && modeName != "fiber")
-        throw InputError("mode \"" + modeName + "\" is not a render mode: allowed neural, fiber");
-    const render::RenderMode mode = render::parseRenderMode(modeName);
+    const render::RenderMode mode = render::parseRenderMode(modeName, "mode");
     YarnBsdfOptions yarnOptions;
     yarnOptions.sampling = parseYarnSampling(yarnSampling, "yarn_sampling");
     render::SceneDesc desc;

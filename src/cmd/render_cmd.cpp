@@ -1,4 +1,4 @@
-// weft render: a cloth scene to an image, in neural or fiber mode (docs/render.md).
+// weft render: a cloth scene to an image, in neural, fiber or dual mode (docs/render.md).
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -104,7 +104,8 @@ void addRenderCommand(CLI::App& app) {
     cmd->add_option("scene", o->scene, "Scene file (JSON)")->required();
     cmd->add_option("--mode", o->mode,
                     "neural: plies as curves with the yarn BSDF; fiber: every fiber drawn "
-                    "(ground truth)")
+                    "(ground truth); dual: plies as curves with the dual-scattering baseline "
+                    "(after ZMA23, docs/dual-scattering.md), from the model's fiber and ply")
         ->capture_default_str();
     cmd->add_option("--yarn-sampling", o->yarnSampling,
                     "Neural mode: how the yarn BSDF samples directions: tabulated (in "

@@ -11,6 +11,8 @@ inline constexpr double kPi = std::numbers::pi;
 inline constexpr double kTwoPi = 2.0 * std::numbers::pi;
 inline constexpr double kHalfPi = 0.5 * std::numbers::pi;
 inline constexpr double kInvPi = std::numbers::inv_pi;
+// The largest double below 1: uniform numbers are clamped to [0, this].
+inline constexpr double kOneMinusEpsilon = 0x1.fffffffffffffp-1;
 
 constexpr double radians(double deg) { return deg * (kPi / 180.0); }
 constexpr double degrees(double rad) { return rad * (180.0 / kPi); }

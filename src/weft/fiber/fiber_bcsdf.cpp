@@ -69,6 +69,12 @@ Rgb FiberBcsdf::evalPrepared(const Incident& in, const Angles& out) const {
     return value;
 }
 
+BsdfEval FiberBcsdf::evalPdfPrepared(const Incident& in, const Angles& out) const {
+    BsdfEval e;
+    evalAndPdf(in, out, &e.value, &e.pdf);
+    return e;
+}
+
 void FiberBcsdf::evalAndPdf(const Incident& incident, const Angles& out, Rgb* value,
                             double* density) const {
     if (out.cosTheta <= 0) {

@@ -70,6 +70,7 @@ class FiberBcsdf final : public Bsdf {
     };
     Incident incident(const Vec3& wi) const;
     Rgb evalPrepared(const Incident& in, const Angles& out) const;
+    BsdfEval evalPdfPrepared(const Incident& in, const Angles& out) const;
 
   private:
     // Probability of picking the R lobe for this incident angle.

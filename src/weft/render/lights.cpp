@@ -17,7 +17,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // The largest u below 1, so that a sample u = 1 - ulp stays in the last cell.
-constexpr double kOneMinusEpsilon = 0x1.fffffffffffffp-1;
 
 template <typename T>
 std::string format(const T& value) {

@@ -149,15 +149,16 @@ TEST_F(RenderTest, WhiteFurnaceOfLosslessFibers) {
 TEST_F(RenderTest, NextEventEstimationAgreesWithBsdfSamplingOnly) {
     // A sphere light and a dim constant light: NEE + MIS and pure BSDF
     // sampling estimate the same expectation along the same rays (neural
-    // mode: T, R and M lobes; fiber mode: the fiber BCSDF).
+    // mode: T, R and M lobes; fiber mode: the fiber BCSDF; dual mode: the
+    // dual-scattering baseline).
     const std::string lights = R"([{"type": "sphere", "center": [0.3, 0.4, 0.5], "radius": 0.25,
                                      "radiance": [4, 3, 2]},
                                     {"type": "constant", "radiance": [0.2, 0.25, 0.3]}])";
-    for (const RenderMode mode : {RenderMode::Neural, RenderMode::Fiber}) {
+    for (const RenderMode mode : {RenderMode::Neural, RenderMode::Fiber, RenderMode::Dual}) {
         const Scene s(scene(kFleece, lights), mode);
         const auto rays = raysOnYarn(s, 5);
         ASSERT_EQ(rays.size(), 5u);
-        const int samples = static_cast<int>(scaled(mode == RenderMode::Neural ? 20000 : 6000));
+        const int samples = static_cast<int>(scaled(mode == RenderMode::Fiber ? 6000 : 20000));
         for (size_t r = 0; r < rays.size(); ++r) {
             const Estimate a = estimate(s, rays[r].first, rays[r].second, samples, true, r);
             const Estimate b = estimate(s, rays[r].first, rays[r].second, samples, false, r);
@@ -278,7 +279,7 @@ TEST_F(RenderTest, ImagesAreFiniteAndDoNotDependOnTheThreadCount) {
     const std::string lights = R"([{"type": "sky"},
                                     {"type": "sphere", "center": [0.5, 0.5, 0.5], "radius": 0.1,
                                      "radiance": [20, 20, 20]}])";
-    for (const RenderMode mode : {RenderMode::Neural, RenderMode::Fiber}) {
+    for (const RenderMode mode : {RenderMode::Neural, RenderMode::Fiber, RenderMode::Dual}) {
         const Scene s(scene(kFleece, lights, 10, 8), mode);
         RenderOptions options;
         options.spp = 3;
@@ -302,8 +303,8 @@ TEST_F(RenderTest, ImagesAreFiniteAndDoNotDependOnTheThreadCount) {
         EXPECT_EQ(one.stats.scene.curves, 2);
         // Neural: 3 plies on the open curve; on the closed loop the rounded
         // ply twist (11 thirds of a turn) joins the 3 plies into one closed
-        // ply of three loops (yarn_geometry.h). Fiber: 300 fibers per ply.
-        EXPECT_EQ(one.stats.scene.tubes, mode == RenderMode::Neural ? 4 : 1200);
+        // ply of three loops (yarn_geometry.h); dual the same. Fiber: 300 fibers per ply.
+        EXPECT_EQ(one.stats.scene.tubes, mode == RenderMode::Fiber ? 1200 : 4);
         EXPECT_GT(one.stats.scene.embreeBytes, 0);
         // A different seed gives a different image.
         options.seed = 6;

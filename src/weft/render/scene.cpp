@@ -15,18 +15,28 @@
 #include "weft/fiber/fiber_bcsdf.h"
 #include "weft/render/curves.h"
 #include "weft/render/yarn_geometry.h"
+#include "weft/yarn/dual_scattering.h"
 #include "weft/yarn/yarn_model.h"
 
 namespace weft::render {
 
 const char* renderModeName(RenderMode mode) {
-    return mode == RenderMode::Neural ? "neural" : "fiber";
+    switch (mode) {
+        case RenderMode::Neural:
+            return "neural";
+        case RenderMode::Fiber:
+            return "fiber";
+        case RenderMode::Dual:
+            return "dual";
+    }
+    return "unknown";
 }
 
-RenderMode parseRenderMode(const std::string& name) {
+RenderMode parseRenderMode(const std::string& name, const std::string& field) {
     if (name == "neural") return RenderMode::Neural;
     if (name == "fiber") return RenderMode::Fiber;
-    throw InputError("--mode " + name + " is not a render mode: allowed neural, fiber");
+    if (name == "dual") return RenderMode::Dual;
+    throw InputError(field + " \"" + name + "\" is not a render mode: allowed neural, fiber, dual");
 }
 
 namespace {
@@ -128,6 +138,8 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
             plyOf.push_back(model.ply);
             if (mode == RenderMode::Neural)
                 bsdfs_.push_back(std::make_unique<YarnBsdf>(model, yarn.model, yarnOptions));
+            else if (mode == RenderMode::Dual)
+                bsdfs_.push_back(std::make_unique<DualScatteringBsdf>(model.fiber, model.ply));
             else
                 bsdfs_.push_back(std::make_unique<FiberBcsdf>(model.fiber));
         }
@@ -153,7 +165,7 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
             for (size_t k = 0; k + 1 < cp.size(); ++k) chord += length(cp[k + 1] - cp[k]);
             if (curves[c].closed && cp.size() > 1) chord += length(cp.front() - cp.back());
             const double estimate = (chord * yarn.scale / step + 1) * yarn.plies *
-                                    (mode == RenderMode::Neural ? 1 : fibers.fibers);
+                                    (drawsPlies(mode) ? 1 : fibers.fibers);
             if (static_cast<double>(planned) + estimate > static_cast<double>(kMaxSceneSegments))
                 tooMuchGeometry(desc, y, mode);
             checkMemoryBudget((static_cast<double>(planned) + estimate) * kBytesPerSegment,
@@ -163,10 +175,10 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
             const std::vector<FramedCurve> plies = plyCurves(centre, yarn.plies, yarn.plyTwist);
             for (size_t j = 0; j < plies.size(); ++j) {
                 // Refuse before allocating: a fiber-mode scene costs fibers x samples segments.
-                const int64_t tubes = mode == RenderMode::Neural ? 1 : fibers.fibers;
+                const int64_t tubes = drawsPlies(mode) ? 1 : fibers.fibers;
                 planned += tubes * static_cast<int64_t>(plies[j].size());
                 if (planned > kMaxSceneSegments) tooMuchGeometry(desc, y, mode);
-                if (mode == RenderMode::Neural) {
+                if (drawsPlies(mode)) {
                     accel_->addGeometry({toTube(plies[j])}, material);
                 } else {
                     // Seeded by where the ply is, not by the render seed.

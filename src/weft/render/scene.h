@@ -31,14 +31,19 @@
 
 namespace weft::render {
 
-enum class RenderMode { Neural, Fiber };
+// How yarns are drawn and shaded: neural (plies as curves, the fitted yarn
+// BSDF), fiber (every fiber, the fiber BCSDF: the ground truth) or dual (plies
+// as curves, the dual-scattering baseline after ZMA23, yarn/dual_scattering.h).
+enum class RenderMode { Neural, Fiber, Dual };
+// Whether the mode draws each ply as one curve (neural, dual) rather than its fibers.
+constexpr bool drawsPlies(RenderMode mode) { return mode != RenderMode::Fiber; }
 
 // Largest number of curve segments a scene may hand to Embree (about 60
 // bytes each with the BVH): an InputError naming the yarn beyond it.
 inline constexpr int64_t kMaxSceneSegments = int64_t{200} * 1000 * 1000;
 const char* renderModeName(RenderMode mode);
-// "neural" or "fiber"; InputError otherwise.
-RenderMode parseRenderMode(const std::string& name);
+// "neural", "fiber" or "dual"; otherwise an InputError naming `field`.
+RenderMode parseRenderMode(const std::string& name, const std::string& field = "--mode");
 
 struct SceneBuildStats {
     int64_t curves = 0;           // yarn curves read
@@ -71,9 +76,7 @@ class Scene {
     // (t, t x n, n) of DESIGN.md 2, in fiber mode the fiber frame with the
     // tangent as +x (fiber_bcsdf.h).
     Frame shadingFrame(const TubeHit& hit) const {
-        return mode_ == RenderMode::Neural
-                   ? yarnFrame(hit.tangent, hit.normal)
-                   : Frame::fromX(hit.tangent);
+        return drawsPlies(mode_) ? yarnFrame(hit.tangent, hit.normal) : Frame::fromX(hit.tangent);
     }
 
   private:

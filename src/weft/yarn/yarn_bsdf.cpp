@@ -43,7 +43,6 @@ constexpr Vec3 mirrored(const Vec3& w) { return {w.x, w.y, -w.z}; }
 
 // The smallest probability of a part of the tabulated mixture that may carry energy.
 constexpr double kMinimumShare = 1e-3;
-constexpr double kOneMinusEpsilon = 0x1.fffffffffffffp-1;
 
 }  // namespace
 

@@ -62,6 +62,15 @@ Cotton knit at 4096 spp does not fit at 128 x 128 with the full fiber ladder
 Fiber c of cotton was flat across the quick ladder (10.6, 12.6), so its top
 level loses little.
 
+--baseline dual adds the dual-scattering baseline (after ZMA23; `weft render
+--mode dual`, docs/dual-scattering.md) to a chunk: its converged render and
+ladder (the neural ladder's levels), SSIM and relative MSE against the fiber
+reference, time at equal quality, memory, and a Fig. 10 row RESULTS/table2/
+<preset>-<scene>-fig10.png (fiber reference | baseline | neural | 1 - SSIM of
+each); assembling adds a baseline table and RESULTS/table2/fig10-<preset>.png.
+On a chunk already made it renders only the baseline (the chunk's fiber and
+neural renders come from the work folder's cache).
+
 Everything is cached under the work folder (scene folders, renders, their
 JSON statistics, comparisons); a step is redone only when its command line
 changes, so an interrupted chunk resumes where it stopped. A chunk whose
@@ -72,6 +81,7 @@ result file already records the same settings is not run again (--redo).
     bench/table2.py --plan                # the chunks' command lines and estimated minutes
     bench/table2.py                       # every chunk of --presets x --scenes, then assemble
     bench/table2.py --quick               # the one-run quick table (below)
+    bench/table2.py --chunk fleece,weave --baseline dual   # adds the baseline's columns
   common: [--work DIR] [--results DIR] [--weft build/release/weft]
 
 --quick (unchanged): 128 x 128, 256 spp references, ladder N/16 and N/4,
@@ -290,6 +300,48 @@ def scene_cell(bench, s, preset, kind, folder, figure):
         "memory_ratio": scene_bytes(fiber_stats) / scene_bytes(neural_stats),
         "rss_ratio": fiber_stats["peak_resident_bytes"] / neural_stats["peak_resident_bytes"],
         "figure": os.path.basename(os.path.dirname(figure)) + "/" + os.path.basename(figure),
+    }
+
+
+def dual_baseline(bench, s, preset, kind, folder, cell, figure):
+    """The dual-scattering baseline (after ZMA23; docs/dual-scattering.md) for a chunk whose
+    fiber and neural renders are done (`cell`): its converged render and ladder, its quality
+    against the fiber reference, its time at equal quality and memory, and the Fig. 10 row
+    (reference | baseline | neural | 1 - SSIM of the baseline | 1 - SSIM of neural)."""
+    t0 = time.time()
+    scene = os.path.join(folder, "scene", "s", "scene.json")
+    if not os.path.exists(scene):
+        sys.exit("table2: %s is missing: run the chunk itself first" % scene)
+    ref_spp, seed = s["ref_spp"], SEEDS["reference"]
+    fiber_stats, fiber_ref = bench.render(scene, folder, "fiber-ref", "fiber", seed, spp=ref_spp)
+    _, neural_ref = bench.render(scene, folder, "neural-ref", "neural", seed, spp=ref_spp)
+    dual_stats, dual_ref = bench.render(scene, folder, "dual-ref", "dual", seed, spp=ref_spp)
+    dual_eq = convergence(bench, scene, folder, "dual", dual_ref, ref_spp, s["neural_ladder"])
+    heatmap = os.path.join(folder, "heatmap-dual.png")
+    quality = bench.compare(dual_ref, fiber_ref, heatmap)
+    neural_heatmap = os.path.join(folder, "heatmap-neural.png")
+    bench.compare(neural_ref, fiber_ref, neural_heatmap)
+    os.makedirs(os.path.dirname(figure), exist_ok=True)
+    bench.run([bench.weft, "montage", fiber_ref, dual_ref, neural_ref, heatmap, neural_heatmap,
+               "--out", figure])
+    fiber_eq, neural_eq = cell["fiber"]["equal_quality"], cell["neural"]["equal_quality"]
+    return {
+        "name": "dual-scattering baseline (after ZMA23)",
+        "ssim": quality["ssim"], "rel_mse": quality["rel_mse"],
+        "rel_mse_minus_noise": quality["rel_mse"] - fiber_eq["reference_noise"]
+        - dual_eq["reference_noise"],
+        "seconds_per_spp": dual_stats["seconds_per_spp"], "seconds": dual_stats["seconds"],
+        "build_seconds": dual_stats["scene"]["build_seconds"],
+        "embree_bytes": dual_stats["scene"]["geometry_bvh_bytes"],
+        "material_bytes": dual_stats["scene"].get("material_bytes", 0),
+        "peak_resident_bytes": dual_stats["peak_resident_bytes"],
+        "equal_quality": dual_eq,
+        "speedup_over_fiber": fiber_eq["seconds_to_target"] / dual_eq["seconds_to_target"],
+        "neural_speedup_over_dual": dual_eq["seconds_to_target"] / neural_eq["seconds_to_target"],
+        "memory_ratio": scene_bytes(fiber_stats) / scene_bytes(dual_stats),
+        "figure": os.path.basename(os.path.dirname(figure)) + "/" + os.path.basename(figure),
+        "provenance": provenance(bench.weft),
+        "run": {"finished": now(), "wall_seconds": time.time() - t0},
     }
 
 
@@ -566,6 +618,33 @@ def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
         lines.append("| %s | %s | %.1f | %d | %.3f / %.4f | %d | %.3f / %.4f |" % (
             c["preset"], c["scene"], e["seconds"], e["fiber_spp"], e["fiber_ssim"],
             e["fiber_rel_mse"], e["neural_spp"], e["neural_ssim"], e["neural_rel_mse"]))
+    duals = [c for c in cells if "dual" in c]
+    if duals:
+        lines += ["", "## Baseline: the dual-scattering model after ZMA23 (our reconstruction, "
+                  "docs/dual-scattering.md), against the same fiber reference", "",
+                  "Not ZMA23's own numbers: Zinke's dual scattering on KSZ15 fibers with an "
+                  "analytic fiber count, re-implemented without the authors' text or code. "
+                  "Equal-quality times as for neural mode (relative MSE %.2f against its own "
+                  "converged render)." % TARGET_REL_MSE, "",
+                  "| material | scene | baseline SSIM | neural SSIM | baseline relMSE minus noise "
+                  "| neural relMSE minus noise | baseline s (EQ) | neural s (EQ) | fiber s (EQ) "
+                  "| neural speed-up over baseline | baseline memory ratio | baseline c |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for c in duals:
+            d = c["dual"]
+            lines.append("| %s | %s | %.3f | %.3f | %.4f | %.4f | %.1f | %.2f | %.1f | **%.1fx** "
+                         "| %.0fx | %s |" % (
+                             c["preset"], c["scene"], d["ssim"], c["ssim"],
+                             d["rel_mse_minus_noise"], c["rel_mse_minus_noise"],
+                             d["equal_quality"]["seconds_to_target"],
+                             c["neural"]["equal_quality"]["seconds_to_target"],
+                             c["fiber"]["equal_quality"]["seconds_to_target"],
+                             d["neural_speedup_over_dual"], d["memory_ratio"],
+                             c_levels(d["equal_quality"])))
+        without = ["%s %s" % (c["preset"], c["scene"]) for c in cells if "dual" not in c]
+        if without:
+            lines += ["", "Without the baseline yet (`bench/table2.py --chunk MATERIAL,SCENE "
+                      "--baseline dual`): %s." % ", ".join(without)]
     if chunks:
         lines += ["", "## Chunks: settings and provenance", "",
                   "| material | scene | pixels | patch | ref spp | ladder fiber / neural (spp) "
@@ -627,6 +706,7 @@ def run_chunk(bench, args, folder, preset, kind, s, quick):
         if matching_settings(old.get("settings", {}), settings):
             bench.say("%s %s: %s already holds these settings (--redo to run again)" % (
                 preset, kind, shown_path(path)))
+            add_baselines(bench, args, folder, preset, kind, s, path)
             return path
     estimate = estimate_minutes(quick, preset, kind, s)
     bench.say("%s %s: %d x %d, %d spp references, ladders %s / %s%s" % (
@@ -648,7 +728,29 @@ def run_chunk(bench, args, folder, preset, kind, s, quick):
     os.replace(path + ".tmp", path)
     bench.say("%s %s: %.1f minutes, wrote %s" % (preset, kind, cell["run"]["wall_seconds"] / 60,
                                                  shown_path(path)))
+    add_baselines(bench, args, folder, preset, kind, s, path)
     return path
+
+
+def add_baselines(bench, args, folder, preset, kind, s, path):
+    """--baseline dual: adds the baseline's results to the chunk file at `path` (renders only
+    the baseline's images when the chunk's own renders are still in the work folder)."""
+    if "dual" not in args.baseline:
+        return
+    with open(path) as f:
+        cell = json.load(f)
+    if "dual" in cell and not args.redo:
+        bench.say("%s %s: the dual baseline is already in %s" % (preset, kind, shown_path(path)))
+        return
+    bench.say("%s %s: dual-scattering baseline" % (preset, kind))
+    figure = os.path.join(folder, "%s-%s-fig10.png" % (preset, kind))
+    cell["dual"] = dual_baseline(bench, s, preset, kind, os.path.join(bench.work, preset, kind),
+                                 cell, figure)
+    with open(path + ".tmp", "w") as f:
+        json.dump(cell, f, indent=1)
+    os.replace(path + ".tmp", path)
+    bench.say("%s %s: baseline in %.1f minutes, wrote %s" % (
+        preset, kind, cell["dual"]["run"]["wall_seconds"] / 60, shown_path(path)))
 
 
 def assemble(results, name, weft):
@@ -682,11 +784,26 @@ def assemble(results, name, weft):
             figures.append("`%s/fig-%s.png` (%s)" % (name, kind, ", ".join(
                 c["preset"] for c in cells if c["scene"] == kind and
                 os.path.exists(os.path.join(results, c["figure"])))))
+    fig10 = []
+    for preset in PRESETS:
+        pngs = [os.path.join(results, c["dual"]["figure"]) for c in cells
+                if c["preset"] == preset and "dual" in c]
+        pngs = [p for p in pngs if os.path.exists(p)]
+        out = os.path.join(folder, "fig10-%s.png" % preset)
+        if pngs and can_montage:
+            r = subprocess.run([weft, "montage"] + pngs + ["--columns", "1", "--out", out],
+                               capture_output=True, text=True)
+            if r.returncode != 0:
+                sys.exit("table2: weft montage failed: %s" % r.stderr)
+            fig10.append("`%s/fig10-%s.png`" % (name, preset))
     note = ("Figures, one row per material: reference | neural | heatmap of 1 - SSIM | "
             "equal-time fiber. Per scene: %s. Per row: `%s/<material>-<scene>.png`." % (
                 "; ".join(figures) or "none yet" + ("" if can_montage else
                                                     " (no weft binary for `weft montage`)"),
                 name))
+    if fig10:
+        note += (" Fig. 10 (one row per scene: fiber reference | dual-scattering baseline | "
+                 "neural | 1 - SSIM of the baseline | 1 - SSIM of neural): %s." % ", ".join(fig10))
     caption = (
         "Assembled by `bench/table2.py --assemble` from the chunk files in `%s/` (one per "
         "material and scene, made by `bench/table2.py --chunk MATERIAL,SCENE`). References "
@@ -791,6 +908,9 @@ def main():
     p.add_argument("--presets", default=",".join(PRESETS), help="without --chunk: materials")
     p.add_argument("--scenes", default=",".join(SCENES), help="without --chunk: scenes")
     p.add_argument("--threads", type=int, default=0, help="render threads (0: all cores)")
+    p.add_argument("--baseline", default="", metavar="dual",
+                   help="also render the dual-scattering baseline (after ZMA23) for each chunk "
+                        "and add its columns (reuses the chunk's cached renders)")
     p.add_argument("--redo", action="store_true",
                    help="run a chunk even if its result file records the same settings")
     p.add_argument("--no-ablations", action="store_true", help="--quick without Fig. 5")
@@ -818,6 +938,8 @@ def main():
         if value is not None and not lo <= value <= hi:
             sys.exit("table2: --%s %d is out of range [%d, %d]" % (key.replace("_", "-"), value,
                                                                    lo, hi))
+    if args.baseline not in ("", "dual"):
+        sys.exit("table2: --baseline %r: allowed dual" % args.baseline)
     if args.chunk:
         parts = args.chunk.split(",")
         if len(parts) != 2 or parts[0] not in PRESETS or parts[1] not in SCENES:

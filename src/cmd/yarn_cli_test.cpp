@@ -141,6 +141,18 @@ TEST_F(YarnCliTest, CheckWritesItsReport) {
         EXPECT_TRUE(std::filesystem::exists(path("report/") + file)) << file;
     const NpyArray albedo = readNpy(path("report/albedo_rdm.npy"));
     EXPECT_EQ(albedo.shape, (std::vector<size_t>{4, 8, 3}));
+    EXPECT_FALSE(s.contains("dual_baseline"));
+
+    // --dual: the dual-scattering baseline's errors beside the neural model's.
+    const RunResult d = run("yarn check --model " + testing::shellQuote(kFleece) +
+                            " --rdm rdm --min-paths 50 --threads 1 --dual --out report-dual");
+    ASSERT_EQ(d.status, 0) << d.err;
+    EXPECT_TRUE(nlohmann::json::parse(d.out).contains("dual_baseline"));
+    const nlohmann::json dual =
+        nlohmann::json::parse(readFile(path("report-dual/check.json"))).at("dual_baseline");
+    for (const char* key : {"m_rel_l2", "r_rel_l2", "total_rel_l2", "neural_total_rel_l2"})
+        EXPECT_GT(dual.at(key).get<double>(), 0.0) << key;
+    EXPECT_EQ(dual.at("albedo").at("model_mean").size(), 3u);
 
     expectUserError(
         run("yarn check --model " + testing::shellQuote(kFleece) + " --rdm nowhere --out r2"),

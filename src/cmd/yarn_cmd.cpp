@@ -7,12 +7,12 @@
 #include <vector>
 
 #include "commands.h"
-#include "weft/core/file.h"
 #include "weft/core/error.h"
+#include "weft/core/file.h"
 #include "weft/core/npy.h"
+#include "weft/fit/model_check.h"
 #include "weft/gather/rdm_io.h"
 #include "weft/yarn/yarn_bsdf.h"
-#include "weft/fit/model_check.h"
 
 namespace weft::cmd {
 
@@ -34,6 +34,7 @@ struct CheckOptions {
     std::string model, rdm, out;
     int64_t minPaths = 1000;
     int threads = 0;
+    bool dual = false;
 };
 
 void runEval(const EvalOptions& o) {
@@ -56,9 +57,10 @@ void runCheck(const CheckOptions& o) {
     checkOutputsSpareInputs({{"--model", o.model}}, {}, {{"--rdm", o.rdm}}, {{"--out", o.out}});
     const YarnModel model = loadYarnModel(o.model);
     const RdmData rdm = loadRdm(o.rdm);
-    const nlohmann::json s = checkYarnModel(model, o.model, rdm, {o.minPaths, o.threads}, o.out);
+    const nlohmann::json s =
+        checkYarnModel(model, o.model, rdm, {o.minPaths, o.threads, o.dual}, o.out);
     // One line on stdout: the headline numbers (the full summary is in check.json).
-    const nlohmann::json line = {
+    nlohmann::json line = {
         {"out", o.out},
         {"bins_checked", s.at("bins_checked")},
         {"albedo_relative_error_mean_abs", s.at("albedo").at("relative_error_mean_abs")},
@@ -72,6 +74,15 @@ void runCheck(const CheckOptions& o) {
                                            ? nlohmann::json(nullptr)
                                            : s.at("sampling_weights").at("worst_bin")},
         {"seconds", s.at("seconds")}};
+    if (o.dual) {
+        const nlohmann::json& d = s.at("dual_baseline");
+        line["dual_baseline"] = {
+            {"m_rel_l2", d.at("m_rel_l2")},
+            {"r_rel_l2", d.at("r_rel_l2")},
+            {"total_rel_l2", d.at("total_rel_l2")},
+            {"neural_total_rel_l2", d.at("neural_total_rel_l2")},
+            {"albedo_relative_error_mean_abs", d.at("albedo").at("relative_error_mean_abs")}};
+    }
     std::printf("%s\n", line.dump().c_str());
 }
 
@@ -126,6 +137,10 @@ void addYarnCommands(CLI::App& app) {
                      "incident bins with fewer paths are left out of the albedo summary")
         ->default_val(1000)
         ->check(CLI::Range(int64_t{0}, int64_t{1} << 62));
+    check->add_flag("--dual", checkOpts->dual,
+                    "also compare the dual-scattering baseline (after ZMA23) of the model's "
+                    "fiber and ply with the RDM: check.json's dual_baseline "
+                    "(docs/dual-scattering.md)");
     check->add_option("--threads", checkOpts->threads, "worker threads (0: all cores)")
         ->default_val(0);
     check->callback([checkOpts] { runCheck(*checkOpts); });

@@ -19,6 +19,7 @@
 #include "weft/fit/fit.h"
 #include "weft/fit/metrics.h"
 #include "weft/gather/rdm_image.h"
+#include "weft/yarn/dual_scattering.h"
 #include "weft/yarn/yarn_bsdf.h"
 #include "weft/yarn/yarn_integrals.h"
 
@@ -40,7 +41,69 @@ double relativeError(double model, double rdm) {
     return model > 0 ? INFINITY : 0.0;
 }
 
+// a + b, elementwise.
+std::vector<float> sumOf(const std::vector<float>& a, const std::vector<float>& b) {
+    std::vector<float> sum(a.size());
+    for (size_t k = 0; k < a.size(); ++k) sum[k] = a[k] + b[k];
+    return sum;
+}
+
 }  // namespace
+
+nlohmann::json checkDualBaseline(const YarnModel& model, const RdmData& rdm,
+                                 const std::vector<float>& neuralR,
+                                 const std::vector<float>& neuralM, int64_t minPaths) {
+    const RdmBins& bins = rdm.bins;
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    const DualScatteringBsdf dual(model.fiber, model.ply);
+    std::vector<float> single(nIn * nOut * 3), multiple(nIn * nOut * 3);
+    std::vector<Rgb> albedo(nIn);
+    tbb::parallel_for(size_t(0), nIn, [&](size_t i) {
+        const Vec3 wi = bins.incidentCentre(i);
+        for (size_t o = 0; o < nOut; ++o) {
+            const DualScatteringBsdf::Parts p = dual.parts(wi, bins.outgoingCentre(o));
+            for (int c = 0; c < 3; ++c) {
+                single[(i * nOut + o) * 3 + c] = static_cast<float>(p.single[c]);
+                multiple[(i * nOut + o) * 3 + c] = static_cast<float>(p.multiple[c]);
+            }
+        }
+        albedo[i] = dual.albedo(wi);
+    });
+
+    const std::vector<Rgb> rdmR = incidentEnergies(rdm.rdmR, bins);
+    const std::vector<Rgb> rdmM = incidentEnergies(rdm.rdmM, bins);
+    Rgb sumAbs, worst, sumModel, sumRdm;
+    size_t checked = 0, within = 0;
+    for (size_t i = 0; i < nIn; ++i) {
+        if (rdm.count[i] < minPaths) continue;
+        ++checked;
+        const Rgb b = rdmR[i] + rdmM[i] + Rgb(rdm.pT[i]);
+        sumModel += albedo[i];
+        sumRdm += b;
+        for (int c = 0; c < 3; ++c) {
+            const double rel = relativeError(albedo[i][c], b[c]);
+            sumAbs[c] += std::fabs(rel);
+            if (std::fabs(rel) > std::fabs(worst[c])) worst[c] = rel;
+            within += std::fabs(rel) <= kAlbedoTolerance;
+        }
+    }
+    const std::vector<float> rdmTotal = sumOf(rdm.rdmR, rdm.rdmM);
+    nlohmann::json j;
+    j["name"] = "dual-scattering baseline (after ZMA23)";
+    j["r_rel_l2"] = coarseRelativeL2(single, rdm.rdmR, bins);
+    j["m_rel_l2"] = coarseRelativeL2(multiple, rdm.rdmM, bins);
+    j["total_rel_l2"] = coarseRelativeL2(sumOf(single, multiple), rdmTotal, bins);
+    j["neural_total_rel_l2"] = coarseRelativeL2(sumOf(neuralR, neuralM), rdmTotal, bins);
+    j["bins_checked"] = checked;
+    nlohmann::json& a = j["albedo"];
+    const double n = static_cast<double>(checked);
+    a["relative_error_mean_abs"] = checked ? rgbJson(sumAbs / n) : nlohmann::json(nullptr);
+    a["relative_error_worst"] = checked ? rgbJson(worst) : nlohmann::json(nullptr);
+    a["within_3_percent"] = checked ? nlohmann::json(within / (3 * n)) : nlohmann::json(nullptr);
+    a["model_mean"] = checked ? rgbJson(sumModel / n) : nlohmann::json(nullptr);
+    a["rdm_mean"] = checked ? rgbJson(sumRdm / n) : nlohmann::json(nullptr);
+    return j;
+}
 
 YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& modelPath,
                                  const RdmData& rdm, const YarnCheckOptions& options) {
@@ -269,6 +332,11 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
                                  {"albedo_luminance", integrals[worstWeightBin].albedoLuminance}};
     } else {
         sampling = nullptr;  // a black model: no weights to report
+    }
+    if (options.dualBaseline) {
+        arena.execute([&] {
+            summary["dual_baseline"] = checkDualBaseline(model, rdm, rMap, mMap, options.minPaths);
+        });
     }
     summary["seconds"] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

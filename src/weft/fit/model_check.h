@@ -39,9 +39,21 @@
 namespace weft {
 
 struct YarnCheckOptions {
-    int64_t minPaths = 1000;  // incident bins with fewer paths are left out of the albedo summary
-    int threads = 0;          // 0: all cores; never changes the result
+    int64_t minPaths = 1000;    // incident bins with fewer paths are left out of the albedo summary
+    int threads = 0;            // 0: all cores; never changes the result
+    bool dualBaseline = false;  // also check the dual-scattering baseline (below)
 };
+
+// The dual-scattering baseline (after ZMA23, yarn/dual_scattering.h) of the
+// model's fiber and ply against the same RDM, with the neural model's metrics:
+// its single-scattering part against the RDM's R (r_rel_l2), the rest against
+// M (m_rel_l2), both against R + M (total_rel_l2, and the neural model's
+// total beside it), and its directional albedo (quadrature at bin centres)
+// against the RDM's p_t + R + M over the bins with at least `minPaths` paths.
+// `neuralR`, `neuralM`: the neural model's maps (model_maps.h).
+nlohmann::json checkDualBaseline(const YarnModel& model, const RdmData& rdm,
+                                 const std::vector<float>& neuralR,
+                                 const std::vector<float>& neuralM, int64_t minPaths);
 
 // The computation: check.json's document and the arrays of the report.
 struct YarnCheckResult {

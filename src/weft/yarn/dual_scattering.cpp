@@ -196,22 +196,23 @@ DualScatteringBsdf::Incident DualScatteringBsdf::incident(const Vec3& upperWi) c
     return in;
 }
 
-Rgb DualScatteringBsdf::evalUpper(const Incident& in, const Vec3& wo) const {
+DualScatteringBsdf::Parts DualScatteringBsdf::partsUpper(const Incident& in, const Vec3& wo) const {
+    Parts parts;
     const FiberBcsdf::Angles out = FiberBcsdf::anglesOf(frame_.toLocal(wo));
-    if (out.cosTheta <= 0) return Rgb();
+    if (out.cosTheta <= 0) return parts;
     const Rgb single = fiber_.evalPrepared(in.fiber, out);  // cos theta_o included
     const double n = fibersCrossed(wo);
     const double direct = 1 - std::min(n, 1.0);
     const double df = options_.forwardScale, db = options_.backScale;
     const double mu = -in.thetaI, thetaO = out.theta, w = forwardShareTT_;
-    Rgb value;
     for (int c = 0; c < 3; ++c) {
         const Channel& ch = in.channel[c];
-        double v = 0;
+        double multiple = 0;
         if (direct > 0) {
+            parts.single[c] = direct * single[c];
             const double back =
                 ch.backAmplitude * cosSquaredGaussian(thetaO, mu, ch.backWidth) * kInvTwoPi;
-            v += direct * (single[c] + db * back * out.cosTheta);
+            multiple += direct * db * back * out.cosTheta;
         }
         if (direct < 1) {
             const double transmitted = direct + (1 - direct) * df * std::pow(ch.forward, n);
@@ -226,11 +227,25 @@ Rgb DualScatteringBsdf::evalUpper(const Incident& in, const Vec3& wo) const {
                 ch.backAmplitude *
                 cosSquaredGaussian(thetaO, mu, std::sqrt(ch.backWidth * ch.backWidth + spread)) *
                 kInvTwoPi;
-            v += (transmitted - direct) * df * (global + kPi * db * back) * out.cosTheta;
+            multiple += (transmitted - direct) * df * (global + kPi * db * back) * out.cosTheta;
         }
-        value[c] = v;
+        parts.multiple[c] = multiple;
     }
-    return value;
+    return parts;
+}
+
+Rgb DualScatteringBsdf::evalUpper(const Incident& in, const Vec3& wo) const {
+    const Parts p = partsUpper(in, wo);
+    return p.single + p.multiple;
+}
+
+DualScatteringBsdf::Parts DualScatteringBsdf::parts(const Vec3& wi, const Vec3& wo) const {
+    const bool flip = wi.z < 0;
+    const Incident in = incident(flip ? mirrored(wi) : wi);
+    Parts p = partsUpper(in, flip ? mirrored(wo) : wo);
+    p.single *= in.scale;
+    p.multiple *= in.scale;
+    return p;
 }
 
 double DualScatteringBsdf::pdfUpper(const Incident& in, const Vec3& wo) const {

@@ -95,6 +95,13 @@ class DualScatteringBsdf final : public Bsdf {
     // Directional albedo: the integral of eval(wi, .) over the sphere, by
     // quadrature (the clamp included).
     Rgb albedo(const Vec3& wi) const;
+    // eval(wi, wo) in two parts, the clamp included: single scattering by the
+    // surface fibers under direct light (D S), compared with a gather's R, and
+    // the rest (multiple scattering: both B terms and G), compared with its M.
+    struct Parts {
+        Rgb single, multiple;
+    };
+    Parts parts(const Vec3& wi, const Vec3& wo) const;
     const SurfaceFiberFrame& frame() const { return frame_; }
     const FiberBcsdf& fiber() const { return fiber_; }
 
@@ -114,7 +121,8 @@ class DualScatteringBsdf final : public Bsdf {
         Rgb scale;  // the energy clamp
     };
     Incident incident(const Vec3& upperWi) const;
-    // The unclamped value at (wi, wo) for the upper-hemisphere wi.
+    // The unclamped value at (wi, wo) for the upper-hemisphere wi, and its parts.
+    Parts partsUpper(const Incident& in, const Vec3& wo) const;
     Rgb evalUpper(const Incident& in, const Vec3& wo) const;
     double pdfUpper(const Incident& in, const Vec3& wo) const;
     // The integral of evalUpper(in, .) over the sphere (product Gauss-Legendre

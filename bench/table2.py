@@ -770,31 +770,31 @@ def assemble(results, name, weft):
     cells.sort(key=lambda c: order.index((c["preset"], c["scene"])))
     have = {(c["preset"], c["scene"]) for c in cells}
     missing = [pk for pk in order if pk not in have]
-    figures = []
     can_montage = os.access(weft, os.X_OK)
-    for kind in SCENES:
-        pngs = [os.path.join(results, c["figure"]) for c in cells if c["scene"] == kind]
+
+    def stack(figures, out):
+        """The existing row figures, one below the other, into `out`; whether it was made."""
+        pngs = [os.path.join(results, f) for f in figures]
         pngs = [p for p in pngs if os.path.exists(p)]
-        out = os.path.join(folder, "fig-%s.png" % kind)
-        if pngs and can_montage:
-            r = subprocess.run([weft, "montage"] + pngs + ["--columns", "1", "--out", out],
-                               capture_output=True, text=True)
-            if r.returncode != 0:
-                sys.exit("table2: weft montage failed: %s" % r.stderr)
+        if not pngs or not can_montage:
+            return False
+        r = subprocess.run([weft, "montage"] + pngs + ["--columns", "1", "--out", out],
+                           capture_output=True, text=True)
+        if r.returncode != 0:
+            sys.exit("table2: weft montage failed: %s" % r.stderr)
+        return True
+
+    figures = []
+    for kind in SCENES:
+        if stack([c["figure"] for c in cells if c["scene"] == kind],
+                 os.path.join(folder, "fig-%s.png" % kind)):
             figures.append("`%s/fig-%s.png` (%s)" % (name, kind, ", ".join(
                 c["preset"] for c in cells if c["scene"] == kind and
                 os.path.exists(os.path.join(results, c["figure"])))))
     fig10 = []
     for preset in PRESETS:
-        pngs = [os.path.join(results, c["dual"]["figure"]) for c in cells
-                if c["preset"] == preset and "dual" in c]
-        pngs = [p for p in pngs if os.path.exists(p)]
-        out = os.path.join(folder, "fig10-%s.png" % preset)
-        if pngs and can_montage:
-            r = subprocess.run([weft, "montage"] + pngs + ["--columns", "1", "--out", out],
-                               capture_output=True, text=True)
-            if r.returncode != 0:
-                sys.exit("table2: weft montage failed: %s" % r.stderr)
+        if stack([c["dual"]["figure"] for c in cells if c["preset"] == preset and "dual" in c],
+                 os.path.join(folder, "fig10-%s.png" % preset)):
             fig10.append("`%s/fig10-%s.png`" % (name, preset))
     note = ("Figures, one row per material: reference | neural | heatmap of 1 - SSIM | "
             "equal-time fiber. Per scene: %s. Per row: `%s/<material>-<scene>.png`." % (

@@ -5,6 +5,7 @@
 #include <stb/stb_image_write.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -111,6 +112,30 @@ inline BsdfSample expectBsdfFormsAgree(const Bsdf& bsdf, const BsdfSlice& slice,
     EXPECT_EQ(s.pdf, t.pdf);
     EXPECT_EQ(s.lobe, t.lobe);
     return s;
+}
+
+// The mean of sample()'s weight over n samples at wi (invalid samples count
+// as 0) and its standard error, per channel: E[eval / pdf] is the directional
+// albedo, the independent truth a quadrature of eval gives.
+struct WeightMean {
+    Rgb mean, standardError;
+};
+inline WeightMean meanSampleWeight(const Bsdf& bsdf, const Vec3& wi, int64_t n, Rng& rng) {
+    Rgb sum, sumSq;
+    for (int64_t k = 0; k < n; ++k) {
+        const BsdfSample s = bsdf.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()}, rng);
+        if (!s.valid()) continue;
+        sum += s.weight;
+        sumSq += s.weight * s.weight;
+    }
+    WeightMean m;
+    const double count = static_cast<double>(n);
+    for (int c = 0; c < 3; ++c) {
+        m.mean[c] = sum[c] / count;
+        m.standardError[c] =
+            std::sqrt(std::max(0.0, sumSq[c] / count - m.mean[c] * m.mean[c]) / count);
+    }
+    return m;
 }
 
 // A fixture with a fresh directory per test, removed afterwards.

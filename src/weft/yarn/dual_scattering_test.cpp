@@ -163,22 +163,13 @@ TEST(DualScattering, MeanSampleWeightIsTheAlbedo) {
     const MaterialPreset& p = preset("polyester");
     const DualScatteringBsdf bsdf(p.fiber, p.ply);
     for (const Vec3& wi : {yarnDirection(30, 70), yarnDirection(130, 20)}) {
-        const int64_t n = testing::scaled(200000);
         Rng rng(9, 1);
-        Rgb sum, sum2;
-        for (int64_t k = 0; k < n; ++k) {
-            const BsdfSample s =
-                bsdf.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()}, rng);
-            if (!s.valid()) continue;
-            sum += s.weight;
-            sum2 += s.weight * s.weight;
-        }
+        const testing::WeightMean w =
+            testing::meanSampleWeight(bsdf, wi, testing::scaled(200000), rng);
         for (int c = 0; c < 3; ++c) {
             const double quadrature =
                 integrate(bsdf, wi, [&](const Vec3& wo) { return bsdf.eval(wi, wo)[c]; });
-            const double mean = sum[c] / n;
-            const double se = std::sqrt(std::max(0.0, sum2[c] / n - mean * mean) / n);
-            EXPECT_NEAR(mean, quadrature, 5 * se + 1e-3 * quadrature)
+            EXPECT_NEAR(w.mean[c], quadrature, 5 * w.standardError[c] + 1e-3 * quadrature)
                 << "wi " << wi << " channel " << c;
         }
     }

@@ -369,19 +369,11 @@ TEST(YarnIntegrals, MeanSampleWeightIsTheQuadratureAlbedo) {
         for (const Vec3& wi :
              {yarnDirection(10, 0), yarnDirection(60, 90), yarnDirection(80, -30)}) {
             const Rgb albedo = integrateDirections(bsdf, wi).albedo();
-            const int64_t n = testing::scaled(100000);
             Rng rng(13, 14);
-            Rgb sum, sumSq;
-            for (int64_t k = 0; k < n; ++k) {
-                const BsdfSample s =
-                    bsdf.sample(wi, {rng.uniform(), rng.uniform(), rng.uniform()}, rng);
-                sum += s.weight;
-                sumSq += s.weight * s.weight;
-            }
+            const testing::WeightMean w =
+                testing::meanSampleWeight(bsdf, wi, testing::scaled(100000), rng);
             for (int c = 0; c < 3; ++c) {
-                const double mean = sum[c] / n;
-                const double sigma = std::sqrt(std::max(0.0, sumSq[c] / n - mean * mean) / n);
-                EXPECT_NEAR(mean, albedo[c], 4.5 * sigma + 1e-3)
+                EXPECT_NEAR(w.mean[c], albedo[c], 4.5 * w.standardError[c] + 1e-3)
                     << name << " " << wi << " channel " << c;
             }
         }

@@ -22,8 +22,6 @@ constexpr double kMaxForwardEnergy = 0.99;
 // Lobe widths are clamped to this range (radians) for the normaliser table.
 constexpr double kMinWidth = 0.05 * kPi / 180.0, kMaxWidth = 10.0;
 
-constexpr Vec3 mirrored(const Vec3& w) { return {w.x, w.y, -w.z}; }
-
 // Z(mu, s) = integral_{-pi/2}^{pi/2} exp(-(t - mu)^2 / (2 s^2)) cos^2 t dt for
 // any width s: the closed form on the whole line,
 //     Z_line = sqrt(2 pi) s (1 + cos(2 mu) exp(-2 s^2)) / 2,

@@ -30,8 +30,6 @@ Vec3 yarnDirection(double thetaDeg, double phiDeg) {
     return sphericalDirection(radians(thetaDeg), radians(phiDeg));
 }
 
-constexpr Vec3 mirrored(const Vec3& w) { return {w.x, w.y, -w.z}; }
-
 // Incident directions (polar angle from n, azimuth from t) on both sides of
 // the surface, a grazing one included.
 std::vector<Vec3> incidentDirections() {

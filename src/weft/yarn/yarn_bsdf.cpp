@@ -39,8 +39,6 @@ T withSource(const std::string& source, const Args&... args) {
     }
 }
 
-constexpr Vec3 mirrored(const Vec3& w) { return {w.x, w.y, -w.z}; }
-
 // The smallest probability of a part of the tabulated mixture that may carry energy.
 constexpr double kMinimumShare = 1e-3;
 

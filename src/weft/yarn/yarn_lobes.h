@@ -23,6 +23,10 @@
 
 namespace weft {
 
+// A yarn-frame direction mirrored through the surface plane (z -> -z): the
+// yarn BSDFs evaluate a lower-hemisphere wi as its mirror image.
+constexpr Vec3 mirrored(const Vec3& w) { return {w.x, w.y, -w.z}; }
+
 struct SurfaceFiberFrame {
     double cosTilt = 1, sinTilt = 0;
 

@@ -106,15 +106,11 @@ void FiberBcsdf::evalAndPdf(const Incident& incident, const Angles& out, Rgb* va
 }
 
 BsdfEval FiberBcsdf::evalPdf(const BsdfIncident& in, const Vec3& wo) const {
-    BsdfEval e;
-    evalAndPdf(in.get<Incident>(), anglesOf(wo), &e.value, &e.pdf);
-    return e;
+    return evalPdfPrepared(in.get<Incident>(), anglesOf(wo));
 }
 
 Rgb FiberBcsdf::eval(const BsdfIncident& in, const Vec3& wo) const {
-    Rgb value;
-    evalAndPdf(in.get<Incident>(), anglesOf(wo), &value, nullptr);
-    return value;
+    return evalPrepared(in.get<Incident>(), anglesOf(wo));
 }
 
 double FiberBcsdf::pdf(const BsdfIncident& in, const Vec3& wo) const {

@@ -98,6 +98,58 @@ TEST_F(RenderCliTest, CosineYarnSampling) {
                     {"--yarn-sampling", "\"x\"", "tabulated, fitted, cosine"});
 }
 
+// `weft render --shard K/N` and `weft render merge`: the merge of the parts is
+// the unsharded image up to float rounding, and bad sets of parts are refused
+// without writing anything.
+TEST_F(RenderCliTest, ShardedRenderMergesToTheUnshardedImage) {
+    ASSERT_EQ(run("render scene.json --spp 5 --quiet --out whole.exr").status, 0);
+    for (int k = 0; k < 3; ++k) {
+        const std::string part = "part" + std::to_string(k);
+        const RunResult r = run("render scene.json --spp 5 --shard " + std::to_string(k) +
+                                "/3 --threads 1 --quiet --out " + part + ".exr");
+        ASSERT_EQ(r.status, 0) << r.err;
+        const nlohmann::json shard =
+            nlohmann::json::parse(readFile(path(part + ".json"))).at("shard");
+        EXPECT_EQ(shard.at("index"), k);
+        EXPECT_EQ(shard.at("count"), 3);
+        EXPECT_EQ(shard.at("spp"), 5);
+    }
+    RunResult r = run("render merge part2.exr part0.exr part1.exr --out merged.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const Image whole = readImage(path("whole.exr")), merged = readImage(path("merged.exr"));
+    ASSERT_EQ(merged.pixels.size(), whole.pixels.size());
+    for (size_t i = 0; i < whole.pixels.size(); ++i)
+        ASSERT_NEAR(merged.pixels[i], whole.pixels[i], 1e-6 * whole.pixels[i] + 1e-12) << i;
+    const nlohmann::json stats = nlohmann::json::parse(readFile(path("merged.json")));
+    EXPECT_EQ(stats.at("spp"), 5);
+    EXPECT_EQ(stats.at("shards").at("count"), 3);
+    EXPECT_FALSE(stats.contains("shard"));
+    EXPECT_TRUE(std::filesystem::exists(path("merged.png")));
+
+    // A missing part, a part twice, a part of another render, a whole render.
+    expectUserError(run("render merge part0.exr part2.exr --out bad.exr"), {"missing", "1/3"});
+    expectUserError(run("render merge part0.exr part1.exr part1.exr part2.exr --out bad.exr"),
+                    {"both shard 1/3"});
+    ASSERT_EQ(run("render scene.json --spp 5 --seed 9 --shard 1/3 --quiet --out other.exr").status, 0);
+    expectUserError(run("render merge part0.exr other.exr part2.exr --out bad.exr"),
+                    {"other.json", "\"seed\""});
+    expectUserError(run("render merge whole.exr --out bad.exr"), {"whole.json", "not a part"});
+    // A damaged last part: the merge fails after reading the others and writes nothing.
+    const std::string bytes = readFile(path("part2.exr"));
+    writeFileAtomic(path("part2.exr"), bytes.substr(0, bytes.size() / 2));
+    expectUserError(run("render merge part0.exr part1.exr part2.exr --out bad.exr"), {"part2.exr"});
+    EXPECT_FALSE(std::filesystem::exists(path("bad.exr")));
+    EXPECT_FALSE(std::filesystem::exists(path("bad.json")));
+    for (const auto& entry : std::filesystem::directory_iterator(dir_))
+        EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos)
+            << entry.path();
+    // Bad shards.
+    expectUserError(run("render scene.json --spp 2 --shard 2/2 --out a.exr"), {"--shard", "2/2"});
+    expectUserError(run("render scene.json --spp 2 --shard 0/3 --out a.exr"), {"--shard", "N <= 2"});
+    expectUserError(run("render scene.json --time 1 --shard 0/2 --out a.exr"), {"--shard", "--spp"});
+    expectUserError(run("render scene.json --spp 2 --shard x --out a.exr"), {"--shard", "K/N"});
+}
+
 TEST_F(RenderCliTest, BadInputIsNamed) {
     expectUserError(run("render scene.json --spp 2 --time 1 --out a.exr"), {"--spp", "--time"});
     expectUserError(run("render scene.json --spp 0 --out a.exr"), {"--spp"});

@@ -43,4 +43,30 @@ void Shard::validate(int64_t total, const std::string& what, const std::string& 
                          " would leave some empty: allowed N <= " + std::to_string(total));
 }
 
+void checkCompleteShardSet(const std::vector<Shard>& shards,
+                           const std::vector<std::string>& names) {
+    if (shards.empty()) throw InputError("no parts to merge");
+    const int64_t n = shards[0].count;
+    std::vector<int64_t> owner(static_cast<size_t>(n), -1);
+    for (size_t k = 0; k < shards.size(); ++k) {
+        if (shards[k].count != n || shards[k].index < 0 || shards[k].index >= n)
+            throw InputError(names[k] + " is shard " + shards[k].toString() + ", but " + names[0] +
+                             " is shard " + shards[0].toString() + ": the parts are of different jobs");
+        int64_t& o = owner[static_cast<size_t>(shards[k].index)];
+        if (o >= 0)
+            throw InputError(names[k] + " and " + names[static_cast<size_t>(o)] +
+                             " are both shard " + shards[k].toString() + ": give each shard once");
+        o = static_cast<int64_t>(k);
+    }
+    std::string missing;
+    int64_t missingCount = 0;
+    for (int64_t i = 0; i < n; ++i)
+        if (owner[static_cast<size_t>(i)] < 0 && missingCount++ < 8)
+            missing += (missing.empty() ? "" : ", ") + Shard{i, n}.toString();
+    if (missingCount > 0)
+        throw InputError(std::to_string(missingCount) + " of the " + std::to_string(n) +
+                         " shards missing (" + missing + (missingCount > 8 ? ", ..." : "") +
+                         "): give all " + std::to_string(n) + " parts");
+}
+
 }  // namespace weft

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace weft {
 
@@ -38,5 +39,10 @@ struct Shard {
         return static_cast<int64_t>((static_cast<__int128>(k) * total) / count);
     }
 };
+
+// Checks that `shards` (of parts named `names`, same size) are shards 0..N-1
+// of one N, each once; InputError naming the duplicate parts, or the missing
+// shards, otherwise. Different N are the caller's check (it names the field).
+void checkCompleteShardSet(const std::vector<Shard>& shards, const std::vector<std::string>& names);
 
 }  // namespace weft

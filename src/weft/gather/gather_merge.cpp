@@ -184,25 +184,11 @@ MergedGather mergeGatherParts(const std::vector<std::string>& partDirs) {
                                  " has " + first[f].second.dump() +
                                  ": the parts are not shards of one gather");
     }
-    const int64_t n = parts[0].options.shard.count;
-    std::vector<int> owner(static_cast<size_t>(n), -1);
-    for (size_t k = 0; k < parts.size(); ++k) {
-        const Shard& s = parts[k].options.shard;
-        int& o = owner[static_cast<size_t>(s.index)];
-        if (o >= 0)
-            throw InputError(parts[k].dir + " and " + parts[static_cast<size_t>(o)].dir +
-                             " are both shard " + s.toString() + ": give each shard once");
-        o = static_cast<int>(k);
-    }
-    std::string missing;
-    int64_t missingCount = 0;
-    for (int64_t i = 0; i < n; ++i)
-        if (owner[static_cast<size_t>(i)] < 0 && missingCount++ < 8)
-            missing += (missing.empty() ? "" : ", ") + Shard{i, n}.toString();
-    if (missingCount > 0)
-        throw InputError(std::to_string(missingCount) + " of the " + std::to_string(n) +
-                         " shards missing (" + missing + (missingCount > 8 ? ", ..." : "") +
-                         "): give all " + std::to_string(n) + " parts of the gather");
+    std::vector<Shard> shards;
+    std::vector<std::string> names;
+    for (const Part& p : parts) shards.push_back(p.options.shard), names.push_back(p.dir);
+    checkCompleteShardSet(shards, names);
+    const int64_t n = shards[0].count;
 
     MergedGather m;
     m.options = parts[0].options;

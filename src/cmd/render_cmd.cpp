@@ -65,6 +65,10 @@ void runRender(const RenderCmdOptions& o) {
 
     const std::string hash = render::sceneHash(desc);
     const render::Scene scene(desc, mode, o.quiet, yarnOptions);
+    if (!o.quiet)
+        for (const std::string& w :
+             render::yarnOverlapWarnings(desc.path, scene.stats().yarnOverlap))
+            std::fprintf(stderr, "weft: warning: %s\n", w.c_str());
     const render::RenderResult result = render::render(scene, options);
 
     nlohmann::json stats = render::toJson(result.stats);
@@ -127,7 +131,9 @@ void addRenderCommand(CLI::App& app) {
         ->capture_default_str();
     cmd->add_flag("--no-nee", o->noNee,
                   "Turn off next-event estimation (BSDF sampling only; for checking estimators)");
-    cmd->add_flag("--quiet", o->quiet, "No progress output");
+    cmd->add_flag("--quiet", o->quiet,
+                  "No progress output and no warning about yarns that overlap (the statistics "
+                  "still record yarn_overlap)");
     cmd->add_option("--out", o->out, "Output IMAGE.exr (IMAGE.png and IMAGE.json beside it)")
         ->required();
     cmd->callback([o] { runRender(*o); });

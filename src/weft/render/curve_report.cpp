@@ -315,6 +315,12 @@ struct OverlapSums {
     double length = 0, overlapping = 0, maxDepth = 0;
 };
 
+// overlapping / length, 0 for no length, at most 1 (the weights are summed
+// in another order than the lengths).
+double overlapFraction(const OverlapSums& sums) {
+    return sums.length > 0 ? std::min(1.0, sums.overlapping / sums.length) : 0.0;
+}
+
 // Samples every segment and finds, for each sample, its deepest partner.
 class OverlapSampler {
   public:
@@ -326,10 +332,12 @@ class OverlapSampler {
         sums.length += s.length;
         // The partner distance minus its radius below which a sample counts.
         const double bound = r * (1 - 2 * kOverlapTolerance);
-        if (!anyPartnerNear(s, bound)) return;
         const double intervals =
             std::clamp(std::ceil(s.length / (0.25 * r)), 1.0, double{kMaxSamplesPerSegment});
         const int n = static_cast<int>(intervals);
+        // A long segment first asks whether anything is near it at all; for
+        // one or two samples that costs as much as the samples themselves.
+        if (n > 2 && !anyPartnerNear(s, bound)) return;
         for (int k = 0; k <= n; ++k) {
             const double u = static_cast<double>(k) / n;
             const double weight = s.length / n * (k == 0 || k == n ? 0.5 : 1.0);
@@ -527,7 +535,7 @@ CurveReport curveReport(const CurveSet& set, std::optional<double> radius) {
         for (const Segment& s : tree.segments()) sampler.addSegment(s, sums, curveOverlaps);
         CurveOverlap& o = report.overlap.emplace();
         o.radius = *radius;
-        o.fraction = sums.length > 0 ? sums.overlapping / sums.length : 0;
+        o.fraction = overlapFraction(sums);
         o.maxDepth = sums.maxDepth;
         o.curvesOverlapping =
             static_cast<size_t>(std::count(curveOverlaps.begin(), curveOverlaps.end(), char{1}));
@@ -550,7 +558,7 @@ std::vector<YarnOverlap> yarnOverlaps(const std::vector<YarnCurves>& yarns) {
     for (size_t y = 0; y < yarns.size(); ++y) {
         YarnOverlap& o = result[y];
         o.radius = yarns[y].radius;
-        o.fraction = sums[y].length > 0 ? sums[y].overlapping / sums[y].length : 0;
+        o.fraction = overlapFraction(sums[y]);
         o.maxDepth = sums[y].maxDepth;
         // One entry: every contact involves it.
         const ContactSearch search(tree, yarns.size() == 1 ? -1 : static_cast<int64_t>(y));

@@ -302,12 +302,9 @@ class ContactSearch {
 };
 
 double pointBoxDistance(const Vec3& x, const Bounds3& box) {
-    double d2 = 0;
-    for (int k = 0; k < 3; ++k) {
-        const double gap = std::max({0.0, box.lo[k] - x[k], x[k] - box.hi[k]});
-        d2 += gap * gap;
-    }
-    return std::sqrt(d2);
+    Bounds3 point;
+    point.lo = point.hi = x;
+    return boxDistance(point, box);
 }
 
 // Overlap sums of one yarn entry.
@@ -462,6 +459,11 @@ CurveTable curveTable(const std::vector<YarnCurves>& yarns) {
                 s.length = length(s.b - s.a);
                 s.arcStart = info.length;
                 s.curve = curveIndex;
+                // Indices are 32-bit: no input weft reads holds 4 billion segments.
+                if (table.segments.size() >= std::numeric_limits<uint32_t>::max())
+                    throw InputError("the curves have more than " +
+                                     std::to_string(std::numeric_limits<uint32_t>::max() - 1) +
+                                     " segments, more than the curve report handles");
                 s.index = static_cast<uint32_t>(table.segments.size());
                 info.length += s.length;
                 table.segments.push_back(s);

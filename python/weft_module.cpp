@@ -4,7 +4,7 @@
 //   FiberBcsdf   the fiber BCSDF (preset or parameter dict): eval, pdf, sample
 //   YarnModel    a fitted model.json: the yarn BSDF's eval, pdf, sample, P(T|wi)
 //                and the raw network weights
-//   gather, fit, render, fit_config, presets
+//   gather, fit, render, fit_config, presets, curves_info (`weft curves info`)
 // The BSDF calls are vectorised: (n,3) float64 arrays in, one loop in C++ with
 // the GIL released, NumPy arrays out. Directions follow the CLI probes exactly
 // (docs/cli.md), so that the numbers are the same as `weft fiber eval` and
@@ -40,6 +40,8 @@
 #include "weft/gather/gather.h"
 #include "weft/gather/gather_merge.h"
 #include "weft/gather/rdm_io.h"
+#include "weft/render/curve_report.h"
+#include "weft/render/curves.h"
 #include "weft/render/render_merge.h"
 #include "weft/render/renderer.h"
 #include "weft/render/scene.h"
@@ -685,6 +687,10 @@ py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, cons
         const render::Scene scene(desc, mode, quiet, yarnOptions);
         result = render::render(scene, options);
     }
+    // The overlap warnings of `weft render`, as Python warnings (filterable).
+    for (const std::string& w :
+         render::yarnOverlapWarnings(desc.path, result->stats.scene.yarnOverlap))
+        if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw py::error_already_set();
     json stats = render::toJson(result->stats);
     stats["scene_hash"] = hash;
     stats["next_event_estimation"] = nee;
@@ -706,6 +712,22 @@ py::tuple renderMerge(const std::vector<py::object>& parts) {
         merged = render::mergeRenderParts(paths);
     }
     return py::make_tuple(imageArray(merged->image), pyFromJson(merged->stats));
+}
+
+py::object pyCurvesInfo(const py::object& pathArg, const py::object& radiusArg) {
+    const std::string path = pathOf(pathArg, "path");
+    std::optional<double> radius;
+    if (!radiusArg.is_none()) {
+        radius = radiusArg.cast<double>();
+        render::checkOverlapRadius(*radius, "radius");
+    }
+    json report;
+    {
+        py::gil_scoped_release release;
+        report = render::toJson(render::curveReport(render::readCurves(path), radius));
+    }
+    report["file"] = path;
+    return pyFromJson(report);
 }
 
 }  // namespace
@@ -907,6 +929,11 @@ PYBIND11_MODULE(weft, m) {
           py::arg("ablation") = "none", py::arg("reference") = py::none(),
           py::arg("report") = py::none(), py::arg("quiet") = true,
           "`weft fit`: fits a YarnModel to a gather folder; returns {model, report}.");
+
+    m.def("curves_info", &pyCurvesInfo, py::arg("path"), py::arg("radius") = py::none(),
+          "`weft curves info`: the report of a curve file (.bcc, .txt, .obj) as a dict: counts, "
+          "lengths, bounds, the closest contact, the largest radius without overlap and, with "
+          "radius=, the overlap at that radius.");
 
     m.def("render", &pyRender, py::arg("scene"), py::kw_only(), py::arg("mode") = "neural",
           py::arg("spp") = py::none(), py::arg("seconds") = py::none(), py::arg("threads") = 0,

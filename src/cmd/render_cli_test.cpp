@@ -148,6 +148,50 @@ TEST_F(RenderCliTest, ShardedRenderMergesToTheUnshardedImage) {
     expectUserError(run("render scene.json --spp 2 --shard 0/3 --out a.exr"), {"--shard", "N <= 2"});
     expectUserError(run("render scene.json --time 1 --shard 0/2 --out a.exr"), {"--shard", "--spp"});
     expectUserError(run("render scene.json --spp 2 --shard x --out a.exr"), {"--shard", "K/N"});
+
+// Two parallel yarns 0.03 apart drawn with radius 0.03: the whole length of
+// each lies inside the other, by (0.06 - 0.03) / 0.06 = half the diameter.
+TEST_F(RenderCliTest, WarnsWhenYarnsOverlap) {
+    writeFileAtomic(path("pair.txt"), "-0.2 0 0\n0.2 0 0\n\n-0.2 0.03 0\n0.2 0.03 0\n");
+    writeFileAtomic(path("pair.json"), R"({
+        "camera": {"from": [0, 0, 1], "to": [0, 0, 0], "fov_deg": 8},
+        "film": {"width": 16, "height": 12},
+        "render": {"spp": 1, "seed": 1},
+        "yarns": [{"curves": "pair.txt", "radius": 0.03, "model": ")" + kFleece + R"("}]
+    })");
+    for (const std::string mode : {"neural", "fiber"}) {
+        const RunResult r = run("render pair.json --mode " + mode + " --out " + mode + ".exr");
+        ASSERT_EQ(r.status, 0) << r.err;
+        EXPECT_TRUE(testing::contains(
+            r.err, "weft: warning: pair.json: yarns[0] (" + path("pair.txt") +
+                       "): 100.0% of the yarn length lies inside other yarns (up to 50% of the "
+                       "diameter) at radius 0.03; the largest radius without overlap is 0.015\n"))
+            << r.err;
+        const nlohmann::json overlap =
+            nlohmann::json::parse(readFile(path(mode + ".json"))).at("yarn_overlap");
+        ASSERT_EQ(overlap.size(), 1u);
+        EXPECT_EQ(overlap[0].at("yarn"), 0);
+        EXPECT_EQ(overlap[0].at("curves"), path("pair.txt"));
+        EXPECT_EQ(overlap[0].at("radius"), 0.03);
+        EXPECT_EQ(overlap[0].at("overlap_fraction"), 1.0);
+        EXPECT_NEAR(overlap[0].at("max_overlap").get<double>(), 0.5, 1e-6);
+        EXPECT_NEAR(overlap[0].at("largest_radius_without_overlap").get<double>(), 0.015, 1e-8);
+    }
+    // --quiet: no warning (and no progress), the statistics keep the record.
+    RunResult r = run("render pair.json --quiet --out quiet.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("quiet.json"))).at("yarn_overlap"),
+              nlohmann::json::parse(readFile(path("neural.json"))).at("yarn_overlap"));
+    // One yarn alone: recorded, not warned about; no contact, no largest radius.
+    r = run("render scene.json --out alone.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_FALSE(testing::contains(r.err, "warning")) << r.err;
+    const nlohmann::json alone =
+        nlohmann::json::parse(readFile(path("alone.json"))).at("yarn_overlap");
+    ASSERT_EQ(alone.size(), 1u);
+    EXPECT_EQ(alone[0].at("overlap_fraction"), 0.0);
+    EXPECT_TRUE(alone[0].at("largest_radius_without_overlap").is_null());
 }
 
 TEST_F(RenderCliTest, BadInputIsNamed) {

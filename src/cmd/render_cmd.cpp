@@ -90,6 +90,10 @@ void runRender(const RenderCmdOptions& o) {
 
     const std::string hash = render::sceneHash(desc);
     const render::Scene scene(desc, mode, o.quiet, yarnOptions);
+    if (!o.quiet)
+        for (const std::string& w :
+             render::yarnOverlapWarnings(desc.path, scene.stats().yarnOverlap))
+            std::fprintf(stderr, "weft: warning: %s\n", w.c_str());
     const render::RenderResult result = render::render(scene, options);
 
     nlohmann::json stats = render::toJson(result.stats);
@@ -160,7 +164,9 @@ void addRenderCommand(CLI::App& app) {
         ->capture_default_str();
     cmd->add_flag("--no-nee", o->noNee,
                   "Turn off next-event estimation (BSDF sampling only; for checking estimators)");
-    cmd->add_flag("--quiet", o->quiet, "No progress output");
+    cmd->add_flag("--quiet", o->quiet,
+                  "No progress output and no warning about yarns that overlap (the statistics "
+                  "still record yarn_overlap)");
     o->shardOpt = cmd->add_option(
         "--shard", o->shard,
         "K/N: trace only shard K (0..N-1) of N of the --spp samples, [K spp/N, (K+1) spp/N) of "

@@ -182,6 +182,7 @@ nlohmann::json toJson(const RenderStats& s) {
           {"geometry_bvh_peak_bytes", s.scene.embreePeakBytes},
           {"material_bytes", s.scene.materialBytes},
           {"build_seconds", s.scene.seconds}}},
+        {"yarn_overlap", yarnOverlapJson(s.scene.yarnOverlap)},
     };
     if (s.shard)
         j["shard"] = {{"index", s.shard->index},

@@ -148,6 +148,7 @@ TEST_F(RenderCliTest, ShardedRenderMergesToTheUnshardedImage) {
     expectUserError(run("render scene.json --spp 2 --shard 0/3 --out a.exr"), {"--shard", "N <= 2"});
     expectUserError(run("render scene.json --time 1 --shard 0/2 --out a.exr"), {"--shard", "--spp"});
     expectUserError(run("render scene.json --spp 2 --shard x --out a.exr"), {"--shard", "K/N"});
+}
 
 // Two parallel yarns 0.03 apart drawn with radius 0.03: the whole length of
 // each lies inside the other, by (0.06 - 0.03) / 0.06 = half the diameter.

@@ -3,8 +3,10 @@
 rendered with every fitted material in fiber, neural and dual mode.
 
 For each model of models/ (the five Table 3 materials) and each swatch
-(knit-stockinette-tiny.bcc, woven-satin-small.bcc; yarn radius 1 in the files,
-scaled here to 0.01), renders a fiber-mode reference at REF_SPP and the
+(knit-stockinette-tiny.bcc, woven-satin-small.bcc; yarn radius 1 in the files
+by their README, scaled here by 0.01), drawn at the smaller of that radius and
+the largest radius without interpenetration that `weft curves info` measures
+(the knit's yarns overlap at radius 1: docs/curves.md), renders a fiber-mode reference at REF_SPP and the
 neural model and the dual-scattering baseline (after ZMA23) at SPP, each with
 `weft render` in its own process, then compares both with the reference
 (`weft compare`: SSIM, relative MSE). Writes a table (seconds per spp of each
@@ -51,7 +53,17 @@ def bcc_bounds(path):
     return lo, hi
 
 
-def swatch_scene(folder, name, bcc, model, size, spp):
+def swatch_radius(weft, bcc, folder):
+    """The yarn radius in scene units: min(1, the largest radius without
+    overlap) in file units, times SCALE."""
+    report = os.path.join(folder, os.path.basename(bcc) + ".report.json")
+    run([weft, "curves", "info", bcc, "--json", report])
+    with open(report) as f:
+        largest = json.load(f)["largest_radius_without_overlap"]
+    return SCALE * (1.0 if largest is None else min(1.0, largest))
+
+
+def swatch_scene(folder, name, bcc, model, size, spp, radius):
     lo, hi = bcc_bounds(bcc)
     centre = [SCALE * 0.5 * (a + b) for a, b in zip(lo, hi)]
     extent = SCALE * max(b - a for a, b in zip(lo, hi))
@@ -65,7 +77,7 @@ def swatch_scene(folder, name, bcc, model, size, spp):
             {"type": "sphere", "center": [centre[0] + extent, centre[1] + extent, extent],
              "radius": 0.2 * extent, "radiance": [10, 10, 10]},
         ],
-        "yarns": [{"curves": os.path.abspath(bcc), "scale": SCALE, "radius": SCALE, "plies": 3,
+        "yarns": [{"curves": os.path.abspath(bcc), "scale": SCALE, "radius": radius, "plies": 3,
                    "ply_twist": 0.3, "model": os.path.abspath(model)}],
     }
     path = os.path.join(folder, "%s.json" % name)
@@ -99,23 +111,25 @@ def main():
 
     results = {"settings": vars(a), "rows": []}
     lines = ["# The shared knit and woven swatches in fiber, neural and dual mode", "",
-             "%d x %d; fiber reference %d spp, neural and dual %d spp; %s threads; yarn radius "
-             "%g (the files' radius 1 times the scale). SSIM and relative MSE against the "
+             "%d x %d; fiber reference %d spp, neural and dual %d spp; %s threads; scale %g "
+             "(below: the radius of each swatch). SSIM and relative MSE against the "
              "fiber reference (itself noisy: compare the columns with each other). "
              "Seconds per spp include no scene build." % (a.size, a.size, a.ref_spp, a.spp,
                                                           a.threads or "all", SCALE), "",
              "| swatch | material | fiber s/spp | neural s/spp | dual s/spp | SSIM neural | "
              "SSIM dual | relMSE neural | relMSE dual |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    captions = []
+    captions, radii = [], {}
     os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="weft-bench-shared-") as tmp:
         for swatch, file_name in SWATCHES:
             images = []
+            bcc = os.path.join(SHARED, file_name)
+            radius = swatch_radius(a.weft, bcc, tmp)
+            radii[swatch] = radius
             for m in materials:
                 model = os.path.join(ROOT, "models", "%s.json" % m)
-                scene = swatch_scene(tmp, "%s-%s" % (swatch, m),
-                                     os.path.join(SHARED, file_name), model, a.size, a.spp)
+                scene = swatch_scene(tmp, "%s-%s" % (swatch, m), bcc, model, a.size, a.spp, radius)
                 stats, exr = {}, {}
                 for mode, spp in (("fiber", a.ref_spp), ("neural", a.spp), ("dual", a.spp)):
                     exr[mode] = os.path.join(tmp, "%s-%s-%s.exr" % (swatch, m, mode))
@@ -140,7 +154,9 @@ def main():
             run([a.weft, "montage", *images, "--columns", "3", "--out", figure])
             captions.append("- `%s`: rows %s; columns fiber reference | neural | dual." % (
                 os.path.basename(figure), ", ".join(materials)))
-    lines += ["", "Figures:", ""] + captions
+    lines += ["", "Yarn radius (scene units): %s." % ", ".join(
+        "%s %.4g" % kv for kv in radii.items()), "", "Figures:", ""] + captions
+    results["radius"] = radii
     with open(a.out + ".tmp", "w") as f:
         f.write("\n".join(lines) + "\n")
     os.replace(a.out + ".tmp", a.out)

@@ -9,7 +9,9 @@
 // and M networks through FixedMlp, SIMD kernel and scalar reference, the R
 // lobe), Mlp<float>::forward on a batch of one (what the fixed-size evaluator
 // replaces), FiberBcsdf eval / sample, and the time to construct a YarnBsdf
-// (model validation, energy guard table).
+// (model validation, energy guard table); the dual-scattering baseline
+// (yarn/dual_scattering.h) for the model's fiber and ply: the same per-wo
+// costs and its construction (energy clamp table).
 // Writes a Markdown table (default bench/results/bsdf.md; --md=PATH) with
 // every time relative to FiberBcsdf::eval; --benchmark_out=FILE.json adds
 // Google Benchmark's JSON. The model: tests/data/fleece-small.json next to
@@ -34,6 +36,7 @@
 #include "weft/core/rng.h"
 #include "weft/fiber/fiber_bcsdf.h"
 #include "weft/fit/mlp.h"
+#include "weft/yarn/dual_scattering.h"
 #include "weft/yarn/yarn_bsdf.h"
 
 using namespace weft;
@@ -60,6 +63,12 @@ const YarnBsdf& rawBsdf() {
 // With the paper's sampling (eq. 9-11) instead of the tabulated default.
 const YarnBsdf& fittedBsdf() {
     static const YarnBsdf b(model(), gModelPath, YarnBsdfOptions{true, YarnSampling::Fitted});
+    return b;
+}
+
+// The dual-scattering baseline of the same fiber and ply (render --mode dual).
+const DualScatteringBsdf& dualBsdf() {
+    static const DualScatteringBsdf b(model().fiber, model().ply);
     return b;
 }
 
@@ -208,6 +217,26 @@ void YarnPrepared(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations());
 }
 
+// The same three calls of the dual-scattering baseline on a prepared incident.
+void DualPrepared(benchmark::State& state) {
+    const DualScatteringBsdf& bsdf = dualBsdf();
+    const std::vector<BsdfIncident>& in = preparedIncidents(bsdf);
+    const Pairs& p = pairs();
+    const int64_t what = state.range(0);
+    Rng rng(3, 4);
+    size_t k = 0;
+    for (auto _ : state) {
+        if (what == 0)
+            benchmark::DoNotOptimize(bsdf.eval(in[k], p.wo[k]));
+        else if (what == 1)
+            benchmark::DoNotOptimize(bsdf.evalPdf(in[k], p.wo[k]));
+        else
+            benchmark::DoNotOptimize(bsdf.sample(in[k], p.u[k], rng));
+        k = (k + 1) % kPairs;
+    }
+    state.SetItemsProcessed(state.iterations());
+}
+
 // FixedMlp::forward (argument 1: the SIMD kernel) or forwardScalar (0) on
 // float inputs: the network alone, without the conversion from Vec3.
 void MNetwork(benchmark::State& state) {
@@ -284,6 +313,14 @@ void YarnConstruct(benchmark::State& state) {
     for (auto _ : state) benchmark::DoNotOptimize(YarnBsdf(model(), gModelPath, options));
 }
 
+// Argument 1: with the energy clamp table (the default), 0: without.
+void DualConstruct(benchmark::State& state) {
+    DualScatteringOptions options;
+    options.energyClamp = state.range(0) != 0;
+    for (auto _ : state)
+        benchmark::DoNotOptimize(DualScatteringBsdf(model().fiber, model().ply, options));
+}
+
 // Console output as usual, and every run's CPU time for the Markdown table
 // (with --benchmark_repetitions=K, the fastest of the K runs: on a shared
 // machine noise only adds time, and random interleaving spreads it).
@@ -345,6 +382,11 @@ const Entry kEntries[] = {
     {"YarnConstruct/2", "YarnBsdf construction: energy guard and sampling table (default)"},
     {"YarnConstruct/1", "YarnBsdf construction with the energy guard table, fitted sampling"},
     {"YarnConstruct/0", "YarnBsdf construction without the guard, fitted sampling"},
+    {"DualPrepared/0", "dual-scattering baseline: eval on a prepared incident"},
+    {"DualPrepared/1", "dual-scattering baseline: evalPdf on a prepared incident"},
+    {"DualPrepared/2", "dual-scattering baseline: sample on a prepared incident"},
+    {"DualConstruct/1", "dual-scattering baseline construction: energy clamp table (default)"},
+    {"DualConstruct/0", "dual-scattering baseline construction without the clamp"},
 };
 
 // The row of a benchmark's name (the end of kEntries when it has none).
@@ -383,6 +425,8 @@ BENCHMARK(TNetwork)->Arg(1)->Arg(0);
 BENCHMARK(YarnRLobe);
 BENCHMARK(MlpForwardBatchOfOne);
 BENCHMARK(YarnConstruct)->Arg(2)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+BENCHMARK(DualPrepared)->Arg(0)->Arg(1)->Arg(2);
+BENCHMARK(DualConstruct)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
 int main(int argc, char** argv) {
     std::string md = "bench/results/bsdf.md";
@@ -421,7 +465,7 @@ int main(int argc, char** argv) {
         << "| benchmark | what | ns per call | / fiber eval |\n| --- | --- | --- | --- |\n";
     for (const auto& row : reporter.rows) {
         char line[512];
-        if (row.name.rfind("YarnConstruct", 0) == 0)
+        if (row.name.find("Construct") != std::string::npos)
             std::snprintf(line, sizeof line, "| %s | %s | %.3g ms | |\n", row.name.c_str(),
                           describe(row.name), row.fastest() * 1e-6);
         else

@@ -4,7 +4,7 @@
 //   FiberBcsdf   the fiber BCSDF (preset or parameter dict): eval, pdf, sample
 //   YarnModel    a fitted model.json: the yarn BSDF's eval, pdf, sample, P(T|wi)
 //                and the raw network weights
-//   gather, fit, render, fit_config, presets
+//   gather, fit, render, fit_config, presets, curves_info (`weft curves info`)
 // The BSDF calls are vectorised: (n,3) float64 arrays in, one loop in C++ with
 // the GIL released, NumPy arrays out. Directions follow the CLI probes exactly
 // (docs/cli.md), so that the numbers are the same as `weft fiber eval` and
@@ -38,7 +38,11 @@
 #include "weft/fit/fit.h"
 #include "weft/yarn/yarn_model.h"
 #include "weft/gather/gather.h"
+#include "weft/gather/gather_merge.h"
 #include "weft/gather/rdm_io.h"
+#include "weft/render/curve_report.h"
+#include "weft/render/curves.h"
+#include "weft/render/render_merge.h"
 #include "weft/render/renderer.h"
 #include "weft/render/scene.h"
 #include "weft/render/scene_file.h"
@@ -406,10 +410,46 @@ py::array_t<T> ndarray(const std::vector<T>& values, std::vector<py::ssize_t> sh
     return a;
 }
 
+// (k, n) -> shard k of n (core/shard.h).
+Shard shardOf(const py::object& shard) {
+    std::pair<int64_t, int64_t> kn;
+    try {
+        kn = shard.cast<std::pair<int64_t, int64_t>>();
+    } catch (const py::cast_error&) {
+        throw InputError("shard: expected a pair (k, n) of integers, 0 <= k < n");
+    }
+    return Shard::parse(std::to_string(kn.first) + "/" + std::to_string(kn.second), "shard");
+}
+
+py::dict gatherDict(const GatherResult& r, const GatherOptions& o, const std::string& outPath);
+
+// A shard's integer sums (gather_merge.h's part files) and statistics.
+py::dict gatherPartDict(const GatherSums& s, const GatherOptions& o, const std::string& outPath) {
+    const py::ssize_t ti = s.bins.thetaI, pi = s.bins.phiI, to = s.bins.thetaO, po = s.bins.phiO;
+    py::dict d;
+    d["count"] = ndarray(s.count, {ti, pi});
+    d["count_t"] = ndarray(s.countT, {ti, pi});
+    d["sum_r"] = ndarray(s.sumR, {ti, pi, to, po, 3});
+    d["sum_m"] = ndarray(s.sumM, {ti, pi, to, po, 3});
+    d["sum_truncated"] = ndarray(s.sumTruncated, {ti, pi, 3});
+    d["depth"] = ndarray(s.depth, {static_cast<py::ssize_t>(s.depth.size())});
+    json stats = gatherInputs(o, s.fiberRadius, s.period, s.segments);
+    stats["shard"] = {{"index", o.shard.index},
+                      {"count", o.shard.count},
+                      {"first_path", s.firstPath},
+                      {"end_path", s.endPath}};
+    stats["elapsed_seconds"] = s.seconds;
+    stats["rays"] = s.rays;
+    stats["out"] = outPath.empty() ? json() : json(outPath);
+    d["stats"] = pyFromJson(stats);
+    return d;
+}
+
 py::dict pyGather(const py::object& preset, const py::object& params, const py::object& fibers,
                   const py::object& density, const py::object& twist, int64_t paths, uint64_t seed,
                   const py::object& plySeed, const std::vector<int>& bins, int maxDepth,
-                  int threads, int segmentsPerTwist, const py::object& out, bool quiet) {
+                  int threads, int segmentsPerTwist, const py::object& shard,
+                  const py::object& out, bool quiet) {
     GatherOptions o;
     const bool geometry = !fibers.is_none() || !density.is_none() || !twist.is_none();
     if (!preset.is_none()) {
@@ -441,6 +481,7 @@ py::dict pyGather(const py::object& preset, const py::object& params, const py::
     o.threads = threads;
     o.segmentsPerTwist = segmentsPerTwist;
     o.quiet = quiet;
+    if (!shard.is_none()) o.shard = shardOf(shard);
     o.validate();
     std::unique_ptr<TempDirCommit> dir;
     std::string outPath;
@@ -448,12 +489,51 @@ py::dict pyGather(const py::object& preset, const py::object& params, const py::
         outPath = pathOf(out, "out");
         dir = std::make_unique<TempDirCommit>(outPath);  // fails now, not after the walks
     }
+    if (!shard.is_none()) {
+        // A part: its integer sums (gather_merge.h), written for gather_merge with out=DIR.
+        GatherSums sums;
+        {
+            py::gil_scoped_release release;
+            sums = gatherSums(o);
+            if (dir) writeGatherPart(sums, o, *dir);
+        }
+        return gatherPartDict(sums, o, outPath);
+    }
     GatherResult r;
     {
         py::gil_scoped_release release;
         r = gatherRdm(o);
         if (dir) writeGather(r, o, *dir);
     }
+    return gatherDict(r, o, outPath);
+}
+
+py::dict gatherMerge(const std::vector<py::object>& parts, const py::object& out) {
+    std::vector<std::string> dirs;
+    for (size_t k = 0; k < parts.size(); ++k)
+        dirs.push_back(pathOf(parts[k], "parts[" + std::to_string(k) + "]"));
+    std::unique_ptr<TempDirCommit> dir;
+    std::string outPath;
+    if (!out.is_none()) {
+        outPath = pathOf(out, "out");
+        std::vector<CommandPath> inputs;
+        for (const std::string& d : dirs) inputs.push_back({"part", d});
+        checkOutputsSpareInputs({}, {}, inputs, {{"out", outPath}});
+        dir = std::make_unique<TempDirCommit>(outPath);
+    }
+    GatherResult r;
+    GatherOptions o;
+    {
+        py::gil_scoped_release release;
+        MergedGather m = mergeGatherParts(dirs);
+        r = normaliseGather(m.sums, m.options, m.shards);
+        o = m.options;
+        if (dir) writeGather(r, o, *dir);
+    }
+    return gatherDict(r, o, outPath);
+}
+
+py::dict gatherDict(const GatherResult& r, const GatherOptions& o, const std::string& outPath) {
     const py::ssize_t ti = r.bins.thetaI, pi = r.bins.phiI, to = r.bins.thetaO, po = r.bins.phiO;
     py::dict d;
     d["count"] = ndarray(r.count, {ti, pi});
@@ -556,9 +636,17 @@ py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object
     return d;
 }
 
+// An (H, W, 3) float32 array of an image.
+py::array_t<float> imageArray(const Image& image) {
+    py::array_t<float> pixels(std::vector<py::ssize_t>{image.height, image.width, 3});
+    std::copy(image.pixels.begin(), image.pixels.end(), pixels.mutable_data());
+    return pixels;
+}
+
 py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, const py::object& spp,
                    const py::object& seconds, int threads, const py::object& seed, bool nee,
-                   const std::string& yarnSampling, const py::object& baseDir, bool quiet) {
+                   const std::string& yarnSampling, const py::object& baseDir,
+                   const py::object& shard, bool quiet) {
     const render::RenderMode mode = render::parseRenderMode(modeName, "mode");
     YarnBsdfOptions yarnOptions;
     yarnOptions.sampling = parseYarnSampling(yarnSampling, "yarn_sampling");
@@ -589,6 +677,7 @@ py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, cons
     options.maxDepth = desc.render.maxDepth;
     options.nextEventEstimation = nee;
     options.quiet = quiet;
+    if (!shard.is_none()) options.shard = shardOf(shard);
     options.validate();
     std::optional<render::RenderResult> result;
     std::string hash;
@@ -598,6 +687,10 @@ py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, cons
         const render::Scene scene(desc, mode, quiet, yarnOptions);
         result = render::render(scene, options);
     }
+    // The overlap warnings of `weft render`, as Python warnings (filterable).
+    for (const std::string& w :
+         render::yarnOverlapWarnings(desc.path, result->stats.scene.yarnOverlap))
+        if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw py::error_already_set();
     json stats = render::toJson(result->stats);
     stats["scene_hash"] = hash;
     stats["next_event_estimation"] = nee;
@@ -606,10 +699,35 @@ py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, cons
     stats["version"] = WEFT_VERSION;
     py::dict statsDict = pyFromJson(stats).cast<py::dict>();
     statsDict["scene_file"] = sceneFile;
-    const Image& image = result->image;
-    py::array_t<float> pixels(std::vector<py::ssize_t>{image.height, image.width, 3});
-    std::copy(image.pixels.begin(), image.pixels.end(), pixels.mutable_data());
-    return py::make_tuple(pixels, statsDict);
+    return py::make_tuple(imageArray(result->image), statsDict);
+}
+
+py::tuple renderMerge(const std::vector<py::object>& parts) {
+    std::vector<std::string> paths;
+    for (size_t k = 0; k < parts.size(); ++k)
+        paths.push_back(pathOf(parts[k], "parts[" + std::to_string(k) + "]"));
+    std::optional<render::MergedRender> merged;
+    {
+        py::gil_scoped_release release;
+        merged = render::mergeRenderParts(paths);
+    }
+    return py::make_tuple(imageArray(merged->image), pyFromJson(merged->stats));
+}
+
+py::object pyCurvesInfo(const py::object& pathArg, const py::object& radiusArg) {
+    const std::string path = pathOf(pathArg, "path");
+    std::optional<double> radius;
+    if (!radiusArg.is_none()) {
+        radius = radiusArg.cast<double>();
+        render::checkOverlapRadius(*radius, "radius");
+    }
+    json report;
+    {
+        py::gil_scoped_release release;
+        report = render::toJson(render::curveReport(render::readCurves(path), radius));
+    }
+    report["file"] = path;
+    return pyFromJson(report);
 }
 
 }  // namespace
@@ -793,10 +911,18 @@ PYBIND11_MODULE(weft, m) {
           py::arg("density") = py::none(), py::arg("twist") = py::none(), py::arg("paths"),
           py::arg("seed") = 0, py::arg("ply_seed") = py::none(),
           py::arg("bins") = std::vector<int>{22, 90, 45, 90}, py::arg("max_depth") = 1000,
-          py::arg("threads") = 0, py::arg("segments_per_twist") = 128, py::arg("out") = py::none(),
-          py::arg("quiet") = true,
+          py::arg("threads") = 0, py::arg("segments_per_twist") = 128,
+          py::arg("shard") = py::none(), py::arg("out") = py::none(), py::arg("quiet") = true,
           "`weft gather`: the RDM of a ply as a dict of arrays (count, count_t, p_t, rdm_r, "
-          "rdm_m, truncated, depth) and stats; out=DIR also writes the gather folder.");
+          "rdm_m, truncated, depth) and stats; out=DIR also writes the gather folder. "
+          "shard=(k, n): only shard k of n of the paths, as integer sums (count, count_t, "
+          "sum_r, sum_m, sum_truncated, depth) for gather_merge; out=DIR writes the part.");
+
+    m.def("gather_merge", &gatherMerge, py::arg("parts"), py::kw_only(),
+          py::arg("out") = py::none(),
+          "`weft gather merge`: the part folders of gather(shard=(k, n), out=...) for k = 0..n-1 "
+          "added into one gather, bit for bit the unsharded one; returns gather()'s dict; "
+          "out=DIR writes the gather folder.");
 
     m.def("fit", &pyFit, py::arg("rdm"), py::kw_only(), py::arg("out") = py::none(),
           py::arg("config") = py::none(), py::arg("seed") = 0, py::arg("threads") = py::none(),
@@ -804,10 +930,20 @@ PYBIND11_MODULE(weft, m) {
           py::arg("report") = py::none(), py::arg("quiet") = true,
           "`weft fit`: fits a YarnModel to a gather folder; returns {model, report}.");
 
+    m.def("curves_info", &pyCurvesInfo, py::arg("path"), py::arg("radius") = py::none(),
+          "`weft curves info`: the report of a curve file (.bcc, .txt, .obj) as a dict: counts, "
+          "lengths, bounds, the closest contact, the largest radius without overlap and, with "
+          "radius=, the overlap at that radius.");
+
     m.def("render", &pyRender, py::arg("scene"), py::kw_only(), py::arg("mode") = "neural",
           py::arg("spp") = py::none(), py::arg("seconds") = py::none(), py::arg("threads") = 0,
           py::arg("seed") = py::none(), py::arg("nee") = true, py::arg("yarn_sampling") = "tabulated",
-          py::arg("base_dir") = py::none(), py::arg("quiet") = true,
+          py::arg("base_dir") = py::none(), py::arg("shard") = py::none(),
+          py::arg("quiet") = true,
           "`weft render`: a scene file or dict to an (H,W,3) float32 linear RGB image and the "
-          "statistics dict.");
+          "statistics dict; shard=(k, n) traces only shard k of n of the spp samples.");
+
+    m.def("render_merge", &renderMerge, py::arg("parts"),
+          "`weft render merge`: the sample-weighted mean of the PART.exr files (PART.json "
+          "beside each) that `weft render --shard K/N` wrote; returns (image, stats).");
 }

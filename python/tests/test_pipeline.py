@@ -3,6 +3,7 @@ a tiny render."""
 import json
 
 import numpy as np
+import pytest
 
 import weft
 
@@ -77,3 +78,37 @@ def test_tiny_render(cli, tmp_path, root):
 
     fiber, fstats = weft.render(scene, mode="fiber", spp=1)
     assert fiber.shape == (16, 16, 3) and fstats["mode"] == "fiber"
+
+
+def test_sharded_gather_and_render_merge(cli, tmp_path, root):
+    args = dict(preset="fleece", paths=3000, bins=[4, 8, 6, 12], seed=2)
+    whole = weft.gather(**args)
+    parts = []
+    for k in range(3):
+        part = weft.gather(**args, shard=(k, 3), out=tmp_path / f"part{k}")
+        assert part["stats"]["shard"]["index"] == k and part["sum_m"].dtype == np.int64
+        parts.append(tmp_path / f"part{k}")
+    # The shards' counts add up to the whole gather's.
+    assert sum(weft.gather(**args, shard=(k, 3))["count"].sum() for k in range(3)) == 3000
+    merged = weft.gather_merge(parts[::-1], out=tmp_path / "merged")
+    for name in GATHER_ARRAYS:
+        np.testing.assert_array_equal(merged[name], whole[name], err_msg=name)
+        np.testing.assert_array_equal(np.load(tmp_path / "merged" / f"{name}.npy"), whole[name])
+    assert merged["stats"]["shards"] == 3
+    with pytest.raises(ValueError, match="missing"):
+        weft.gather_merge(parts[:2])
+    with pytest.raises(ValueError, match="shard"):
+        weft.gather(**args, shard=(3, 3))
+
+    cli("scene", "closeup", "--model", root / "models" / "fleece.json", "--width", 12,
+        "--height", 8, "--out", tmp_path / "closeup")
+    scene = tmp_path / "closeup" / "scene.json"
+    image, _ = weft.render(scene, spp=4, seed=1)
+    for k in range(2):
+        cli("render", scene, "--spp", 4, "--seed", 1, "--shard", f"{k}/2", "--quiet", "--out",
+            tmp_path / f"r{k}.exr")
+    _, part_stats = weft.render(scene, spp=4, seed=1, shard=(1, 2))
+    assert part_stats["shard"]["first_sample"] == 2 and part_stats["spp"] == 2
+    merged_image, stats = weft.render_merge([tmp_path / "r1.exr", tmp_path / "r0.exr"])
+    np.testing.assert_allclose(merged_image, image, rtol=1e-6, atol=1e-12)
+    assert stats["spp"] == 4 and stats["shards"]["count"] == 2

@@ -100,5 +100,6 @@ void addRenderCommand(CLI::App& app);
 void addCompareCommand(CLI::App& app);
 void addSceneCommand(CLI::App& app);
 void addMontageCommand(CLI::App& app);
+void addCurvesCommands(CLI::App& app);
 
 }  // namespace weft::cmd

@@ -216,6 +216,49 @@ TEST_F(GatherCliTest, BitIdenticalForAnyThreadCount) {
     EXPECT_EQ(meta("two").at("threads"), 2);
 }
 
+// `weft gather --shard K/N` and `weft gather merge`: the merge is the unsharded
+// gather byte for byte (every array and ply.txt).
+TEST_F(GatherCliTest, ShardsMergeToTheUnshardedGather) {
+    gatherOk("--preset fleece " + kSmall + " --seed 3 --out whole");
+    for (int k = 0; k < 4; ++k) {
+        const std::string out = gatherOk("--preset fleece " + kSmall + " --seed 3 --shard " +
+                                         std::to_string(k) + "/4 --threads " +
+                                         std::to_string(1 + k % 2) + " --out part" +
+                                         std::to_string(k));
+        EXPECT_TRUE(contains(out, "\"shard\": \"" + std::to_string(k) + "/4\"")) << out;
+        EXPECT_EQ(meta("part" + std::to_string(k)).at("format"), "weft-gather-part");
+    }
+    const RunResult r = run("gather merge part3 part1 part0 part2 --out merged");
+    ASSERT_EQ(r.status, 0) << r.err;
+    for (const char* name : kNpyFiles)
+        EXPECT_TRUE(readFile(path("whole") + "/" + name) == readFile(path("merged") + "/" + name))
+            << name << " differs between the merged shards and the unsharded gather";
+    EXPECT_TRUE(readFile(path("whole/ply.txt")) == readFile(path("merged/ply.txt")));
+    EXPECT_EQ(meta("merged").at("format"), "weft-gather");
+    EXPECT_EQ(meta("merged").at("shards"), 4);
+    EXPECT_EQ(meta("merged").at("paths"), 3000);
+    EXPECT_EQ(meta("merged").at("mean_depth"), meta("whole").at("mean_depth"));
+    // The merged directory is an ordinary gather; a part is not one.
+    expectUserError(run("fit --rdm part0 --out m.json --quiet"), {"part0/meta.json", "merge"});
+
+    // Sets of parts that are not one gather, and a damaged part: nothing is written.
+    expectUserError(run("gather merge part0 part1 part3 --out bad"), {"missing", "2/4"});
+    expectUserError(run("gather merge part0 part1 part1 part2 part3 --out bad"), {"both shard 1/4"});
+    gatherOk("--preset silk " + kSmall + " --seed 3 --shard 2/4 --out silk2");
+    expectUserError(run("gather merge part0 part1 silk2 part3 --out bad"),
+                    {"silk2/meta.json", "\"material\""});
+    expectUserError(run("gather merge whole --out bad"), {"whole/meta.json", "not a shard"});
+    const std::string bytes = readFile(path("part3/sum_m.npy"));
+    writeText("part3/sum_m.npy", bytes.substr(0, bytes.size() - 100));
+    expectUserError(run("gather merge part0 part1 part2 part3 --out bad"), {"part3/sum_m.npy"});
+    for (const std::string& name : listing()) EXPECT_TRUE(name.rfind("bad", 0) != 0) << name;
+    // Bad shards.
+    expectUserError(gather("--preset fleece " + kSmall + " --shard 4/4 --out x"), {"--shard", "4/4"});
+    expectUserError(gather("--preset fleece --paths 3 --shard 0/4 --out x"), {"--shard", "N <= 3"});
+    expectUserError(gather("--preset fleece " + kSmall + " --shard 1-4 --out x"), {"--shard", "K/N"});
+    expectUserError(gather("--preset fleece --out x"), {"--paths"});
+}
+
 TEST_F(GatherCliTest, SeedDeterminesTheResult) {
     gatherOk("--preset fleece " + kSmall + " --seed 11 --out a");
     gatherOk("--preset fleece " + kSmall + " --seed 11 --out b");

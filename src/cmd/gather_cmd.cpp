@@ -7,6 +7,7 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/gather/gather.h"
+#include "weft/gather/gather_merge.h"
 #include "weft/gather/rdm_image.h"
 #include "weft/yarn/material_preset.h"
 
@@ -20,12 +21,28 @@ struct GatherCliOptions {
     int64_t paths = 0;
     uint64_t seed = 0, plySeed = 0;
     CLI::Option* plySeedOpt = nullptr;
-    std::string bins = "22,90,45,90", out;
+    std::string bins = "22,90,45,90", out, shard;
+    CLI::Option *pathsOpt = nullptr, *shardOpt = nullptr;
     int maxDepth = 1000, threads = 0, segmentsPerTwist = 128;
     bool quiet = false;
 };
 
+// The one-line JSON summary of a gather or a merge.
+void printGatherSummary(const std::string& out, const GatherStats& s) {
+    std::printf(
+        "{\"out\": \"%s\", \"paths\": %lld, \"seconds\": %.3f, \"paths_per_second\": %.0f, "
+        "\"rays_per_second\": %.0f, \"mean_depth\": %.3f, \"truncated_fraction\": %.3g, "
+        "\"shards\": %lld}\n",
+        out.c_str(), static_cast<long long>(s.paths), s.seconds, s.paths / s.seconds,
+        s.rays / s.walkSeconds, s.meanDepth, static_cast<double>(s.truncatedPaths) / s.paths,
+        static_cast<long long>(s.shards));
+}
+
 void runGather(const GatherCliOptions& c) {
+    // Not CLI11-required: `weft gather merge` does without them.
+    if (!c.pathsOpt->count() || c.out.empty())
+        throw InputError("weft gather needs --paths N and --out DIR (or: weft gather merge "
+                         "PART... --out DIR)");
     GatherOptions o;
     if (!c.material.preset.empty()) {
         if (!c.material.paramsFile.empty() || c.geometry.anyGiven())
@@ -51,18 +68,42 @@ void runGather(const GatherCliOptions& c) {
     o.threads = c.threads;
     o.segmentsPerTwist = c.segmentsPerTwist;
     o.quiet = c.quiet;
+    if (c.shardOpt->count()) o.shard = Shard::parse(c.shard, "--shard");
     o.validate();
     checkOutputsSpareInputs({{"--params", c.material.paramsFile}}, {}, {}, {{"--out", c.out}});
     // Before the (long) gather: a bad destination fails now, not after it.
     TempDirCommit out(c.out);
+    if (c.shardOpt->count()) {
+        // A part for `weft gather merge` (gather_merge.h), even for 0/1.
+        const GatherSums sums = gatherSums(o);
+        writeGatherPart(sums, o, out);
+        std::printf(
+            "{\"out\": \"%s\", \"shard\": \"%s\", \"first_path\": %lld, \"end_path\": %lld, "
+            "\"seconds\": %.3f, \"paths_per_second\": %.0f}\n",
+            c.out.c_str(), o.shard.toString().c_str(), static_cast<long long>(sums.firstPath),
+            static_cast<long long>(sums.endPath), sums.seconds,
+            (sums.endPath - sums.firstPath) / sums.seconds);
+        return;
+    }
     const GatherResult result = gatherRdm(o);
     writeGather(result, o, out);
-    const GatherStats& s = result.stats;
-    std::printf(
-        "{\"out\": \"%s\", \"paths\": %lld, \"seconds\": %.3f, \"paths_per_second\": %.0f, "
-        "\"rays_per_second\": %.0f, \"mean_depth\": %.3f, \"truncated_fraction\": %.3g}\n",
-        c.out.c_str(), static_cast<long long>(s.paths), s.seconds, s.paths / s.seconds,
-        s.rays / s.walkSeconds, s.meanDepth, static_cast<double>(s.truncatedPaths) / s.paths);
+    printGatherSummary(c.out, result.stats);
+}
+
+struct MergeCliOptions {
+    std::vector<std::string> parts;
+    std::string out;
+};
+
+void runGatherMerge(const MergeCliOptions& c) {
+    std::vector<CommandPath> inputs;
+    for (const std::string& part : c.parts) inputs.push_back({"part", part});
+    checkOutputsSpareInputs({}, {}, inputs, {{"--out", c.out}});
+    TempDirCommit out(c.out);
+    const MergedGather merged = mergeGatherParts(c.parts);
+    const GatherResult result = normaliseGather(merged.sums, merged.options, merged.shards);
+    writeGather(result, merged.options, out);
+    printGatherSummary(c.out, result.stats);
 }
 
 }  // namespace
@@ -74,7 +115,9 @@ void addGatherCommand(CLI::App& app) {
                   "distribution (RDM: P(T | wi), R and M maps) as NumPy arrays");
     o->material.add(*gather, true);
     o->geometry.add(*gather);
-    gather->add_option("--paths", o->paths, "number of random walks, in [1, 2^31]")->required();
+    o->pathsOpt = gather->add_option("--paths", o->paths,
+                                     "number of random walks, in [1, 2^31] (required; with "
+                                     "--shard: of the whole gather)");
     addSeedOption(*gather, o->seed, "random seed of the walks (and of the fiber placement)");
     o->plySeedOpt = addSeedOption(*gather, o->plySeed,
                                   "random seed of the fiber placement only (default: --seed); "
@@ -88,9 +131,25 @@ void addGatherCommand(CLI::App& app) {
     gather->add_option("--segments-per-twist", o->segmentsPerTwist,
                        "polyline segments per twist period of the traced fibers (>= 16)")
         ->default_val(128);
+    o->shardOpt = gather->add_option(
+        "--shard", o->shard,
+        "K/N: walk only shard K (0..N-1) of N, paths [K P/N, (K+1) P/N), and write a part "
+        "for weft gather merge (docs/cluster.md)");
     gather->add_flag("--quiet", o->quiet, "no progress output");
-    gather->add_option("--out", o->out, "output directory (written atomically)")->required();
-    gather->callback([o] { runGather(*o); });
+    gather->add_option("--out", o->out, "output directory (written atomically; required)");
+
+    auto mo = std::make_shared<MergeCliOptions>();
+    CLI::App* merge = gather->add_subcommand(
+        "merge", "Add the parts written by weft gather --shard K/N into one gather directory, "
+                 "bit for bit the unsharded gather's (docs/cluster.md)");
+    merge->add_option("parts", mo->parts, "the N part directories, shards 0/N .. N-1/N in any order")
+        ->required();
+    merge->add_option("--out", mo->out, "output gather directory (written atomically)")->required();
+    merge->callback([mo] { runGatherMerge(*mo); });
+    gather->require_subcommand(0, 1);
+    gather->callback([o, merge] {
+        if (!merge->parsed()) runGather(*o);
+    });
 
     struct SliceOptions {
         std::string rdm, component = "m", out;

@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
     weft::cmd::addCompareCommand(app);
     weft::cmd::addSceneCommand(app);
     weft::cmd::addMontageCommand(app);
+    weft::cmd::addCurvesCommands(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -98,6 +98,103 @@ TEST_F(RenderCliTest, CosineYarnSampling) {
                     {"--yarn-sampling", "\"x\"", "tabulated, fitted, cosine"});
 }
 
+// `weft render --shard K/N` and `weft render merge`: the merge of the parts is
+// the unsharded image up to float rounding, and bad sets of parts are refused
+// without writing anything.
+TEST_F(RenderCliTest, ShardedRenderMergesToTheUnshardedImage) {
+    ASSERT_EQ(run("render scene.json --spp 5 --quiet --out whole.exr").status, 0);
+    for (int k = 0; k < 3; ++k) {
+        const std::string part = "part" + std::to_string(k);
+        const RunResult r = run("render scene.json --spp 5 --shard " + std::to_string(k) +
+                                "/3 --threads 1 --quiet --out " + part + ".exr");
+        ASSERT_EQ(r.status, 0) << r.err;
+        const nlohmann::json shard =
+            nlohmann::json::parse(readFile(path(part + ".json"))).at("shard");
+        EXPECT_EQ(shard.at("index"), k);
+        EXPECT_EQ(shard.at("count"), 3);
+        EXPECT_EQ(shard.at("spp"), 5);
+    }
+    RunResult r = run("render merge part2.exr part0.exr part1.exr --out merged.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const Image whole = readImage(path("whole.exr")), merged = readImage(path("merged.exr"));
+    ASSERT_EQ(merged.pixels.size(), whole.pixels.size());
+    for (size_t i = 0; i < whole.pixels.size(); ++i)
+        ASSERT_NEAR(merged.pixels[i], whole.pixels[i], 1e-6 * whole.pixels[i] + 1e-12) << i;
+    const nlohmann::json stats = nlohmann::json::parse(readFile(path("merged.json")));
+    EXPECT_EQ(stats.at("spp"), 5);
+    EXPECT_EQ(stats.at("shards").at("count"), 3);
+    EXPECT_FALSE(stats.contains("shard"));
+    EXPECT_TRUE(std::filesystem::exists(path("merged.png")));
+
+    // A missing part, a part twice, a part of another render, a whole render.
+    expectUserError(run("render merge part0.exr part2.exr --out bad.exr"), {"missing", "1/3"});
+    expectUserError(run("render merge part0.exr part1.exr part1.exr part2.exr --out bad.exr"),
+                    {"both shard 1/3"});
+    ASSERT_EQ(run("render scene.json --spp 5 --seed 9 --shard 1/3 --quiet --out other.exr").status, 0);
+    expectUserError(run("render merge part0.exr other.exr part2.exr --out bad.exr"),
+                    {"other.json", "\"seed\""});
+    expectUserError(run("render merge whole.exr --out bad.exr"), {"whole.json", "not a part"});
+    // A damaged last part: the merge fails after reading the others and writes nothing.
+    const std::string bytes = readFile(path("part2.exr"));
+    writeFileAtomic(path("part2.exr"), bytes.substr(0, bytes.size() / 2));
+    expectUserError(run("render merge part0.exr part1.exr part2.exr --out bad.exr"), {"part2.exr"});
+    EXPECT_FALSE(std::filesystem::exists(path("bad.exr")));
+    EXPECT_FALSE(std::filesystem::exists(path("bad.json")));
+    for (const auto& entry : std::filesystem::directory_iterator(dir_))
+        EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos)
+            << entry.path();
+    // Bad shards.
+    expectUserError(run("render scene.json --spp 2 --shard 2/2 --out a.exr"), {"--shard", "2/2"});
+    expectUserError(run("render scene.json --spp 2 --shard 0/3 --out a.exr"), {"--shard", "N <= 2"});
+    expectUserError(run("render scene.json --time 1 --shard 0/2 --out a.exr"), {"--shard", "--spp"});
+    expectUserError(run("render scene.json --spp 2 --shard x --out a.exr"), {"--shard", "K/N"});
+}
+
+// Two parallel yarns 0.03 apart drawn with radius 0.03: the whole length of
+// each lies inside the other, by (0.06 - 0.03) / 0.06 = half the diameter.
+TEST_F(RenderCliTest, WarnsWhenYarnsOverlap) {
+    writeFileAtomic(path("pair.txt"), "-0.2 0 0\n0.2 0 0\n\n-0.2 0.03 0\n0.2 0.03 0\n");
+    writeFileAtomic(path("pair.json"), R"({
+        "camera": {"from": [0, 0, 1], "to": [0, 0, 0], "fov_deg": 8},
+        "film": {"width": 16, "height": 12},
+        "render": {"spp": 1, "seed": 1},
+        "yarns": [{"curves": "pair.txt", "radius": 0.03, "model": ")" + kFleece + R"("}]
+    })");
+    for (const std::string mode : {"neural", "fiber"}) {
+        const RunResult r = run("render pair.json --mode " + mode + " --out " + mode + ".exr");
+        ASSERT_EQ(r.status, 0) << r.err;
+        EXPECT_TRUE(testing::contains(
+            r.err, "weft: warning: pair.json: yarns[0] (" + path("pair.txt") +
+                       "): 100.0% of the yarn length lies inside other yarns (up to 50% of the "
+                       "diameter) at radius 0.03; the largest radius without overlap is 0.015\n"))
+            << r.err;
+        const nlohmann::json overlap =
+            nlohmann::json::parse(readFile(path(mode + ".json"))).at("yarn_overlap");
+        ASSERT_EQ(overlap.size(), 1u);
+        EXPECT_EQ(overlap[0].at("yarn"), 0);
+        EXPECT_EQ(overlap[0].at("curves"), path("pair.txt"));
+        EXPECT_EQ(overlap[0].at("radius"), 0.03);
+        EXPECT_EQ(overlap[0].at("overlap_fraction"), 1.0);
+        EXPECT_NEAR(overlap[0].at("max_overlap").get<double>(), 0.5, 1e-6);
+        EXPECT_NEAR(overlap[0].at("largest_radius_without_overlap").get<double>(), 0.015, 1e-8);
+    }
+    // --quiet: no warning (and no progress), the statistics keep the record.
+    RunResult r = run("render pair.json --quiet --out quiet.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("quiet.json"))).at("yarn_overlap"),
+              nlohmann::json::parse(readFile(path("neural.json"))).at("yarn_overlap"));
+    // One yarn alone: recorded, not warned about; no contact, no largest radius.
+    r = run("render scene.json --out alone.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_FALSE(testing::contains(r.err, "warning")) << r.err;
+    const nlohmann::json alone =
+        nlohmann::json::parse(readFile(path("alone.json"))).at("yarn_overlap");
+    ASSERT_EQ(alone.size(), 1u);
+    EXPECT_EQ(alone[0].at("overlap_fraction"), 0.0);
+    EXPECT_TRUE(alone[0].at("largest_radius_without_overlap").is_null());
+}
+
 TEST_F(RenderCliTest, BadInputIsNamed) {
     expectUserError(run("render scene.json --spp 2 --time 1 --out a.exr"), {"--spp", "--time"});
     expectUserError(run("render scene.json --spp 0 --out a.exr"), {"--spp"});

@@ -10,6 +10,7 @@
 #include "weft/core/file.h"
 #include "weft/core/image.h"
 #include "weft/core/image_io.h"
+#include "weft/render/render_merge.h"
 #include "weft/render/renderer.h"
 #include "weft/render/scene.h"
 #include "weft/render/scene_file.h"
@@ -19,29 +20,52 @@ namespace weft::cmd {
 namespace {
 
 struct RenderCmdOptions {
-    std::string scene, mode = "neural", out, yarnSampling = "tabulated";
+    std::string scene, mode = "neural", out, yarnSampling = "tabulated", shard;
     int spp = 0, threads = 0;
     double seconds = 0, exposure = 0;
     uint64_t seed = 0;
-    CLI::Option *sppOpt = nullptr, *timeOpt = nullptr, *seedOpt = nullptr;
+    CLI::Option *sppOpt = nullptr, *timeOpt = nullptr, *seedOpt = nullptr, *shardOpt = nullptr;
     bool noNee = false, quiet = false;
 };
 
 // IMAGE.exr -> IMAGE (the stem the PNG and JSON share).
 std::string outputStem(const std::string& out) {
-    const std::string ext = ".exr";
-    if (out.size() <= ext.size() || out.compare(out.size() - ext.size(), ext.size(), ext) != 0)
-        throw InputError("--out " + out +
-                         ": expected a path ending in .exr (the PNG and JSON "
-                         "are written beside it)");
-    return out.substr(0, out.size() - ext.size());
+    const std::string json = render::renderStatsPath(out, "--out " + out);
+    return json.substr(0, json.size() - 5);
+}
+
+// IMAGE.exr, IMAGE.png and IMAGE.json, all three or none; then the one-line summary.
+void writeRenderOutputs(const std::string& out, const Image& image, nlohmann::json stats,
+                        double exposure) {
+    const std::string stem = outputStem(out);
+    stats["exposure"] = exposure;
+    stats["outputs"] = {{"exr", out}, {"png", stem + ".png"}, {"json", stem + ".json"}};
+    writeFilesAtomic({{out, encodeExr(image, out)},
+                      {stem + ".png", encodePng(image, exposure)},
+                      {stem + ".json", stats.dump(2) + "\n"}});
+    std::printf("%s\n", nlohmann::json({{"exr", out},
+                                        {"png", stem + ".png"},
+                                        {"json", stem + ".json"},
+                                        {"mode", stats.at("mode")},
+                                        {"spp", stats.at("spp")},
+                                        {"seconds", stats.at("seconds")}})
+                            .dump()
+                            .c_str());
+}
+
+void checkExposure(double exposure) {
+    if (!std::isfinite(exposure) || std::abs(exposure) > 64)
+        throw InputError("--exposure " + std::to_string(exposure) +
+                         " is out of range: allowed [-64, 64] stops");
 }
 
 void runRender(const RenderCmdOptions& o) {
+    // Not CLI11-required: `weft render merge` does without them.
+    if (o.scene.empty() || o.out.empty())
+        throw InputError("weft render needs SCENE and --out IMAGE.exr (or: weft render merge "
+                         "PART.exr... --out IMAGE.exr)");
     const std::string stem = outputStem(o.out);
-    if (!std::isfinite(o.exposure) || std::abs(o.exposure) > 64)
-        throw InputError("--exposure " + std::to_string(o.exposure) +
-                         " is out of range: allowed [-64, 64] stops");
+    checkExposure(o.exposure);
     const render::RenderMode mode = render::parseRenderMode(o.mode);
     YarnBsdfOptions yarnOptions;
     yarnOptions.sampling = parseYarnSampling(o.yarnSampling, "--yarn-sampling");
@@ -61,10 +85,15 @@ void runRender(const RenderCmdOptions& o) {
     options.maxDepth = desc.render.maxDepth;
     options.nextEventEstimation = !o.noNee;
     options.quiet = o.quiet;
+    if (o.shardOpt->count()) options.shard = Shard::parse(o.shard, "--shard");
     options.validate();
 
     const std::string hash = render::sceneHash(desc);
     const render::Scene scene(desc, mode, o.quiet, yarnOptions);
+    if (!o.quiet)
+        for (const std::string& w :
+             render::yarnOverlapWarnings(desc.path, scene.stats().yarnOverlap))
+            std::fprintf(stderr, "weft: warning: %s\n", w.c_str());
     const render::RenderResult result = render::render(scene, options);
 
     nlohmann::json stats = render::toJson(result.stats);
@@ -73,24 +102,32 @@ void runRender(const RenderCmdOptions& o) {
     stats["next_event_estimation"] = !o.noNee;
     stats["yarn_sampling"] = yarnSamplingName(yarnOptions.sampling);
     stats["max_depth"] = options.maxDepth;
-    stats["exposure"] = o.exposure;
     stats["version"] = WEFT_VERSION;
-    stats["outputs"] = {{"exr", o.out}, {"png", stem + ".png"}, {"json", stem + ".json"}};
-    // All three or none.
-    writeFilesAtomic({{o.out, encodeExr(result.image, o.out)},
-                      {stem + ".png", encodePng(result.image, o.exposure)},
-                      {stem + ".json", stats.dump(2) + "\n"}});
     if (result.stats.nonFiniteSamples > 0)
         std::fprintf(stderr, "weft: warning: %lld samples were NaN or infinite and were dropped\n",
                      static_cast<long long>(result.stats.nonFiniteSamples));
-    std::printf("%s\n", nlohmann::json({{"exr", o.out},
-                                        {"png", stem + ".png"},
-                                        {"json", stem + ".json"},
-                                        {"mode", result.stats.mode},
-                                        {"spp", result.stats.spp},
-                                        {"seconds", result.stats.seconds}})
-                            .dump()
-                            .c_str());
+    writeRenderOutputs(o.out, result.image, std::move(stats), o.exposure);
+}
+
+struct RenderMergeOptions {
+    std::vector<std::string> parts;
+    std::string out;
+    double exposure = 0;
+};
+
+void runRenderMerge(const RenderMergeOptions& o) {
+    const std::string stem = outputStem(o.out);
+    checkExposure(o.exposure);
+    std::vector<CommandPath> inputs;
+    for (const std::string& part : o.parts) {
+        inputs.push_back({"part", part});
+        inputs.push_back({"part's statistics", render::renderStatsPath(part, "part " + part)});
+    }
+    checkOutputsSpareInputs(inputs, {{"--out", o.out},
+                                     {"--out's PNG", stem + ".png"},
+                                     {"--out's statistics", stem + ".json"}});
+    const render::MergedRender merged = render::mergeRenderParts(o.parts);
+    writeRenderOutputs(o.out, merged.image, merged.stats, o.exposure);
 }
 
 }  // namespace
@@ -101,7 +138,7 @@ void addRenderCommand(CLI::App& app) {
         "render",
         "Render a cloth scene (docs/render.md, docs/scene-format.md) to IMAGE.exr, "
         "IMAGE.png and IMAGE.json (statistics).");
-    cmd->add_option("scene", o->scene, "Scene file (JSON)")->required();
+    cmd->add_option("scene", o->scene, "Scene file (JSON; required)");
     cmd->add_option("--mode", o->mode,
                     "neural: plies as curves with the yarn BSDF; fiber: every fiber drawn "
                     "(ground truth); dual: plies as curves with the dual-scattering baseline "
@@ -127,10 +164,32 @@ void addRenderCommand(CLI::App& app) {
         ->capture_default_str();
     cmd->add_flag("--no-nee", o->noNee,
                   "Turn off next-event estimation (BSDF sampling only; for checking estimators)");
-    cmd->add_flag("--quiet", o->quiet, "No progress output");
-    cmd->add_option("--out", o->out, "Output IMAGE.exr (IMAGE.png and IMAGE.json beside it)")
+    cmd->add_flag("--quiet", o->quiet,
+                  "No progress output and no warning about yarns that overlap (the statistics "
+                  "still record yarn_overlap)");
+    o->shardOpt = cmd->add_option(
+        "--shard", o->shard,
+        "K/N: trace only shard K (0..N-1) of N of the --spp samples, [K spp/N, (K+1) spp/N) of "
+        "every pixel, for weft render merge (docs/cluster.md)");
+    cmd->add_option("--out", o->out,
+                    "Output IMAGE.exr (IMAGE.png and IMAGE.json beside it; required)");
+
+    auto mo = std::make_shared<RenderMergeOptions>();
+    CLI::App* merge = cmd->add_subcommand(
+        "merge", "The sample-weighted mean of the parts written by weft render --shard K/N "
+                 "(docs/cluster.md): IMAGE.exr, IMAGE.png and IMAGE.json");
+    merge->add_option("parts", mo->parts,
+                      "the N parts PART.exr (each with PART.json beside it), in any order")
         ->required();
-    cmd->callback([o] { runRender(*o); });
+    merge->add_option("--exposure", mo->exposure, "PNG exposure in stops (the EXR stays linear)")
+        ->capture_default_str();
+    merge->add_option("--out", mo->out, "Output IMAGE.exr (IMAGE.png and IMAGE.json beside it)")
+        ->required();
+    merge->callback([mo] { runRenderMerge(*mo); });
+    cmd->require_subcommand(0, 1);
+    cmd->callback([o, merge] {
+        if (!merge->parsed()) runRender(*o);
+    });
 }
 
 }  // namespace weft::cmd

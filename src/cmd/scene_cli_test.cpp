@@ -33,6 +33,13 @@ TEST_F(SceneCliTest, GeneratedWeaveRenders) {
     // 2 warp and 2 weft yarns in view, one more of each on either side to hide the ends.
     EXPECT_EQ(summary.at("yarns"), 8);
     EXPECT_EQ(summary.at("scene"), "weave/scene.json");
+    // The generated yarns touch with 1% clearance: no overlap, no warning.
+    EXPECT_EQ(r.err, "");
+    const nlohmann::json& overlap = summary.at("yarn_overlap").at(0);
+    EXPECT_EQ(overlap.at("curves"), "weave/yarns.txt");
+    EXPECT_EQ(overlap.at("overlap_fraction"), 0.0);
+    EXPECT_GT(overlap.at("largest_radius_without_overlap").get<double>(), 0.01);
+    EXPECT_LT(overlap.at("largest_radius_without_overlap").get<double>(), 0.0102);
 
     r = run("render weave/scene.json --mode neural --spp 1 --threads 2 --quiet --out img.exr");
     ASSERT_EQ(r.status, 0) << r.err;

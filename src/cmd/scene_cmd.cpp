@@ -5,11 +5,13 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "commands.h"
 #include "weft/core/file.h"
 #include "weft/core/error.h"
 #include "weft/eval/scene_gen.h"
+#include "weft/render/scene.h"
 
 namespace weft::cmd {
 
@@ -19,6 +21,7 @@ struct SceneCmdOptions {
     std::string kind, out;
     eval::SceneOptions scene;
     CLI::Option* sizeOpt = nullptr;
+    bool quiet = false;
 };
 
 void runScene(const SceneCmdOptions& o) {
@@ -30,12 +33,21 @@ void runScene(const SceneCmdOptions& o) {
     const eval::GeneratedScene generated = eval::generateScene(kind, o.scene);
     eval::writeScene(generated, o.out);
     const std::filesystem::path dir(o.out);
+    // The generated yarns at their radius, checked as `weft render` checks a scene.
+    std::vector<render::YarnEntryOverlap> overlap =
+        render::checkYarnOverlap(generated.scene, {generated.curves});
+    for (render::YarnEntryOverlap& entry : overlap) entry.curves = (dir / entry.curves).string();
+    if (!o.quiet)
+        for (const std::string& w :
+             render::yarnOverlapWarnings((dir / "scene.json").string(), overlap))
+            std::fprintf(stderr, "weft: warning: %s\n", w.c_str());
     std::printf("%s\n", nlohmann::json({{"kind", eval::sceneKindName(kind)},
                                         {"scene", (dir / "scene.json").string()},
                                         {"curves", (dir / "yarns.txt").string()},
                                         {"yarns", generated.curves.curves.size()},
                                         {"points", generated.curves.pointCount()},
-                                        {"radius", o.scene.radius}})
+                                        {"radius", o.scene.radius},
+                                        {"yarn_overlap", render::yarnOverlapJson(overlap)}})
                             .dump()
                             .c_str());
 }
@@ -69,6 +81,7 @@ void addSceneCommand(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--envmap", s.envmap,
                     "Lat-long .exr or .hdr environment map instead of the procedural sky");
+    cmd->add_flag("--quiet", o->quiet, "No warning when the generated yarns overlap");
     cmd->add_option("--out", o->out,
                     "Output directory (replaced only if it holds nothing but an earlier "
                     "scene)")

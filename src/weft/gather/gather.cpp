@@ -30,7 +30,7 @@ namespace {
 // Fixed-point unit of the accumulators: associative sums, thread-count
 // independent results. 2^-32 resolves weights to 2.3e-10 and leaves room for
 // 2^31 unit-weight paths in one cell.
-constexpr double kFixedScale = 4294967296.0;
+constexpr double kFixedScale = GatherSums::kFixedScale;
 
 int64_t toFixed(double w) { return std::llround(w * kFixedScale); }
 
@@ -40,6 +40,31 @@ void atomicAdd(int64_t& cell, int64_t v) {
 
 constexpr int64_t kChunk = 1024;  // paths per task
 
+PlyGeometry gatherPly(const GatherOptions& o) {
+    // R = 1: everything is scale-invariant.
+    return generatePly(o.ply, 1.0, 1.0, o.placementSeed());
+}
+
+// Zero sums and the description of the traced ply.
+GatherSums zeroSums(const GatherOptions& o, const PlyGeometry& ply,
+                    const PeriodicPlyTracer& tracer) {
+    const size_t nIn = o.bins.incidentCount(), nOut = o.bins.outgoingCount();
+    GatherSums s;
+    s.bins = o.bins;
+    s.count.assign(nIn, 0);
+    s.countT.assign(nIn, 0);
+    s.sumTruncated.assign(nIn * 3, 0);
+    s.sumR.assign(nIn * nOut * 3, 0);
+    s.sumM.assign(nIn * nOut * 3, 0);
+    s.depth.assign(static_cast<size_t>(o.maxDepth) + 2, 0);
+    s.plyLines = tracer.centreLines();
+    s.period = tracer.period();
+    s.fiberRadius = ply.fiberRadius;
+    s.segments = tracer.segmentCount();
+    s.embreeBytes = tracer.embreeBytes();
+    return s;
+}
+
 }  // namespace
 
 void GatherOptions::validate() const {
@@ -48,6 +73,7 @@ void GatherOptions::validate() const {
     checkRange("paths =", paths, 1, kMaxPaths, " (the fixed-point sums hold 2^31 paths)");
     checkRange("max depth =", maxDepth, 1, 1000000);
     checkRange("threads =", threads, 0, 1024, " (0: all cores)");
+    shard.validate(paths, "--shard", "paths");
     PeriodicPlyTracer::validateSegmentsPerTwist(segmentsPerTwist);
     fiber.validate();
     ply.validate();
@@ -58,33 +84,42 @@ void GatherOptions::validate() const {
                       "the RDM's bins (" + bins.toString() + ")");
 }
 
-GatherResult gatherRdm(const GatherOptions& o) {
+GatherSums emptyGatherSums(const GatherOptions& o) {
+    o.validate();
+    const PlyGeometry ply = gatherPly(o);
+    const PeriodicPlyTracer tracer(ply, o.segmentsPerTwist);
+    return zeroSums(o, ply, tracer);
+}
+
+GatherSums gatherSums(const GatherOptions& o) {
     o.validate();
     const auto start = std::chrono::steady_clock::now();
     const FiberBcsdf fiber(o.fiber);
-    // R = 1: everything is scale-invariant.
-    const PlyGeometry ply = generatePly(o.ply, 1.0, 1.0, o.placementSeed());
+    const PlyGeometry ply = gatherPly(o);
     const PeriodicPlyTracer tracer(ply, o.segmentsPerTwist);
     const RdmBins& bins = o.bins;
-    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
-
-    std::vector<int64_t> count(nIn, 0), countT(nIn, 0), truncated(nIn * 3, 0);
-    std::vector<int64_t> depthHistogram(o.maxDepth + 2, 0);
-    std::vector<int64_t> mapR(nIn * nOut * 3, 0), mapM(nIn * nOut * 3, 0);
+    const size_t nOut = bins.outgoingCount();
+    GatherSums sums = zeroSums(o, ply, tracer);
+    sums.firstPath = o.shard.begin(o.paths);
+    sums.endPath = o.shard.end(o.paths);
     std::atomic<int64_t> rays{0}, axial{0}, depthSum{0};
 
     const double period = tracer.period();
-    const int64_t chunks = (o.paths + kChunk - 1) / kChunk;
-    Progress progress("gather", static_cast<uint64_t>(o.paths), o.quiet);
+    const int64_t firstPath = sums.firstPath, endPath = sums.endPath;
+    const int64_t chunks = (endPath - firstPath + kChunk - 1) / kChunk;
+    Progress progress(o.shard.whole() ? "gather" : "gather " + o.shard.toString(),
+                      static_cast<uint64_t>(endPath - firstPath), o.quiet);
     const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
     const auto walkStart = std::chrono::steady_clock::now();
     arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<int64_t>(0, chunks), [&](const auto& range) {
             for (int64_t chunk = range.begin(); chunk != range.end(); ++chunk) {
-                const int64_t first = chunk * kChunk, last = std::min(o.paths, first + kChunk);
+                const int64_t first = firstPath + chunk * kChunk,
+                              last = std::min(endPath, first + kChunk);
                 int64_t chunkRays = 0, chunkAxial = 0, chunkDepth = 0;
                 for (int64_t k = first; k < last; ++k) {
+                    // Path k's stream depends on (seed, k) alone, not on the shard.
                     Rng rng(static_cast<uint64_t>(k), o.seed);
                     // Entry point and frame (DESIGN.md 5).
                     const double psi = kTwoPi * rng.uniform();
@@ -126,21 +161,21 @@ GatherResult gatherRdm(const GatherOptions& o) {
                         org = hit.point;
                         excluded = hit.fiber;
                     }
-                    atomicAdd(count[binIn], 1);
+                    atomicAdd(sums.count[binIn], 1);
                     chunkDepth += depth;
                     if (truncatedPath) {
-                        atomicAdd(depthHistogram[o.maxDepth + 1], 1);
+                        atomicAdd(sums.depth[o.maxDepth + 1], 1);
                         for (int c = 0; c < 3; ++c)
-                            atomicAdd(truncated[binIn * 3 + c], toFixed(weight[c]));
+                            atomicAdd(sums.sumTruncated[binIn * 3 + c], toFixed(weight[c]));
                         continue;
                     }
-                    atomicAdd(depthHistogram[depth], 1);
+                    atomicAdd(sums.depth[depth], 1);
                     if (depth == 0) {
-                        atomicAdd(countT[binIn], 1);
+                        atomicAdd(sums.countT[binIn], 1);
                         continue;
                     }
                     const Vec3 woLocal = entry.toLocal(dir);
-                    auto& map = (depth == 1 && woLocal.z > 0) ? mapR : mapM;
+                    auto& map = (depth == 1 && woLocal.z > 0) ? sums.sumR : sums.sumM;
                     const size_t cell = (binIn * nOut + bins.outgoingBin(woLocal)) * 3;
                     for (int c = 0; c < 3; ++c) atomicAdd(map[cell + c], toFixed(weight[c]));
                 }
@@ -151,54 +186,77 @@ GatherResult gatherRdm(const GatherOptions& o) {
             }
         });
     });
-    const double walkSeconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - walkStart).count();
     progress.finish();
+    const auto now = std::chrono::steady_clock::now();
+    sums.walkSeconds = std::chrono::duration<double>(now - walkStart).count();
+    sums.seconds = std::chrono::duration<double>(now - start).count();
+    sums.rays = rays.load();
+    sums.axialPaths = axial.load();
+    sums.depthSum = depthSum.load();
+    sums.threads = threads;
+    return sums;
+}
 
+GatherResult normaliseGather(const GatherSums& sums, const GatherOptions& o, int64_t shards) {
+    const auto start = std::chrono::steady_clock::now();
+    const RdmBins& bins = sums.bins;
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    if (sums.firstPath != 0 || sums.endPath != o.paths || sums.count.size() != nIn ||
+        sums.depth.size() != static_cast<size_t>(o.maxDepth) + 2)
+        throw std::logic_error("normaliseGather: the sums are not those of the whole gather");
     GatherResult r;
     r.bins = bins;
-    r.fiberRadius = ply.fiberRadius;
-    r.plyLines = tracer.centreLines();
+    r.fiberRadius = sums.fiberRadius;
+    r.plyLines = sums.plyLines;
     r.pT.assign(nIn, 0.0);
     r.truncated.assign(nIn * 3, 0.0);
-    r.rdmR.assign(mapR.size(), 0.0f);
-    r.rdmM.assign(mapM.size(), 0.0f);
+    r.rdmR.assign(sums.sumR.size(), 0.0f);
+    r.rdmM.assign(sums.sumM.size(), 0.0f);
     double truncatedTotal[3] = {0, 0, 0};
     for (size_t i = 0; i < nIn; ++i) {
-        if (count[i] == 0) continue;
-        r.pT[i] = static_cast<double>(countT[i]) / count[i];
+        const int64_t count = sums.count[i];
+        if (count == 0) continue;
+        r.pT[i] = static_cast<double>(sums.countT[i]) / count;
         for (int c = 0; c < 3; ++c) {
-            truncatedTotal[c] += truncated[i * 3 + c] / kFixedScale;
-            r.truncated[i * 3 + c] = truncated[i * 3 + c] / kFixedScale / count[i];
+            truncatedTotal[c] += sums.sumTruncated[i * 3 + c] / kFixedScale;
+            r.truncated[i * 3 + c] = sums.sumTruncated[i * 3 + c] / kFixedScale / count;
         }
         for (size_t j = 0; j < nOut; ++j) {
-            const double norm = 1.0 / (kFixedScale * count[i] * bins.outgoingSolidAngle(j));
+            const double norm = 1.0 / (kFixedScale * count * bins.outgoingSolidAngle(j));
             for (int c = 0; c < 3; ++c) {
                 const size_t cell = (i * nOut + j) * 3 + c;
-                r.rdmR[cell] = static_cast<float>(mapR[cell] * norm);
-                r.rdmM[cell] = static_cast<float>(mapM[cell] * norm);
+                r.rdmR[cell] = static_cast<float>(sums.sumR[cell] * norm);
+                r.rdmM[cell] = static_cast<float>(sums.sumM[cell] * norm);
             }
         }
     }
-    r.count = std::move(count);
-    r.countT = std::move(countT);
-    r.depth = std::move(depthHistogram);
+    r.count = sums.count;
+    r.countT = sums.countT;
+    r.depth = sums.depth;
 
     GatherStats& st = r.stats;
     st.paths = o.paths;
-    st.rays = rays.load();
+    st.rays = sums.rays;
     st.truncatedPaths = r.depth[o.maxDepth + 1];
-    st.axialPaths = axial.load();
-    st.meanDepth = static_cast<double>(depthSum.load()) / o.paths;
+    st.axialPaths = sums.axialPaths;
+    st.meanDepth = static_cast<double>(sums.depthSum) / o.paths;
     for (int c = 0; c < 3; ++c) st.truncatedEnergy[c] = truncatedTotal[c] / o.paths;
-    st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    st.walkSeconds = walkSeconds;
-    st.threads = threads;
-    st.period = period;
-    st.fiberRadius = ply.fiberRadius;
-    st.segments = tracer.segmentCount();
-    st.embreeBytes = tracer.embreeBytes();
+    st.seconds = sums.seconds +
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    st.walkSeconds = sums.walkSeconds;
+    st.threads = sums.threads;
+    st.shards = shards;
+    st.period = sums.period;
+    st.fiberRadius = sums.fiberRadius;
+    st.segments = sums.segments;
+    st.embreeBytes = sums.embreeBytes;
     return r;
+}
+
+GatherResult gatherRdm(const GatherOptions& o) {
+    if (!o.shard.whole())
+        throw std::logic_error("gatherRdm: a shard has no RDM of its own (gather_merge.h)");
+    return normaliseGather(gatherSums(o), o);
 }
 
 void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& out) {
@@ -214,40 +272,52 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
     writeNpy(file("rdm_m.npy"), r.rdmM.data(), {ti, pi, to, po, 3});
     writeNpy(file("truncated.npy"), r.truncated.data(), {ti, pi, 3});
     writeNpy(file("depth.npy"), r.depth.data(), {r.depth.size()});
-    CurveSet lines;
-    lines.curves = r.plyLines;
-    for (const auto& c : lines.curves) lines.radii.emplace_back(c.size(), r.fiberRadius);
-    lines.closed.assign(lines.curves.size(), false);
-    writeCurveText(file("ply.txt"), lines);
+    writePlyLines(file("ply.txt"), r.plyLines, r.fiberRadius);
 
     writeFileAtomic(file("meta.json"), gatherMetadata(r, o).dump(2) + "\n");
     out.commit();
 }
 
+void writePlyLines(const std::string& path, const std::vector<std::vector<Vec3>>& lines,
+                   double fiberRadius) {
+    CurveSet set;
+    set.curves = lines;
+    for (const auto& c : set.curves) set.radii.emplace_back(c.size(), fiberRadius);
+    set.closed.assign(set.curves.size(), false);
+    writeCurveText(path, set);
+}
+
+nlohmann::json gatherInputs(const GatherOptions& o, double fiberRadius, double period,
+                           int64_t segments) {
+    const RdmBins& b = o.bins;
+    return {{"material", o.material},
+            {"fiber", o.fiber.toJson()},
+            {"ply",
+             {{"fibers", o.ply.fibers},
+              {"density", o.ply.density},
+              {"twist", o.ply.twist},
+              {"radius", 1.0},
+              {"fiber_radius", fiberRadius},
+              {"period", period},
+              {"segments_per_twist", o.ply.twist > 0 ? o.segmentsPerTwist : 1},
+              {"segments", segments},
+              {"primitive", "embree round linear curves, periodic in z"}}},
+            {"bins", {b.thetaI, b.phiI, b.thetaO, b.phiO}},
+            {"paths", o.paths},
+            {"seed", o.seed},
+            {"ply_seed", o.placementSeed()},
+            {"max_depth", o.maxDepth},
+            {"versions", {{"weft", WEFT_VERSION}, {"embree", EmbreeDevice::version()}}}};
+}
+
 nlohmann::json gatherMetadata(const GatherResult& r, const GatherOptions& o) {
-    const RdmBins& b = r.bins;
     const GatherStats& s = r.stats;
-    return {
+    nlohmann::json meta = gatherInputs(o, s.fiberRadius, s.period, s.segments);
+    meta.update({
         {"format", "weft-gather"},
         {"version", 1},
-        {"material", o.material},
-        {"fiber", o.fiber.toJson()},
-        {"ply",
-         {{"fibers", o.ply.fibers},
-          {"density", o.ply.density},
-          {"twist", o.ply.twist},
-          {"radius", 1.0},
-          {"fiber_radius", s.fiberRadius},
-          {"period", s.period},
-          {"segments_per_twist", o.ply.twist > 0 ? o.segmentsPerTwist : 1},
-          {"segments", s.segments},
-          {"primitive", "embree round linear curves, periodic in z"}}},
-        {"bins", {b.thetaI, b.phiI, b.thetaO, b.phiO}},
-        {"paths", s.paths},
-        {"seed", o.seed},
-        {"ply_seed", o.placementSeed()},
-        {"max_depth", o.maxDepth},
         {"threads", s.threads},
+        {"shards", s.shards},
         {"elapsed_seconds", s.seconds},
         {"paths_per_second", s.paths / s.seconds},
         {"rays", s.rays},
@@ -259,7 +329,6 @@ nlohmann::json gatherMetadata(const GatherResult& r, const GatherOptions& o) {
         {"end_exit_fraction", 0.0},
         {"axial_fraction", static_cast<double>(s.axialPaths) / s.paths},
         {"embree_bytes", s.embreeBytes},
-        {"versions", {{"weft", WEFT_VERSION}, {"embree", EmbreeDevice::version()}}},
         {"arrays",
          {{"count", "int64 (TI,PI): paths per incident bin"},
           {"count_t", "int64 (TI,PI): T paths (no fiber interaction) per incident bin"},
@@ -268,7 +337,8 @@ nlohmann::json gatherMetadata(const GatherResult& r, const GatherOptions& o) {
           {"rdm_m", "float32 (TI,PI,TO,PO,3): M weight / count / outgoing solid angle"},
           {"truncated", "float64 (TI,PI,3): weight of paths cut at max_depth / count"},
           {"depth",
-           "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}}};
+           "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}}});
+    return meta;
 }
 
 }  // namespace weft

@@ -18,7 +18,9 @@
 //
 // Determinism: path k draws from random stream k of the seed; weights are
 // accumulated in 64-bit fixed point (2^-32 units) with atomic adds, which is
-// associative, so the output is bit-identical for any thread count.
+// associative, so the output is bit-identical for any thread count, and for
+// any split of the paths into shards (GatherOptions::shard) whose integer
+// sums are added before normalising (gather_merge.h).
 #pragma once
 
 #include <cstdint>
@@ -27,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "weft/core/shard.h"
 #include "weft/fiber/fiber_params.h"
 #include "weft/gather/rdm.h"
 #include "weft/ply/ply.h"
@@ -49,13 +52,16 @@ struct GatherOptions {
     int threads = 0;             // 0: all cores
     int segmentsPerTwist = 128;  // helix resolution of the traced geometry
     bool quiet = false;          // no progress output
+    // The paths this run walks: [shard.begin(paths), shard.end(paths)) of the
+    // `paths` of the whole gather (all of them by default).
+    Shard shard;
 
     void validate() const;  // InputError naming the option
     uint64_t placementSeed() const { return plySeed.value_or(seed); }
 };
 
 struct GatherStats {
-    int64_t paths = 0, rays = 0;
+    int64_t paths = 0, rays = 0;  // paths: of the whole gather
     int64_t truncatedPaths = 0;  // reached maxDepth
     int64_t axialPaths = 0;      // ran along the axis without hit or exit (recorded as exits)
     double meanDepth = 0;        // mean number of fiber interactions
@@ -63,6 +69,9 @@ struct GatherStats {
     double seconds = 0;      // whole gather: placement, BVH, walks, normalisation
     double walkSeconds = 0;  // the random walks alone
     int threads = 0;
+    // A merge of shards: their number; seconds, walkSeconds and rays are
+    // their sums, threads the largest.
+    int64_t shards = 1;
     double period = 0, fiberRadius = 0;
     int64_t segments = 0, embreeBytes = 0;
 };
@@ -79,6 +88,37 @@ struct GatherResult {
     GatherStats stats;
 };
 
+// The integer accumulators of a gather, or of one shard of it. Adding the
+// sums of disjoint shards gives the sums of their union exactly (integers),
+// so normalising the sum of all N shards gives the unsharded gather bit for bit.
+struct GatherSums {
+    RdmBins bins;
+    int64_t firstPath = 0, endPath = 0;   // the paths walked: [firstPath, endPath)
+    std::vector<int64_t> count, countT;   // (TI, PI)
+    std::vector<int64_t> sumR, sumM;      // (TI, PI, TO, PO, 3): weights in 2^-32 units
+    std::vector<int64_t> sumTruncated;    // (TI, PI, 3): weights in 2^-32 units
+    std::vector<int64_t> depth;           // depth histogram, 0..maxDepth, then truncated
+    int64_t rays = 0, axialPaths = 0, depthSum = 0;
+    double seconds = 0, walkSeconds = 0;  // of the walks and their set-up
+    int threads = 0;
+    // The traced ply, the same for every shard of a gather.
+    std::vector<std::vector<Vec3>> plyLines;  // fiber centre lines
+    double period = 0, fiberRadius = 0;
+    int64_t segments = 0, embreeBytes = 0;
+
+    // One unit of sumR, sumM and sumTruncated.
+    static constexpr double kFixedScale = 4294967296.0;
+};
+
+// Zero sums for the bins and depth of `options`, with the ply's description
+// (which builds the ply's geometry).
+GatherSums emptyGatherSums(const GatherOptions& options);
+// The walks of options.shard; gatherRdm(o) is normaliseGather(gatherSums(o), o).
+GatherSums gatherSums(const GatherOptions& options);
+// The RDM of the sums of the whole gather (every path of options.paths), with
+// the ply's centre lines and statistics; `shards` and the times as GatherStats says.
+GatherResult normaliseGather(const GatherSums& sums, const GatherOptions& options,
+                             int64_t shards = 1);
 GatherResult gatherRdm(const GatherOptions& options);
 
 class TempDirCommit;
@@ -88,7 +128,15 @@ class TempDirCommit;
 // it into place. Create `out` before gathering so that an unwritable
 // destination fails at once.
 void writeGather(const GatherResult& result, const GatherOptions& options, TempDirCommit& out);
+// ply.txt: the traced fiber centre lines as a curve file (core/curve_io.h).
+void writePlyLines(const std::string& path, const std::vector<std::vector<Vec3>>& lines,
+                   double fiberRadius);
 // The content of meta.json: inputs, bins, statistics, versions, array descriptions.
 nlohmann::json gatherMetadata(const GatherResult& result, const GatherOptions& options);
+// The part of meta.json that says what was gathered (material, fiber, ply,
+// bins, paths, seeds, max_depth) and by which versions; the shards of one
+// gather share it (gather_merge.h).
+nlohmann::json gatherInputs(const GatherOptions& options, double fiberRadius, double period,
+                            int64_t segments);
 
 }  // namespace weft

@@ -39,6 +39,10 @@ RdmData loadRdm(const std::string& dir) {
     d.dir = dir;
     const std::string metaPath = (fs::path(dir) / "meta.json").string();
     d.meta = readJsonFile(metaPath);
+    if (d.meta.is_object() && d.meta.contains("format") && d.meta.at("format") == "weft-gather-part")
+        throw InputError(metaPath +
+                         ": one shard of a gather (\"format\" is \"weft-gather-part\"): merge "
+                         "all its shards with `weft gather merge PART... --out DIR` first");
     if (!d.meta.is_object() || d.meta.value("format", "") != "weft-gather")
         throw InputError(metaPath + ": not a weft gather (\"format\" must be \"weft-gather\")");
     if (d.meta.value("version", 0) != 1)

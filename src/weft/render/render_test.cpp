@@ -336,6 +336,36 @@ TEST_F(RenderTest, TimeBudgetRendersAtLeastOnePass) {
     for (float v : r.image.pixels) ASSERT_TRUE(std::isfinite(v));
 }
 
+// Shards split the samples of every pixel; n_k-weighted, their images add up
+// to the unsharded render (the same samples, summed in another order).
+TEST_F(RenderTest, ShardsAreTheUnshardedRenderSplitBySample) {
+    const std::string lights = R"([{"type": "sky"}])";
+    for (const RenderMode mode : {RenderMode::Neural, RenderMode::Fiber}) {
+        const Scene s(scene(kFleece, lights, 10, 8), mode);
+        RenderOptions options;
+        options.spp = 7;
+        options.seed = 3;
+        options.quiet = true;
+        const RenderResult whole = render(s, options);
+        std::vector<double> sum(whole.image.pixels.size(), 0.0);
+        int64_t samples = 0;
+        for (int64_t k = 0; k < 3; ++k) {
+            options.shard = Shard{k, 3};
+            options.threads = 1 + static_cast<int>(k % 2);
+            const RenderResult part = render(s, options);
+            EXPECT_EQ(part.stats.spp, options.shard->end(7) - options.shard->begin(7));
+            EXPECT_EQ(part.stats.firstSample, options.shard->begin(7));
+            samples += part.stats.spp;
+            for (size_t i = 0; i < sum.size(); ++i)
+                sum[i] += static_cast<double>(part.image.pixels[i]) * part.stats.spp;
+        }
+        EXPECT_EQ(samples, 7);
+        for (size_t i = 0; i < sum.size(); ++i)
+            ASSERT_NEAR(sum[i] / 7, whole.image.pixels[i], 1e-6 * whole.image.pixels[i] + 1e-12)
+                << renderModeName(mode) << " element " << i;
+    }
+}
+
 TEST(RenderOptions, BudgetsAndRangesAreValidated) {
     using weft::testing::expectInputError;
     RenderOptions o;
@@ -351,6 +381,13 @@ TEST(RenderOptions, BudgetsAndRangesAreValidated) {
     expectInputError([&] { o.validate(); }, {"max_depth", "[1, 10000]"});
     o.maxDepth = 5;
     EXPECT_NO_THROW(o.validate());
+    o.shard = Shard{4, 5};
+    expectInputError([&] { o.validate(); }, {"--shard", "4/5", "N <= 4"});
+    o.shard = Shard{3, 4};
+    EXPECT_NO_THROW(o.validate());
+    o.spp = 0;
+    o.seconds = 1;
+    expectInputError([&] { o.validate(); }, {"--shard", "--spp"});
 }
 
 }  // namespace

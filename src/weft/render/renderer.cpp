@@ -38,6 +38,12 @@ void RenderOptions::validate() const {
                          " is out of range: allowed (0, 1e6] seconds");
     checkRange("--threads", threads, 0, 1024, " (0: all cores)");
     checkRange("max_depth", maxDepth, 1, 10000);
+    if (shard) {
+        if (spp == 0)
+            throw InputError("--shard needs --spp: a time budget has no fixed range of samples "
+                             "to split");
+        shard->validate(spp, "--shard", "samples per pixel");
+    }
 }
 
 int64_t peakResidentBytes() {
@@ -105,9 +111,12 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
 
     int64_t done = 0;
     int passes = 0;
+    int64_t first = 0;
     if (!timed) {
-        pass(0, options.spp);
-        done = options.spp, passes = 1;
+        const int64_t last = options.shard ? options.shard->end(options.spp) : options.spp;
+        first = options.shard ? options.shard->begin(options.spp) : 0;
+        pass(first, last);
+        done = last - first, passes = 1;
     } else {
         int64_t next = 1;
         while (true) {
@@ -143,11 +152,14 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     st.peakResidentBytes = peakResidentBytes();
     st.scene = scene.stats();
     st.nonFiniteSamples = static_cast<int64_t>(nonFinite.load());
+    st.shard = options.shard;
+    st.shardSpp = options.shard ? options.spp : 0;
+    st.firstSample = first;
     return result;
 }
 
 nlohmann::json toJson(const RenderStats& s) {
-    return {
+    nlohmann::json j = {
         {"mode", s.mode},
         {"width", s.width},
         {"height", s.height},
@@ -170,7 +182,15 @@ nlohmann::json toJson(const RenderStats& s) {
           {"geometry_bvh_peak_bytes", s.scene.embreePeakBytes},
           {"material_bytes", s.scene.materialBytes},
           {"build_seconds", s.scene.seconds}}},
+        {"yarn_overlap", yarnOverlapJson(s.scene.yarnOverlap)},
     };
+    if (s.shard)
+        j["shard"] = {{"index", s.shard->index},
+                      {"count", s.shard->count},
+                      {"spp", s.shardSpp},
+                      {"first_sample", s.firstSample},
+                      {"end_sample", s.firstSample + s.spp}};
+    return j;
 }
 
 }  // namespace weft::render

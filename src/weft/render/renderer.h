@@ -9,15 +9,21 @@
 //
 // Determinism: sample s of pixel p draws from Rng(stream p, seed mixed with
 // s), so the image depends only on (scene, mode, seed, spp), not on the
-// number of threads or on how samples were split into passes. Tiles of 16 x
+// number of threads or on how samples were split into passes, or into
+// shards: shard K of N (RenderOptions::shard, core/shard.h) traces samples
+// [floor(K spp / N), floor((K + 1) spp / N)) of every pixel, and the
+// sample-weighted mean of the N images (render_merge.h) is the unsharded
+// image up to float rounding. Tiles of 16 x
 // 16 pixels are scheduled with TBB (an arena of `threads` workers).
 #pragma once
 
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
+#include <optional>
 #include <string>
 
 #include "weft/core/image.h"
+#include "weft/core/shard.h"
 #include "weft/render/path_tracer.h"
 #include "weft/render/scene.h"
 
@@ -31,16 +37,18 @@ struct RenderOptions {
     int maxDepth = 100;
     bool nextEventEstimation = true;
     bool quiet = false;  // no progress output
+    // A part of an spp render for `weft render merge`: only this shard's samples.
+    std::optional<Shard> shard;
 
     // InputError naming the flag and its range (exactly one budget, threads
-    // in [0, 1024], maxDepth in [1, 10000]).
+    // in [0, 1024], maxDepth in [1, 10000]; a shard needs spp and N <= spp).
     void validate() const;
 };
 
 struct RenderStats {
     std::string mode;
     int width = 0, height = 0;
-    int64_t spp = 0;  // samples per pixel traced
+    int64_t spp = 0;  // samples per pixel traced (by this shard, for a part)
     int passes = 0;
     double seconds = 0;  // rendering, without the scene build
     double secondsPerSpp = 0;
@@ -51,6 +59,9 @@ struct RenderStats {
     int64_t peakResidentBytes = 0;  // of the whole process (getrusage)
     SceneBuildStats scene;
     int64_t nonFiniteSamples = 0;  // samples dropped as NaN/Inf (reported; should stay 0)
+    // A part: its shard of `shardSpp` samples per pixel, samples [firstSample, firstSample + spp).
+    std::optional<Shard> shard;
+    int64_t shardSpp = 0, firstSample = 0;
 };
 
 struct RenderResult {

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "weft/core/error.h"
@@ -105,7 +107,55 @@ void checkCurveExtent(const CurveSet& set, const SceneDesc& desc, size_t yarn) {
                      "curves, or a larger radius");
 }
 
+// The radius the overlap check gives an entry: its "radius", or the mean of
+// the per-point radii times its scale; none when a curve has no radii.
+std::optional<double> overlapRadius(const YarnDesc& yarn, const CurveSet& set) {
+    if (yarn.radius) return *yarn.radius;
+    double sum = 0;
+    size_t count = 0;
+    for (const Curve& c : set.curves) {
+        if (c.radii.empty()) return std::nullopt;
+        for (float r : c.radii) sum += r;
+        count += c.radii.size();
+    }
+    if (count == 0) return std::nullopt;
+    return yarn.scale * sum / static_cast<double>(count);
+}
+
 }  // namespace
+
+std::vector<YarnEntryOverlap> checkYarnOverlap(const SceneDesc& desc,
+                                               const std::vector<CurveSet>& curveSets) {
+    std::vector<YarnCurves> yarns;
+    for (size_t y = 0; y < desc.yarns.size(); ++y) {
+        const std::optional<double> radius = overlapRadius(desc.yarns[y], curveSets[y]);
+        if (!radius) return {};
+        yarns.push_back({&curveSets[y], desc.yarns[y].scale, *radius});
+    }
+    const std::vector<YarnOverlap> overlaps = yarnOverlaps(yarns);
+    std::vector<YarnEntryOverlap> result;
+    for (size_t y = 0; y < overlaps.size(); ++y)
+        result.push_back({desc.yarns[y].curves, overlaps[y]});
+    return result;
+}
+
+std::vector<std::string> yarnOverlapWarnings(const std::string& sceneName,
+                                             const std::vector<YarnEntryOverlap>& overlaps) {
+    std::vector<std::string> warnings;
+    for (size_t y = 0; y < overlaps.size(); ++y) {
+        const std::string w =
+            yarnOverlapWarning(sceneName, y, overlaps[y].curves, overlaps[y].overlap);
+        if (!w.empty()) warnings.push_back(w);
+    }
+    return warnings;
+}
+
+nlohmann::json yarnOverlapJson(const std::vector<YarnEntryOverlap>& overlaps) {
+    nlohmann::json list = nlohmann::json::array();
+    for (size_t y = 0; y < overlaps.size(); ++y)
+        list.push_back(toJson(overlaps[y].overlap, y, overlaps[y].curves));
+    return list;
+}
 
 Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfOptions& yarnOptions)
     : mode_(mode),
@@ -145,6 +195,8 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
         }
         yarnMaterial.push_back(it->second);
     }
+    // Before the geometry: what the render will draw inside other yarns.
+    stats_.yarnOverlap = checkYarnOverlap(desc, curveSets);
 
     Progress progress("build " + std::string(renderModeName(mode)) + " geometry",
                       static_cast<uint64_t>(stats_.curves), quiet);

@@ -24,6 +24,8 @@
 #include "weft/core/bsdf.h"
 #include "weft/core/vec.h"
 #include "weft/render/camera.h"
+#include "weft/render/curve_report.h"
+#include "weft/render/curves.h"
 #include "weft/render/lights.h"
 #include "weft/render/scene_file.h"
 #include "weft/render/tube_accel.h"
@@ -45,6 +47,28 @@ const char* renderModeName(RenderMode mode);
 // "neural", "fiber" or "dual"; otherwise an InputError naming `field`.
 RenderMode parseRenderMode(const std::string& name, const std::string& field = "--mode");
 
+// The overlap check of one yarn entry (curve_report.h): its curves file, as
+// the scene names it, and how much of it lies inside the scene's yarns.
+struct YarnEntryOverlap {
+    std::string curves;
+    YarnOverlap overlap;
+};
+
+// The overlap check of a scene's yarn entries, whose curves (in file units)
+// `curveSets` holds in the same order: every entry's curves times its scale
+// at its radius ("radius", or else the mean of the file's per-point radii
+// times the scale) against all of them. Empty when an entry has neither (the
+// geometry build refuses that yarn). Cheap next to the build: a hierarchy
+// over the control polygons' segments.
+std::vector<YarnEntryOverlap> checkYarnOverlap(const SceneDesc& desc,
+                                               const std::vector<CurveSet>& curveSets);
+// The warnings (yarnOverlapWarning) of the entries that overlap, naming the
+// scene file `sceneName`.
+std::vector<std::string> yarnOverlapWarnings(const std::string& sceneName,
+                                             const std::vector<YarnEntryOverlap>& overlaps);
+// The "yarn_overlap" list of IMAGE.json: toJson(overlap, i, curves) per entry.
+nlohmann::json yarnOverlapJson(const std::vector<YarnEntryOverlap>& overlaps);
+
 struct SceneBuildStats {
     int64_t curves = 0;           // yarn curves read
     int64_t curvePoints = 0;      // their control points
@@ -54,6 +78,8 @@ struct SceneBuildStats {
     int64_t embreePeakBytes = 0;  // largest Embree allocation during the build
     int64_t materialBytes = 0;    // the materials' BSDFs (yarn: networks and tables)
     double seconds = 0;           // building time, model loading included
+    // Per yarn entry, the overlap check (checkYarnOverlap; empty when it could not run).
+    std::vector<YarnEntryOverlap> yarnOverlap;
 };
 
 class Scene {

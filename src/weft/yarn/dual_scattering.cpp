@@ -36,8 +36,9 @@ class WidthFamily {
         return family;
     }
 
-    static double lineIntegral(double mu, double s) {
-        return std::sqrt(kTwoPi) * s * 0.5 * (1.0 + std::cos(2.0 * mu) * std::exp(-2.0 * s * s));
+    // Z_line for cos2Mu = cos(2 mu).
+    static double lineIntegral(double cos2Mu, double s) {
+        return std::sqrt(kTwoPi) * s * 0.5 * (1.0 + cos2Mu * std::exp(-2.0 * s * s));
     }
     static double byQuadrature(double mu, double s) {
         const double a = std::max(-kHalfPi, mu - 12.0 * s), b = std::min(kHalfPi, mu + 12.0 * s);
@@ -53,7 +54,8 @@ class WidthFamily {
         return sum;
     }
 
-    double normalization(double mu, double s) const {
+    // cos2Mu = cos(2 mu), which a caller with many widths for one mu computes once.
+    double normalization(double mu, double cos2Mu, double s) const {
         const double m = std::min(std::abs(mu), kHalfPi) / kHalfPi * (kMu - 1);
         const double l = (std::log(s) - logMin_) / (logMax_ - logMin_) * (kWidths - 1);
         const int i = std::min(static_cast<int>(m), kMu - 2);
@@ -62,7 +64,7 @@ class WidthFamily {
         auto at = [&](int a, int b) { return share_[static_cast<size_t>(a) * kWidths + b]; };
         const double share = (1 - fm) * ((1 - fl) * at(i, j) + fl * at(i, j + 1)) +
                              fm * ((1 - fl) * at(i + 1, j) + fl * at(i + 1, j + 1));
-        return lineIntegral(mu, s) * share;
+        return lineIntegral(cos2Mu, s) * share;
     }
 
     size_t memoryBytes() const { return sizeof(*this) + share_.size() * sizeof(double); }
@@ -77,7 +79,7 @@ class WidthFamily {
             for (int j = 0; j < kWidths; ++j) {
                 const double s = std::exp(logMin_ + (logMax_ - logMin_) * j / (kWidths - 1));
                 share_[static_cast<size_t>(i) * kWidths + j] =
-                    byQuadrature(mu, s) / lineIntegral(mu, s);
+                    byQuadrature(mu, s) / lineIntegral(std::cos(2.0 * mu), s);
             }
         }
     }
@@ -86,11 +88,11 @@ class WidthFamily {
     std::vector<double> share_;
 };
 
-// g(theta; mu, s), normalised against cos^2 on [-pi/2, pi/2].
-double cosSquaredGaussian(double theta, double mu, double s) {
+// g(theta; mu, s), normalised against cos^2 on [-pi/2, pi/2]; cos2Mu = cos(2 mu).
+double cosSquaredGaussian(double theta, double mu, double cos2Mu, double s) {
     s = std::clamp(s, kMinWidth, kMaxWidth);
     return std::exp(-sqr(theta - mu) / (2.0 * s * s)) /
-           WidthFamily::instance().normalization(mu, s);
+           WidthFamily::instance().normalization(mu, cos2Mu, s);
 }
 
 // The share of a von Mises lobe within pi/2 of its mean.
@@ -161,6 +163,7 @@ DualScatteringBsdf::Incident DualScatteringBsdf::incident(const Vec3& upperWi) c
     in.upper = upperWi;
     in.fiber = fiber_.incident(frame_.toLocal(upperWi));
     in.thetaI = in.fiber.angles.theta;
+    in.cos2Mu = std::cos(2.0 * in.thetaI);  // mu = -theta_i
     const double w = forwardShareTT_, db = options_.backScale;
     const double betaR2 = betaR_ * betaR_, betaTT2 = betaTT_ * betaTT_;
     for (int c = 0; c < 3; ++c) {
@@ -202,28 +205,29 @@ DualScatteringBsdf::Parts DualScatteringBsdf::partsUpper(const Incident& in, con
     const double n = fibersCrossed(wo);
     const double direct = 1 - std::min(n, 1.0);
     const double df = options_.forwardScale, db = options_.backScale;
-    const double mu = -in.thetaI, thetaO = out.theta, w = forwardShareTT_;
+    const double mu = -in.thetaI, cos2Mu = in.cos2Mu, thetaO = out.theta, w = forwardShareTT_;
     for (int c = 0; c < 3; ++c) {
         const Channel& ch = in.channel[c];
         double multiple = 0;
         if (direct > 0) {
             parts.single[c] = direct * single[c];
             const double back =
-                ch.backAmplitude * cosSquaredGaussian(thetaO, mu, ch.backWidth) * kInvTwoPi;
+                ch.backAmplitude * cosSquaredGaussian(thetaO, mu, cos2Mu, ch.backWidth) * kInvTwoPi;
             multiple += direct * db * back * out.cosTheta;
         }
         if (direct < 1) {
             const double transmitted = direct + (1 - direct) * df * std::pow(ch.forward, n);
             const double spread = n * ch.betaForward2;
             const double global =
-                ch.fresnel * cosSquaredGaussian(thetaO, mu, std::sqrt(betaR_ * betaR_ + spread)) *
+                ch.fresnel * cosSquaredGaussian(thetaO, mu, cos2Mu, std::sqrt(betaR_ * betaR_ + spread)) *
                     kInvTwoPi +
                 (1 - ch.fresnel) * fiber_.params().cTT[c] *
-                    cosSquaredGaussian(thetaO, mu, std::sqrt(betaTT_ * betaTT_ + spread)) * w *
+                    cosSquaredGaussian(thetaO, mu, cos2Mu, std::sqrt(betaTT_ * betaTT_ + spread)) * w *
                     kInvPi;
             const double back =
                 ch.backAmplitude *
-                cosSquaredGaussian(thetaO, mu, std::sqrt(ch.backWidth * ch.backWidth + spread)) *
+                cosSquaredGaussian(thetaO, mu, cos2Mu,
+                                   std::sqrt(ch.backWidth * ch.backWidth + spread)) *
                 kInvTwoPi;
             multiple += (transmitted - direct) * df * (global + kPi * db * back) * out.cosTheta;
         }
@@ -310,13 +314,20 @@ Rgb DualScatteringBsdf::clampScale(const Vec3& wi) const {
 }
 
 void DualScatteringBsdf::buildEnergyClamp() {
-    std::vector<Rgb> scale(static_cast<size_t>(kClampA) * kClampB, Rgb(1.0));
-    tbb::parallel_for(0, kClampA * kClampB, [&](int node) {
+    constexpr int kNodes = kClampA * kClampB;
+    std::vector<Rgb> scale(static_cast<size_t>(kNodes), Rgb(1.0));
+    // A half turn about n, (x, y, z) -> (-x, -y, z), maps the ply (its fibers
+    // are lines, whichever way along) and so the BSDF onto itself: a -> -a,
+    // b -> pi - b, i.e. node k -> node kNodes - 1 - k (the Chebyshev nodes are
+    // symmetric). Half the nodes are computed (tested: albedo(wi) equals
+    // albedo of the turned wi).
+    tbb::parallel_for(0, (kNodes + 1) / 2, [&](int node) {
         const Vec3 wi = clampNodeDirection(node / kClampB, node % kClampB);
         const Incident in = incident(wi);  // clamp_ is still empty: scale 1
         const Rgb albedo = directionalAlbedo(in);
         for (int c = 0; c < 3; ++c)
             scale[static_cast<size_t>(node)][c] = albedo[c] > 1 ? 1 / albedo[c] : 1.0;
+        scale[static_cast<size_t>(kNodes - 1 - node)] = scale[static_cast<size_t>(node)];
     });
     // Each node keeps the smallest scale of its 3 x 3 neighbourhood: where
     // the scale changes monotonically between nodes (it falls fast towards

@@ -116,6 +116,7 @@ class DualScatteringBsdf final : public Bsdf {
         bool flip;
         Vec3 upper;  // wi mirrored into the upper hemisphere
         double thetaI;
+        double cos2Mu;  // cos(2 theta_i), for the lobe normalisers (mu = -theta_i)
         FiberBcsdf::Incident fiber;
         Channel channel[3];
         Rgb scale;  // the energy clamp

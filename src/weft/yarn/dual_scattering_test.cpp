@@ -17,6 +17,8 @@
 #include "weft/core/error.h"
 #include "weft/core/math.h"
 #include "weft/core/quadrature.h"
+#include "weft/core/rng.h"
+#include "weft/core/sampling.h"
 #include "weft/core/test_util.h"
 #include "weft/yarn/material_preset.h"
 #include "weft/yarn/sphere_rule.h"
@@ -206,6 +208,31 @@ TEST(DualScattering, FrontLitWithoutBackScatteringIsTheFiberBcsdf) {
             const Rgb value = bsdf.eval(wi, o);
             for (int c = 0; c < 3; ++c)
                 EXPECT_NEAR(value[c], expected[c], 1e-12 * (1 + expected[c])) << wi << " " << wo;
+        }
+    }
+}
+
+// The energy clamp computes half its nodes and mirrors the rest, relying on
+// the ply's symmetry under a half turn about n: check it on the model itself.
+TEST(DualScattering, HalfTurnAboutTheNormalIsASymmetry) {
+    const auto halfTurn = [](const Vec3& v) { return Vec3{-v.x, -v.y, v.z}; };
+    Rng rng(7, 1);
+    for (const char* name : {"fleece", "silk", "cotton"}) {
+        const MaterialPreset& p = preset(name);
+        DualScatteringOptions raw;
+        raw.energyClamp = false;
+        const DualScatteringBsdf bsdf(p.fiber, p.ply, raw);
+        for (int k = 0; k < 2000; ++k) {
+            const Vec3 wi = sampleUniformSphere(rng.uniform(), rng.uniform());
+            const Vec3 wo = sampleUniformSphere(rng.uniform(), rng.uniform());
+            const Rgb a = bsdf.eval(wi, wo), b = bsdf.eval(halfTurn(wi), halfTurn(wo));
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(a[c], b[c], 1e-9 * std::max(1.0, a[c])) << name << " pair " << k;
+        }
+        const DualScatteringBsdf clamped(p.fiber, p.ply);
+        for (const Vec3& wi : incidentDirections()) {
+            const Rgb a = clamped.clampScale(wi), b = clamped.clampScale(halfTurn(wi));
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c], b[c], 1e-12) << name;
         }
     }
 }

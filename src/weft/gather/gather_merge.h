@@ -1,0 +1,53 @@
+// weft/gather/gather_merge.h — the shards of a gather on disk, and their exact merge
+// (`weft gather --shard K/N`, `weft gather merge`; docs/cluster.md).
+//
+// Shard K of N walks the paths [floor(K P / N), floor((K + 1) P / N)) of a
+// gather of P paths (core/shard.h); path k draws from random stream k of the
+// seed whichever shard walks it. A shard writes a part directory (format
+// "weft-gather-part", version 1) holding the gather's integer accumulators
+// rather than its normalised float maps:
+//   meta.json              what a gather's says it gathered (gatherInputs:
+//                          material, fiber, ply, bins, paths of the whole
+//                          gather, seeds, max_depth, versions), "shard":
+//                          {"index", "count", "first_path", "end_path"} and
+//                          this part's statistics ("rays", "axial_paths",
+//                          "depth_sum", "elapsed_seconds", "walk_seconds", "threads")
+//   count.npy, count_t.npy int64 (TI,PI): paths, and T paths, per incident bin
+//   sum_r.npy, sum_m.npy   int64 (TI,PI,TO,PO,3): summed R / M path weights, in units of 2^-32
+//   sum_truncated.npy      int64 (TI,PI,3): summed weight of paths cut at max_depth, 2^-32 units
+//   depth.npy              int64 (max_depth+2): paths by number of fiber interactions
+//   ply.txt                the traced fiber centre lines, as a gather's
+// `weft gather merge` adds the parts' integers and normalises once, with the
+// code of an unsharded gather: every array of the merged directory is bit for
+// bit the unsharded gather's, for any N and any order of the parts (meta.json
+// differs in the timings and "shards"). The cost is size: the two sums take
+// 8 bytes x 3 channels x TI PI TO PO each, 2 x 192 MB at the default bins.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "weft/gather/gather.h"
+
+namespace weft {
+
+// Writes the part directory above for the sums of options.shard into `out`
+// and renames it into place.
+void writeGatherPart(const GatherSums& sums, const GatherOptions& options, TempDirCommit& out);
+
+struct MergedGather {
+    GatherOptions options;  // as the parts' meta.json say (shard: the whole gather)
+    GatherSums sums;        // of every path of the gather
+    int64_t shards = 0;
+};
+
+// Reads the part directories and adds them. They must be the N shards of one
+// gather: each a "weft-gather-part" of the same material, fiber and ply
+// parameters, ply seed, seed, paths, bins, max depth, segments per twist and
+// weft version, with shard indices 0..N-1 each exactly once, and arrays of
+// the shapes the bins say. Anything else is an InputError naming the part's
+// file and the field (a duplicate or missing shard names the shard and the
+// parts given).
+MergedGather mergeGatherParts(const std::vector<std::string>& partDirs);
+
+}  // namespace weft

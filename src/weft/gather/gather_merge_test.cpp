@@ -1,0 +1,195 @@
+// Sharded gathers: the shard ranges, and the merge of the parts against an
+// unsharded gather of the same paths (independent truth: one run over all paths).
+#include "weft/gather/gather_merge.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "weft/core/error.h"
+#include "weft/core/file.h"
+#include "weft/core/npy.h"
+#include "weft/core/test_util.h"
+
+namespace weft {
+namespace {
+
+TEST(Shard, ParsesKOverN) {
+    const Shard s = Shard::parse("3/8", "--shard");
+    EXPECT_EQ(s.index, 3);
+    EXPECT_EQ(s.count, 8);
+    EXPECT_EQ(s.toString(), "3/8");
+    EXPECT_TRUE(Shard::parse("0/1", "--shard").whole());
+    for (const char* bad : {"", "3", "/4", "3/", "4/4", "5/4", "-1/4", "1/0", "+1/4", "1/4/5",
+                            "a/b", " 1/4", "1/70000", "1.5/4"}) {
+        try {
+            Shard::parse(bad, "--shard");
+            ADD_FAILURE() << "accepted \"" << bad << "\"";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("--shard"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("K/N"), std::string::npos) << e.what();
+        }
+    }
+}
+
+TEST(Shard, RangesAreDisjointCoverEverythingAndDifferByAtMostOne) {
+    for (int64_t total : {int64_t{1}, int64_t{2}, int64_t{7}, int64_t{1000}, int64_t{1001}, kMaxPaths}) {
+        for (int64_t n : {1, 2, 3, 7, 64}) {
+            if (n > total) continue;
+            int64_t next = 0, smallest = total, largest = 0;
+            for (int64_t k = 0; k < n; ++k) {
+                const Shard s{k, n};
+                EXPECT_EQ(s.begin(total), next) << k << "/" << n << " of " << total;
+                next = s.end(total);
+                smallest = std::min(smallest, s.end(total) - s.begin(total));
+                largest = std::max(largest, s.end(total) - s.begin(total));
+            }
+            EXPECT_EQ(next, total);
+            EXPECT_LE(largest - smallest, 1);
+            EXPECT_GE(smallest, 1);
+        }
+    }
+    EXPECT_THROW(Shard({0, 3}).validate(2, "--shard", "paths"), InputError);
+    EXPECT_NO_THROW(Shard({1, 2}).validate(2, "--shard", "paths"));
+}
+
+class GatherMergeTest : public testing::TempDirTest {
+  protected:
+    static GatherOptions options() {
+        GatherOptions o;
+        o.fiber = {Rgb(0.04), Rgb(0.9, 0.7, 0.5), 7.0, 12.0, 25.0};
+        o.ply = {24, 0.4, 0.5};
+        o.paths = 2500;  // not a multiple of the shard counts or of the 1024-path tasks
+        o.seed = 5;
+        o.bins = {3, 8, 6, 12};
+        o.maxDepth = 6;  // some paths are truncated, so sum_truncated is exercised
+        o.threads = 2;
+        o.quiet = true;
+        return o;
+    }
+
+    // Writes the n parts of options() (threads alternating 1 and 2) and returns their directories.
+    std::vector<std::string> writeParts(int64_t n, const std::string& prefix,
+                                        GatherOptions o = options()) const {
+        std::vector<std::string> dirs;
+        for (int64_t k = 0; k < n; ++k) {
+            o.shard = {k, n};
+            o.threads = 1 + static_cast<int>(k % 2);
+            TempDirCommit out(path(prefix + std::to_string(k)));
+            writeGatherPart(gatherSums(o), o, out);
+            dirs.push_back(out.finalPath());
+        }
+        return dirs;
+    }
+
+    std::string mergeError(const std::vector<std::string>& dirs) const {
+        try {
+            mergeGatherParts(dirs);
+        } catch (const InputError& e) {
+            return e.what();
+        }
+        ADD_FAILURE() << "the merge was accepted";
+        return "";
+    }
+};
+
+TEST_F(GatherMergeTest, MergedShardsEqualTheUnshardedGatherBitForBit) {
+    const GatherResult whole = gatherRdm(options());
+    ASSERT_GT(whole.stats.truncatedPaths, 0);
+    for (int64_t n : {1, 3, 7}) {
+        std::vector<std::string> dirs = writeParts(n, "n" + std::to_string(n) + "_");
+        std::reverse(dirs.begin(), dirs.end());  // the order of the parts does not matter
+        const MergedGather m = mergeGatherParts(dirs);
+        EXPECT_EQ(m.shards, n);
+        const GatherResult r = normaliseGather(m.sums, m.options, m.shards);
+        EXPECT_EQ(r.count, whole.count) << n;
+        EXPECT_EQ(r.countT, whole.countT) << n;
+        EXPECT_EQ(r.depth, whole.depth) << n;
+        EXPECT_EQ(r.pT, whole.pT) << n;
+        EXPECT_EQ(r.rdmR, whole.rdmR) << n;
+        EXPECT_EQ(r.rdmM, whole.rdmM) << n;
+        EXPECT_EQ(r.truncated, whole.truncated) << n;
+        EXPECT_EQ(r.plyLines.size(), whole.plyLines.size());
+        EXPECT_EQ(r.stats.paths, whole.stats.paths);
+        EXPECT_EQ(r.stats.rays, whole.stats.rays);
+        EXPECT_EQ(r.stats.meanDepth, whole.stats.meanDepth);
+        EXPECT_EQ(r.stats.truncatedPaths, whole.stats.truncatedPaths);
+        EXPECT_EQ(r.stats.shards, n);
+        // The merged meta.json says what was gathered exactly as the unsharded one.
+        const nlohmann::json a = gatherMetadata(r, m.options), b = gatherMetadata(whole, options());
+        for (const char* key : {"material", "fiber", "ply", "bins", "paths", "seed", "ply_seed",
+                                "max_depth", "mean_depth", "truncated_energy"})
+            EXPECT_EQ(a.at(key), b.at(key)) << key;
+    }
+}
+
+TEST_F(GatherMergeTest, PartsThatDoNotFormOneGatherAreRejected) {
+    const std::vector<std::string> parts = writeParts(3, "p");
+    const auto expectMessage = [&](const std::vector<std::string>& dirs,
+                                   std::initializer_list<const char*> words) {
+        const std::string message = mergeError(dirs);
+        for (const char* w : words)
+            EXPECT_NE(message.find(w), std::string::npos) << "\"" << w << "\" in: " << message;
+    };
+    // A shard twice, a shard missing.
+    expectMessage({parts[0], parts[1], parts[1]}, {"both shard 1/3", parts[1].c_str()});
+    expectMessage({parts[0], parts[2]}, {"missing", "1/3"});
+    expectMessage({}, {"no gather parts"});
+    // Another gather's shard: other bins, seed, material, max depth, shard count.
+    GatherOptions other = options();
+    other.bins = {3, 8, 6, 6};
+    expectMessage({parts[0], parts[1], writeParts(3, "bins", other)[2]}, {"\"bins\"", "bins2/meta.json"});
+    other = options();
+    other.seed = 6;
+    expectMessage({parts[0], parts[1], writeParts(3, "seed", other)[2]}, {"\"seed\""});
+    other = options();
+    other.material = "silk";
+    expectMessage({parts[0], parts[1], writeParts(3, "mat", other)[2]}, {"\"material\""});
+    other = options();
+    other.fiber.betaRDeg = 8.0;
+    expectMessage({parts[0], parts[1], writeParts(3, "fib", other)[2]}, {"\"fiber\""});
+    expectMessage({parts[0], parts[1], writeParts(4, "four")[2]}, {"\"shard.count\""});
+    // Not a part at all: a whole gather, a missing directory.
+    {
+        TempDirCommit out(path("whole"));
+        writeGather(gatherRdm(options()), options(), out);
+    }
+    expectMessage({path("whole")}, {"whole/meta.json", "not a shard"});
+    expectMessage({path("nowhere")}, {"nowhere/meta.json"});
+}
+
+TEST_F(GatherMergeTest, DamagedArraysAreRejected) {
+    const std::vector<std::string> parts = writeParts(2, "p");
+    // A truncated array.
+    const std::string sumM = parts[1] + "/sum_m.npy";
+    const std::string bytes = readFile(sumM);
+    writeFileAtomic(sumM, bytes.substr(0, bytes.size() - 8));
+    EXPECT_NE(mergeError(parts).find("sum_m.npy"), std::string::npos);
+    writeFileAtomic(sumM, bytes);
+    // Counts that do not add up to the shard's paths.
+    const std::string countPath = parts[0] + "/count.npy";
+    NpyArray count = readNpy(countPath);
+    std::vector<int64_t> counts(count.size());
+    std::memcpy(counts.data(), count.bytes.data(), count.bytes.size());
+    counts[0] += 1;
+    writeNpy(countPath, counts.data(), count.shape);
+    const std::string message = mergeError(parts);
+    EXPECT_NE(message.find(parts[0]), std::string::npos) << message;
+    EXPECT_NE(message.find("1250 paths"), std::string::npos) << message;
+    // A negative weight.
+    counts[0] -= 1;
+    writeNpy(countPath, counts.data(), count.shape);
+    NpyArray r = readNpy(parts[0] + "/sum_r.npy");
+    std::vector<int64_t> sums(r.size());
+    std::memcpy(sums.data(), r.bytes.data(), r.bytes.size());
+    sums[5] = -1;
+    writeNpy(parts[0] + "/sum_r.npy", sums.data(), r.shape);
+    EXPECT_NE(mergeError(parts).find("sum_r.npy: element 5 is -1"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace weft

@@ -1,0 +1,624 @@
+#include "weft/render/curve_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <tuple>
+#include <utility>
+
+#include "weft/core/error.h"
+#include "weft/core/json_message.h"
+
+namespace weft::render {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Segments per leaf of the hierarchy.
+constexpr size_t kLeafSize = 4;
+
+double clamp01(double v) { return std::clamp(v, 0.0, 1.0); }
+
+}  // namespace
+
+SegmentClosestPoints closestPointsOnSegments(const Vec3& p1, const Vec3& q1, const Vec3& p2,
+                                             const Vec3& q2) {
+    const Vec3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
+    const double a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
+    double s = 0, t = 0;
+    if (a == 0 && e == 0) {
+        // Two points.
+    } else if (a == 0) {
+        t = clamp01(f / e);
+    } else {
+        const double c = dot(d1, r);
+        if (e == 0) {
+            s = clamp01(-c / a);
+        } else {
+            // The lines' closest points, then each parameter clamped and the
+            // other one recomputed for it. Near-parallel segments (denominator
+            // lost to rounding) take s = 0: any s is then as good.
+            const double b = dot(d1, d2);
+            const double denom = a * e - b * b;
+            s = denom > 1e-14 * a * e ? clamp01((b * f - c * e) / denom) : 0.0;
+            t = (b * s + f) / e;
+            if (t < 0) {
+                t = 0;
+                s = clamp01(-c / a);
+            } else if (t > 1) {
+                t = 1;
+                s = clamp01((b - c) / a);
+            }
+        }
+    }
+    SegmentClosestPoints cp;
+    cp.s = s;
+    cp.t = t;
+    cp.p = p1 + d1 * s;
+    cp.q = p2 + d2 * t;
+    cp.distance = length(cp.p - cp.q);
+    return cp;
+}
+
+namespace {
+
+// One straight span of a curve's polyline, in the units analysed (scene
+// units for a scene's yarns).
+struct Segment {
+    Vec3 a, b;
+    double arcStart = 0;  // arc length along the curve from its first point to a
+    double length = 0;
+    uint32_t curve = 0;  // into CurveTable::curves (every entry's curves, in order)
+    uint32_t index = 0;  // position in curve order: equal distances keep the first pair
+};
+
+struct CurveInfo {
+    double length = 0;  // the whole polyline, closing segment included
+    bool closed = false;
+    uint32_t yarn = 0;   // the entry it belongs to
+    uint32_t local = 0;  // its index in that entry's CurveSet
+    double radius = 0;   // the entry's yarn radius (0: none given)
+};
+
+// Distance along a curve between arc positions a and b (the shorter way round
+// on a closed curve).
+double arcSeparation(const CurveInfo& curve, double a, double b) {
+    const double s = std::fabs(a - b);
+    return curve.closed ? std::min(s, curve.length - s) : s;
+}
+
+// An upper bound on arcSeparation between [aLo, aHi] and [bLo, bHi].
+double maxArcSeparation(const CurveInfo& curve, double aLo, double aHi, double bLo, double bHi) {
+    const double s = std::max(aHi - bLo, bHi - aLo);
+    return curve.closed ? std::min(s, 0.5 * curve.length) : s;
+}
+
+double boxDistance(const Bounds3& a, const Bounds3& b) {
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+        const double gap = std::max({0.0, b.lo[k] - a.hi[k], a.lo[k] - b.hi[k]});
+        d2 += gap * gap;
+    }
+    return std::sqrt(d2);
+}
+
+Bounds3 segmentBox(const Segment& s) {
+    Bounds3 box;
+    box.extend(s.a);
+    box.extend(s.b);
+    return box;
+}
+
+// A bounding volume hierarchy over segments. Besides its box, each node
+// records what the same-curve pruning needs: the one curve all its segments
+// belong to (-1 when several) and their arc range, plus the range of yarn
+// entries and the largest radius among its segments.
+struct Node {
+    Bounds3 box;
+    double arcLo = kInf, arcHi = -kInf;
+    int64_t curve = -1;
+    uint32_t yarnLo = 0, yarnHi = 0;
+    double radiusMax = 0;
+    // Leaf: segments [first, first + count). Inner (count 0): children at
+    // this node + 1 and at `first`.
+    uint32_t first = 0, count = 0;
+};
+
+class SegmentTree {
+  public:
+    SegmentTree(const std::vector<Segment>& segments, const std::vector<CurveInfo>& curves)
+        : curves_(curves) {
+        std::vector<uint32_t> order(segments.size());
+        for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<uint32_t>(i);
+        if (!segments.empty()) {
+            nodes_.reserve(2 * segments.size() / kLeafSize + 2);
+            build(segments, order, 0, order.size());
+        }
+        segments_.reserve(segments.size());
+        for (uint32_t i : order) segments_.push_back(segments[i]);
+        // Children come after their parent (pre-order): summarise backwards.
+        for (size_t i = nodes_.size(); i-- > 0;) summarise(i);
+    }
+
+    bool empty() const { return nodes_.empty(); }
+    const Node& node(uint32_t i) const { return nodes_[i]; }
+    const Segment& segment(uint32_t i) const { return segments_[i]; }
+    const std::vector<Segment>& segments() const { return segments_; }
+    const CurveInfo& curveOf(const Segment& s) const { return curves_[s.curve]; }
+    const CurveInfo& curve(int64_t i) const { return curves_[static_cast<size_t>(i)]; }
+
+  private:
+    // Median split on the longest axis of the segment midpoints; pre-order.
+    uint32_t build(const std::vector<Segment>& segments, std::vector<uint32_t>& order, size_t begin,
+                   size_t end) {
+        const auto index = static_cast<uint32_t>(nodes_.size());
+        nodes_.emplace_back();
+        if (end - begin <= kLeafSize) {
+            nodes_[index].first = static_cast<uint32_t>(begin);
+            nodes_[index].count = static_cast<uint32_t>(end - begin);
+            return index;
+        }
+        Bounds3 mids;
+        for (size_t i = begin; i < end; ++i)
+            mids.extend(0.5 * (segments[order[i]].a + segments[order[i]].b));
+        const Vec3 extent = mids.hi - mids.lo;
+        const int axis =
+            extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+        const size_t middle = begin + (end - begin) / 2;
+        const auto at = [&](size_t i) { return order.begin() + static_cast<std::ptrdiff_t>(i); };
+        std::nth_element(at(begin), at(middle), at(end), [&](uint32_t x, uint32_t y) {
+            const double mx = segments[x].a[axis] + segments[x].b[axis];
+            const double my = segments[y].a[axis] + segments[y].b[axis];
+            return mx < my || (mx == my && x < y);
+        });
+        build(segments, order, begin, middle);
+        const uint32_t right = build(segments, order, middle, end);
+        nodes_[index].first = right;
+        return index;
+    }
+
+    // A leaf from its segments, an inner node from its two children.
+    void summarise(size_t i) {
+        Node& node = nodes_[i];
+        node.yarnLo = std::numeric_limits<uint32_t>::max();
+        const auto add = [&node](const Bounds3& box, int64_t curve, double arcLo, double arcHi,
+                                 uint32_t yarnLo, uint32_t yarnHi, double radius, bool first) {
+            node.box.extend(box.lo);
+            node.box.extend(box.hi);
+            node.curve = first || node.curve == curve ? curve : -1;
+            node.arcLo = std::min(node.arcLo, arcLo);
+            node.arcHi = std::max(node.arcHi, arcHi);
+            node.yarnLo = std::min(node.yarnLo, yarnLo);
+            node.yarnHi = std::max(node.yarnHi, yarnHi);
+            node.radiusMax = std::max(node.radiusMax, radius);
+        };
+        if (node.count == 0) {
+            for (const size_t child : {i + 1, size_t{node.first}}) {
+                const Node& c = nodes_[child];
+                add(c.box, c.curve, c.arcLo, c.arcHi, c.yarnLo, c.yarnHi, c.radiusMax,
+                    child == i + 1);
+            }
+            return;
+        }
+        for (uint32_t k = node.first; k < node.first + node.count; ++k) {
+            const Segment& s = segments_[k];
+            const CurveInfo& c = curves_[s.curve];
+            add(segmentBox(s), s.curve, s.arcStart, s.arcStart + s.length, c.yarn, c.yarn, c.radius,
+                k == node.first);
+        }
+    }
+
+    const std::vector<CurveInfo>& curves_;
+    std::vector<Node> nodes_;
+    std::vector<Segment> segments_;
+};
+
+// The closest contact pair, by a traversal of the tree against itself.
+// `yarn` >= 0 keeps only pairs with a segment of that entry.
+class ContactSearch {
+  public:
+    ContactSearch(const SegmentTree& tree, int64_t yarn) : tree_(tree), yarn_(yarn) {
+        if (!tree.empty()) visit(0, 0);
+    }
+
+    bool found() const { return best_ < kInf; }
+    double distance() const { return best_; }
+    const Segment& segmentA() const { return *a_; }
+    const Segment& segmentB() const { return *b_; }
+    const SegmentClosestPoints& points() const { return points_; }
+
+  private:
+    bool involvesYarn(const Node& n) const {
+        return yarn_ < 0 || (n.yarnLo <= yarn_ && yarn_ <= n.yarnHi);
+    }
+
+    void visit(uint32_t ia, uint32_t ib) {
+        const Node& a = tree_.node(ia);
+        const Node& b = tree_.node(ib);
+        if (!involvesYarn(a) && !involvesYarn(b)) return;
+        if (ia != ib) {
+            const double gap = boxDistance(a.box, b.box);
+            // Not >=: an equal distance may still be an earlier pair.
+            if (gap > best_) return;
+            // One stretch of one curve against another: every contact needs
+            // sep > 2 d >= 2 gap.
+            if (a.curve >= 0 && a.curve == b.curve &&
+                maxArcSeparation(tree_.curve(a.curve), a.arcLo, a.arcHi, b.arcLo, b.arcHi) <=
+                    2 * gap)
+                return;
+        }
+        if (a.count != 0 && b.count != 0) {
+            for (uint32_t i = a.first; i < a.first + a.count; ++i)
+                for (uint32_t j = b.first; j < b.first + b.count; ++j)
+                    if (ia != ib || i < j) test(tree_.segment(i), tree_.segment(j));
+            return;
+        }
+        if (ia == ib) {
+            const uint32_t l = ia + 1, r = a.first;
+            visit(l, l);
+            visit(r, r);
+            visit(l, r);
+            return;
+        }
+        // Open the node with the larger box (a leaf never), nearer child first.
+        const bool openA = b.count != 0 || (a.count == 0 && diagonal(a) >= diagonal(b));
+        const Node& open = openA ? a : b;
+        const Node& other = openA ? b : a;
+        const uint32_t io = openA ? ib : ia;
+        uint32_t first = (openA ? ia : ib) + 1, second = open.first;
+        if (boxDistance(tree_.node(second).box, other.box) <
+            boxDistance(tree_.node(first).box, other.box))
+            std::swap(first, second);
+        for (uint32_t child : {first, second}) openA ? visit(child, io) : visit(io, child);
+    }
+
+    static double diagonal(const Node& n) { return length(n.box.hi - n.box.lo); }
+
+    void test(const Segment& x, const Segment& y) {
+        const Segment& s = x.index < y.index ? x : y;
+        const Segment& t = x.index < y.index ? y : x;
+        if (yarn_ >= 0 && tree_.curveOf(s).yarn != yarn_ && tree_.curveOf(t).yarn != yarn_) return;
+        const SegmentClosestPoints cp = closestPointsOnSegments(s.a, s.b, t.a, t.b);
+        if (cp.distance > best_) return;
+        if (cp.distance == best_ && std::tie(s.index, t.index) >= std::tie(a_->index, b_->index))
+            return;
+        if (s.curve == t.curve && !(arcSeparation(tree_.curveOf(s), s.arcStart + cp.s * s.length,
+                                                  t.arcStart + cp.t * t.length) > 2 * cp.distance))
+            return;
+        best_ = cp.distance;
+        a_ = &s;
+        b_ = &t;
+        points_ = cp;
+    }
+
+    const SegmentTree& tree_;
+    int64_t yarn_;
+    double best_ = kInf;
+    const Segment *a_ = nullptr, *b_ = nullptr;
+    SegmentClosestPoints points_;
+};
+
+double pointBoxDistance(const Vec3& x, const Bounds3& box) {
+    Bounds3 point;
+    point.lo = point.hi = x;
+    return boxDistance(point, box);
+}
+
+// Overlap sums of one yarn entry.
+struct OverlapSums {
+    double length = 0, overlapping = 0, maxDepth = 0;
+};
+
+// overlapping / length, 0 for no length, at most 1 (the weights are summed
+// in another order than the lengths).
+double overlapFraction(const OverlapSums& sums) {
+    return sums.length > 0 ? std::min(1.0, sums.overlapping / sums.length) : 0.0;
+}
+
+// Samples every segment and finds, for each sample, its deepest partner.
+class OverlapSampler {
+  public:
+    explicit OverlapSampler(const SegmentTree& tree) : tree_(tree) {}
+
+    void addSegment(const Segment& s, OverlapSums& sums, std::vector<char>& curveOverlaps) {
+        const CurveInfo& curve = tree_.curveOf(s);
+        const double r = curve.radius;
+        sums.length += s.length;
+        // The partner distance minus its radius below which a sample counts.
+        const double bound = r * (1 - 2 * kOverlapTolerance);
+        const double intervals =
+            std::clamp(std::ceil(s.length / (0.25 * r)), 1.0, double{kMaxSamplesPerSegment});
+        const int n = static_cast<int>(intervals);
+        // A long segment first asks whether anything is near it at all; for
+        // one or two samples that costs as much as the samples themselves.
+        if (n > 2 && !anyPartnerNear(s, bound)) return;
+        for (int k = 0; k <= n; ++k) {
+            const double u = static_cast<double>(k) / n;
+            const double weight = s.length / n * (k == 0 || k == n ? 0.5 : 1.0);
+            const Vec3 x = s.a + (s.b - s.a) * u;
+            const double g = nearestPartner(x, s.curve, s.arcStart + u * s.length, bound);
+            if (!(g < bound)) continue;
+            sums.overlapping += weight;
+            sums.maxDepth = std::max(sums.maxDepth, 0.5 - 0.5 * g / r);
+            curveOverlaps[s.curve] = 1;
+        }
+    }
+
+  private:
+    // Whether a node may hold a partner of a point or segment of `curve` at
+    // arc positions [arcLo, arcHi]: not when it is a stretch of the same
+    // curve within 4 R of them along it.
+    bool mayHoldPartner(const Node& n, uint32_t curve, double arcLo, double arcHi) const {
+        if (n.curve != static_cast<int64_t>(curve)) return true;
+        const CurveInfo& c = tree_.curve(n.curve);
+        return maxArcSeparation(c, n.arcLo, n.arcHi, arcLo, arcHi) > 4 * c.radius;
+    }
+
+    // Whether any segment that may be a partner of a point of s comes within
+    // bound + its radius of s's box (a quick test before sampling).
+    bool anyPartnerNear(const Segment& s, double bound) {
+        const Bounds3 box = segmentBox(s);
+        const double arcHi = s.arcStart + s.length;
+        stack_.assign(1, 0);
+        while (!stack_.empty()) {
+            const uint32_t index = stack_.back();
+            stack_.pop_back();
+            const Node& n = tree_.node(index);
+            if (boxDistance(n.box, box) - n.radiusMax >= bound) continue;
+            if (!mayHoldPartner(n, s.curve, s.arcStart, arcHi)) continue;
+            if (n.count == 0) {
+                stack_.push_back(index + 1);
+                stack_.push_back(n.first);
+                continue;
+            }
+            for (uint32_t i = n.first; i < n.first + n.count; ++i) {
+                const Segment& t = tree_.segment(i);
+                if (t.index == s.index) continue;
+                if (boxDistance(segmentBox(t), box) - tree_.curveOf(t).radius >= bound) continue;
+                if (t.curve == s.curve &&
+                    !(maxArcSeparation(tree_.curveOf(t), t.arcStart, t.arcStart + t.length,
+                                       s.arcStart, arcHi) > 4 * tree_.curveOf(t).radius))
+                    continue;
+                return true;
+            }
+        }
+        return false;
+    }
+
+    // min over partner segments of (distance from x - the partner's radius),
+    // searched below `bound` (kInf when nothing is).
+    double nearestPartner(const Vec3& x, uint32_t curve, double arc, double bound) {
+        double best = bound;
+        bool found = false;
+        stack_.assign(1, 0);
+        while (!stack_.empty()) {
+            const uint32_t index = stack_.back();
+            stack_.pop_back();
+            const Node& n = tree_.node(index);
+            if (pointBoxDistance(x, n.box) - n.radiusMax >= best) continue;
+            if (!mayHoldPartner(n, curve, arc, arc)) continue;
+            if (n.count == 0) {
+                // Nearer child last, so that it is taken first.
+                uint32_t nearer = index + 1, farther = n.first;
+                if (pointBoxDistance(x, tree_.node(farther).box) <
+                    pointBoxDistance(x, tree_.node(nearer).box))
+                    std::swap(nearer, farther);
+                stack_.push_back(farther);
+                stack_.push_back(nearer);
+                continue;
+            }
+            for (uint32_t i = n.first; i < n.first + n.count; ++i) {
+                const Segment& t = tree_.segment(i);
+                const CurveInfo& c = tree_.curveOf(t);
+                const Vec3 d = t.b - t.a;
+                const double len2 = dot(d, d);
+                const double u = len2 > 0 ? clamp01(dot(x - t.a, d) / len2) : 0.0;
+                if (t.curve == curve &&
+                    !(arcSeparation(c, arc, t.arcStart + u * t.length) > 4 * c.radius))
+                    continue;
+                const double g = length(x - (t.a + d * u)) - c.radius;
+                if (g < best) {
+                    best = g;
+                    found = true;
+                }
+            }
+        }
+        return found ? best : kInf;
+    }
+
+    const SegmentTree& tree_;
+    std::vector<uint32_t> stack_;
+};
+
+// The segments and curves of every entry, scaled.
+struct CurveTable {
+    std::vector<Segment> segments;
+    std::vector<CurveInfo> curves;
+};
+
+CurveTable curveTable(const std::vector<YarnCurves>& yarns) {
+    CurveTable table;
+    for (size_t y = 0; y < yarns.size(); ++y) {
+        const std::vector<Curve>& curves = yarns[y].curves->curves;
+        for (size_t c = 0; c < curves.size(); ++c) {
+            const std::vector<Vec3>& p = curves[c].points;
+            CurveInfo info;
+            info.closed = curves[c].closed;
+            info.yarn = static_cast<uint32_t>(y);
+            info.local = static_cast<uint32_t>(c);
+            info.radius = yarns[y].radius;
+            const auto curveIndex = static_cast<uint32_t>(table.curves.size());
+            const size_t spans = segmentCount(curves[c]);
+            for (size_t k = 0; k < spans; ++k) {
+                Segment s;
+                s.a = p[k] * yarns[y].scale;
+                s.b = p[(k + 1) % p.size()] * yarns[y].scale;
+                s.length = length(s.b - s.a);
+                s.arcStart = info.length;
+                s.curve = curveIndex;
+                // Indices are 32-bit: no input weft reads holds 4 billion segments.
+                if (table.segments.size() >= std::numeric_limits<uint32_t>::max())
+                    throw InputError("the curves have more than " +
+                                     std::to_string(std::numeric_limits<uint32_t>::max() - 1) +
+                                     " segments, more than the curve report handles");
+                s.index = static_cast<uint32_t>(table.segments.size());
+                info.length += s.length;
+                table.segments.push_back(s);
+            }
+            table.curves.push_back(info);
+        }
+    }
+    return table;
+}
+
+std::string formatPercent(double fraction) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.1f%%", 100 * fraction);
+    return buf;
+}
+
+std::string formatShort(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g", v);
+    return buf;
+}
+
+nlohmann::json finiteOrNull(double v) {
+    return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
+
+nlohmann::json vecJson(const Vec3& v) { return {v.x, v.y, v.z}; }
+
+}  // namespace
+
+void checkOverlapRadius(double radius, const std::string& label) {
+    if (!(std::isfinite(radius) && radius > 0))
+        throw InputError(label + " " + formatNumber(radius) +
+                         " is out of range: allowed finite and > 0");
+}
+
+CurveReport curveReport(const CurveSet& set, std::optional<double> radius) {
+    if (radius) checkOverlapRadius(*radius, "radius");
+    const CurveTable table = curveTable({{&set, 1.0, radius.value_or(0.0)}});
+    CurveReport report;
+    report.curves = set.curves.size();
+    report.points = set.pointCount();
+    for (const Curve& c : set.curves) report.closedCurves += c.closed ? 1 : 0;
+    if (!set.curves.empty()) report.basis = set.curves.front().basis;
+    report.bounds = bounds(set);
+    report.segments = table.segments.size();
+    report.segmentLengthMin = table.segments.empty() ? 0 : kInf;
+    for (const Segment& s : table.segments) {
+        report.totalLength += s.length;
+        report.degenerateSegments += s.length == 0 ? 1 : 0;
+        report.segmentLengthMin = std::min(report.segmentLengthMin, s.length);
+        report.segmentLengthMax = std::max(report.segmentLengthMax, s.length);
+    }
+    if (!table.segments.empty())
+        report.segmentLengthMean = report.totalLength / static_cast<double>(table.segments.size());
+
+    const SegmentTree tree(table.segments, table.curves);
+    const ContactSearch search(tree, -1);
+    if (search.found()) {
+        CurveContact& c = report.closest.emplace();
+        c.distance = search.distance();
+        c.curveA = table.curves[search.segmentA().curve].local;
+        c.curveB = table.curves[search.segmentB().curve].local;
+        c.pointA = search.points().p;
+        c.pointB = search.points().q;
+    }
+    if (radius) {
+        OverlapSums sums;
+        std::vector<char> curveOverlaps(table.curves.size(), 0);
+        OverlapSampler sampler(tree);
+        for (const Segment& s : tree.segments()) sampler.addSegment(s, sums, curveOverlaps);
+        CurveOverlap& o = report.overlap.emplace();
+        o.radius = *radius;
+        o.fraction = overlapFraction(sums);
+        o.maxDepth = sums.maxDepth;
+        o.curvesOverlapping =
+            static_cast<size_t>(std::count(curveOverlaps.begin(), curveOverlaps.end(), char{1}));
+    }
+    return report;
+}
+
+std::vector<YarnOverlap> yarnOverlaps(const std::vector<YarnCurves>& yarns) {
+    for (const YarnCurves& y : yarns)
+        if (!(std::isfinite(y.radius) && y.radius > 0))
+            throw std::invalid_argument("yarnOverlaps: radius " + formatNumber(y.radius));
+    const CurveTable table = curveTable(yarns);
+    const SegmentTree tree(table.segments, table.curves);
+    std::vector<OverlapSums> sums(yarns.size());
+    std::vector<char> curveOverlaps(table.curves.size(), 0);
+    OverlapSampler sampler(tree);
+    for (const Segment& s : tree.segments())
+        sampler.addSegment(s, sums[table.curves[s.curve].yarn], curveOverlaps);
+    std::vector<YarnOverlap> result(yarns.size());
+    for (size_t y = 0; y < yarns.size(); ++y) {
+        YarnOverlap& o = result[y];
+        o.radius = yarns[y].radius;
+        o.fraction = overlapFraction(sums[y]);
+        o.maxDepth = sums[y].maxDepth;
+        // One entry: every contact involves it.
+        const ContactSearch search(tree, yarns.size() == 1 ? -1 : static_cast<int64_t>(y));
+        o.largestRadiusWithoutOverlap = 0.5 * search.distance();
+    }
+    return result;
+}
+
+nlohmann::json toJson(const CurveReport& r) {
+    nlohmann::json j = {
+        {"curves", r.curves},
+        {"points", r.points},
+        {"closed_curves", r.closedCurves},
+        {"basis", r.basis == CurveBasis::CatmullRom ? "catmull_rom" : "polyline"},
+        {"segments", r.segments},
+        {"degenerate_segments", r.degenerateSegments},
+        {"total_length", r.totalLength},
+        {"bounds", {{"min", vecJson(r.bounds.lo)}, {"max", vecJson(r.bounds.hi)}}},
+        {"segment_length",
+         {{"min", r.segmentLengthMin}, {"mean", r.segmentLengthMean}, {"max", r.segmentLengthMax}}},
+        {"min_distance", finiteOrNull(r.minDistance())},
+        {"closest", nullptr},
+        {"largest_radius_without_overlap", finiteOrNull(r.largestRadiusWithoutOverlap())},
+        {"overlap", nullptr},
+    };
+    if (r.closest)
+        j["closest"] = {{"curves", {r.closest->curveA, r.closest->curveB}},
+                        {"points", {vecJson(r.closest->pointA), vecJson(r.closest->pointB)}}};
+    if (r.overlap)
+        j["overlap"] = {{"radius", r.overlap->radius},
+                        {"fraction", r.overlap->fraction},
+                        {"max_overlap", r.overlap->maxDepth},
+                        {"curves_overlapping", r.overlap->curvesOverlapping}};
+    return j;
+}
+
+std::string yarnOverlapWarning(const std::string& scene, size_t yarn, const std::string& curves,
+                               const YarnOverlap& o) {
+    if (!o.overlaps()) return "";
+    char depth[32];
+    std::snprintf(depth, sizeof depth, "%.0f%%", 100 * o.maxDepth);
+    return (scene.empty() ? std::string("scene") : scene) + ": yarns[" + std::to_string(yarn) +
+           "] (" + curves + "): " + formatPercent(o.fraction) +
+           " of the yarn length lies inside other yarns (up to " + depth +
+           " of the diameter) at radius " + formatNumber(o.radius) +
+           "; the largest radius without overlap is " +
+           (std::isfinite(o.largestRadiusWithoutOverlap)
+                ? formatShort(o.largestRadiusWithoutOverlap)
+                : std::string("unbounded"));
+}
+
+nlohmann::json toJson(const YarnOverlap& o, size_t yarn, const std::string& curves) {
+    return {{"yarn", yarn},
+            {"curves", curves},
+            {"radius", o.radius},
+            {"overlap_fraction", o.fraction},
+            {"max_overlap", o.maxDepth},
+            {"largest_radius_without_overlap", finiteOrNull(o.largestRadiusWithoutOverlap)}};
+}
+
+}  // namespace weft::render

@@ -1,0 +1,169 @@
+// weft/render/curve_report.h — what a set of yarn curves is, and whether its
+// yarns interpenetrate at a radius (issue 22; `weft curves info`, the overlap
+// warning of `weft render` and `weft scene`, docs/curves.md).
+//
+// Imported yarn-level models rarely say which yarn radius they were made for.
+// This file measures the curves themselves: counts, lengths, the box, the
+// segment lengths, the closest approach of two yarns and, for a radius R, how
+// much of the yarn length lies inside another yarn.
+//
+// Geometry. Every curve is analysed as its polyline: the straight segments
+// between consecutive control points, plus the closing segment of a closed
+// curve. A Catmull-Rom curve (BCC "C0") is analysed on its control polygon,
+// not on the spline (the spline passes through the control points and stays
+// close to the polygon where the points are dense; docs/curves.md). Arc
+// positions are measured along that polyline.
+//
+// Contact. Two points p (curve i, arc position a) and q (curve j, arc position
+// b) are in contact when i != j, or when i == j and they are farther apart
+// along the curve than twice their distance,
+//     sep(a, b) > 2 |p - q|,   sep = |a - b|, or min(|a - b|, L - |a - b|)
+//                              on a closed curve of length L (the shorter way),
+// i.e. with R = |p - q| / 2 they are more than 4 R apart along the curve: a
+// few radii. Neighbouring points of one smooth curve are never in contact
+// (there sep ~ |p - q|); a loop that comes back to touch itself is. For two
+// segments the rule is evaluated at their closest points (s, t of
+// closestPointsOnSegments).
+//   minDistance = the smallest |p - q| over contact pairs;
+//   largestRadiusWithoutOverlap = minDistance / 2: for every R up to it no
+//   contact pair (at radius R: other curve, or same curve more than 4 R apart
+//   along it) is closer than 2 R, and just above it the closest pair
+//   overlaps. (Because the same-curve rule depends on R, a larger radius can
+//   be free of overlap again, e.g. when a tight hairpin drops out of the
+//   4 R window; the value is the end of the first overlap-free interval.)
+//   Infinite when there is no contact pair at all (one straight line, one
+//   plain circle: on a circle sep / |p - q| <= pi / 2 < 2).
+// The search is exact and uses a bounding volume hierarchy over the segments,
+// traversed against itself; a pair of nodes is skipped when its boxes are
+// farther apart than the best pair so far, or when both hold one stretch of
+// the same curve that is too short along the curve for any contact
+// (max sep <= 2 x box distance), so that one long yarn with no contact costs
+// O(n log n), not all pairs.
+//
+// Overlap at radius R. Each segment is sampled at spacing <= R / 4 (at least
+// both ends; at most kMaxSamplesPerSegment intervals), each sample weighted by
+// the length it stands for (trapezoid weights). For a sample x the partner
+// segments are those of other curves and those of its own curve whose closest
+// point to x is more than 4 R away along the curve; with d the distance from
+// x to the nearest partner the interpenetration is 2 R - d, and x overlaps
+// when (2 R - d) / (2 R) > kOverlapTolerance. Reported: the overlapping
+// length over the total length, the largest (2 R - d) / (2 R) (a fraction of
+// the diameter: 1 = the centre lines cross), and how many curves overlap.
+// For the yarns of a scene (yarnOverlaps) the radii may differ: x on a yarn of
+// radius R_i against a partner of radius R_j interpenetrates by
+// R_i + R_j - d, reported as a fraction of x's diameter 2 R_i, and pairs
+// across yarn entries count as well.
+#pragma once
+
+#include <cstddef>
+#include <limits>
+#include <nlohmann/json_fwd.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "weft/core/vec.h"
+#include "weft/render/curves.h"
+
+namespace weft::render {
+
+// Interpenetration below 2% of the diameter is not counted as overlap: curves
+// written with float32 coordinates, or yarns meant to touch (the generated
+// weave and knit leave 1-2% clearance, docs/scenes.md), stay silent.
+inline constexpr double kOverlapTolerance = 0.02;
+// A segment longer than this many times R / 4 is sampled more coarsely, which
+// bounds the work for a radius far below the segment lengths.
+inline constexpr int kMaxSamplesPerSegment = 1024;
+
+// Closest points of segments [p1, q1] and [p2, q2]: p = p1 + s (q1 - p1),
+// q = p2 + t (q2 - p2), s and t in [0, 1] (Ericson, Real-Time Collision
+// Detection, 5.1.9; parallel segments take s = 0 unless clamped). Exposed for
+// the tests' brute-force searches.
+struct SegmentClosestPoints {
+    double s = 0, t = 0;
+    Vec3 p, q;
+    double distance = 0;
+};
+SegmentClosestPoints closestPointsOnSegments(const Vec3& p1, const Vec3& q1, const Vec3& p2,
+                                             const Vec3& q2);
+
+// The closest contact pair of a curve set.
+struct CurveContact {
+    double distance = 0;
+    size_t curveA = 0, curveB = 0;  // curve indices, curveA <= curveB (equal: a self-contact)
+    Vec3 pointA, pointB;            // on curveA and curveB
+};
+
+// Overlap at one radius (see above).
+struct CurveOverlap {
+    double radius = 0;
+    double fraction = 0;  // overlapping length / total length, [0, 1]
+    double maxDepth = 0;  // largest interpenetration / diameter over overlapping samples
+    size_t curvesOverlapping = 0;
+};
+
+struct CurveReport {
+    size_t curves = 0, points = 0, closedCurves = 0;
+    CurveBasis basis = CurveBasis::Polyline;
+    size_t segments = 0, degenerateSegments = 0;  // degenerate: zero length
+    double totalLength = 0;
+    Bounds3 bounds;  // around the control points
+    double segmentLengthMin = 0, segmentLengthMean = 0, segmentLengthMax = 0;
+    std::optional<CurveContact> closest;  // none: no contact pair
+    std::optional<CurveOverlap> overlap;  // when a radius was given
+
+    double minDistance() const {
+        return closest ? closest->distance : std::numeric_limits<double>::infinity();
+    }
+    double largestRadiusWithoutOverlap() const { return 0.5 * minDistance(); }
+};
+
+// InputError "<label> <r> is out of range: allowed finite and > 0" unless it is.
+void checkOverlapRadius(double radius, const std::string& label);
+
+// The report of `set` (in its own units), with the overlap at `radius` when
+// given (checked by checkOverlapRadius with label "radius").
+CurveReport curveReport(const CurveSet& set, std::optional<double> radius = std::nullopt);
+
+// The report as JSON: curves, points, closed_curves, basis ("polyline",
+// "catmull_rom"), segments, degenerate_segments, total_length, bounds {min,
+// max}, segment_length {min, mean, max}, min_distance, closest {curves,
+// points} and largest_radius_without_overlap (null without a contact pair),
+// overlap {radius, fraction, max_overlap, curves_overlapping} (null without a
+// radius).
+nlohmann::json toJson(const CurveReport& report);
+
+// The yarns of a scene: each entry's curves, scaled into scene units, and its
+// radius in scene units.
+struct YarnCurves {
+    const CurveSet* curves = nullptr;
+    double scale = 1;
+    double radius = 0;  // finite, > 0
+};
+
+struct YarnOverlap {
+    double radius = 0;
+    double fraction = 0;  // of this entry's length inside any yarn (its own included)
+    double maxDepth = 0;  // fraction of this entry's diameter
+    // Half the smallest contact distance involving this entry (infinite: none).
+    double largestRadiusWithoutOverlap = std::numeric_limits<double>::infinity();
+
+    bool overlaps() const { return fraction > 0; }
+};
+
+// Overlap of every entry against all of them (one result per entry, in order).
+std::vector<YarnOverlap> yarnOverlaps(const std::vector<YarnCurves>& yarns);
+
+// The warning for one scene entry, without the "weft: warning: " prefix, or ""
+// when it does not overlap:
+//   <scene>: yarns[i] (<curves>): 24.7% of the yarn length lies inside other
+//   yarns (up to 70% of the diameter) at radius 0.25; the largest radius
+//   without overlap is 0.075
+std::string yarnOverlapWarning(const std::string& scene, size_t yarn, const std::string& curves,
+                               const YarnOverlap& overlap);
+
+// {"yarn": i, "curves": path, "radius", "overlap_fraction", "max_overlap",
+//  "largest_radius_without_overlap" (null when infinite)}.
+nlohmann::json toJson(const YarnOverlap& overlap, size_t yarn, const std::string& curves);
+
+}  // namespace weft::render

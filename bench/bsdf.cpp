@@ -198,11 +198,10 @@ void YarnSample(benchmark::State& state) {
 // energy guard; sample draws its rejection steps from one running generator,
 // as a path's own.
 // Argument 0: eval, 1: evalPdf, 2: sample; argument 1: tabulated (1) or fitted (0) sampling.
-void YarnPrepared(benchmark::State& state) {
-    const YarnBsdf& bsdf = state.range(1) != 0 ? guardedBsdf() : fittedBsdf();
+// eval (what 0), evalPdf (1) or sample (2) of `bsdf` on the prepared pairs.
+void preparedCalls(benchmark::State& state, const Bsdf& bsdf, int64_t what) {
     const std::vector<BsdfIncident>& in = preparedIncidents(bsdf);
     const Pairs& p = pairs();
-    const int64_t what = state.range(0);
     Rng rng(3, 4);
     size_t k = 0;
     for (auto _ : state) {
@@ -217,25 +216,12 @@ void YarnPrepared(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations());
 }
 
-// The same three calls of the dual-scattering baseline on a prepared incident.
-void DualPrepared(benchmark::State& state) {
-    const DualScatteringBsdf& bsdf = dualBsdf();
-    const std::vector<BsdfIncident>& in = preparedIncidents(bsdf);
-    const Pairs& p = pairs();
-    const int64_t what = state.range(0);
-    Rng rng(3, 4);
-    size_t k = 0;
-    for (auto _ : state) {
-        if (what == 0)
-            benchmark::DoNotOptimize(bsdf.eval(in[k], p.wo[k]));
-        else if (what == 1)
-            benchmark::DoNotOptimize(bsdf.evalPdf(in[k], p.wo[k]));
-        else
-            benchmark::DoNotOptimize(bsdf.sample(in[k], p.u[k], rng));
-        k = (k + 1) % kPairs;
-    }
-    state.SetItemsProcessed(state.iterations());
+void YarnPrepared(benchmark::State& state) {
+    preparedCalls(state, state.range(1) != 0 ? guardedBsdf() : fittedBsdf(), state.range(0));
 }
+
+// The same three calls of the dual-scattering baseline on a prepared incident.
+void DualPrepared(benchmark::State& state) { preparedCalls(state, dualBsdf(), state.range(0)); }
 
 // FixedMlp::forward (argument 1: the SIMD kernel) or forwardScalar (0) on
 // float inputs: the network alone, without the conversion from Vec3.

@@ -28,6 +28,8 @@ import subprocess
 import sys
 import tempfile
 
+from render import write_results
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SHARED = os.path.join(ROOT, "..", "shared", "data")
 SWATCHES = [("knit", "knit-stockinette-tiny.bcc"), ("woven", "woven-satin-small.bcc")]
@@ -157,14 +159,7 @@ def main():
     lines += ["", "Yarn radius (scene units): %s." % ", ".join(
         "%s %.4g" % kv for kv in radii.items()), "", "Figures:", ""] + captions
     results["radius"] = radii
-    with open(a.out + ".tmp", "w") as f:
-        f.write("\n".join(lines) + "\n")
-    os.replace(a.out + ".tmp", a.out)
-    json_out = os.path.splitext(a.out)[0] + ".json"
-    with open(json_out + ".tmp", "w") as f:
-        json.dump(results, f, indent=2)
-    os.replace(json_out + ".tmp", json_out)
-    print("\n".join(lines))
+    write_results(a.out, lines, results)
 
 
 if __name__ == "__main__":

@@ -1,4 +1,5 @@
-// weft/fit/colour_basis.h — how a ply's RDM_M changes with the fiber colour C_TT.
+// weft/fit/colour_basis.h — how a ply's RDM_M changes with the fiber colour C_TT,
+// and the colour functions (yarn/colour_basis.h) fitted to it.
 //
 // From an any-colour gather (gather/colour_paths.h), a cell's RDM_M in one
 // channel is sum_paths W0 C_TT^k = sum_k h_k exp(-k s), s = -log C_TT: the
@@ -22,51 +23,14 @@
 // same error).
 #pragma once
 
-#include <nlohmann/json.hpp>
-#include <string>
+#include <cstdint>
 #include <vector>
 
 #include "weft/gather/gather.h"
 #include "weft/gather/rdm.h"
+#include "weft/yarn/colour_basis.h"
 
 namespace weft {
-
-// The fiber colours a conditioned model covers, per channel.
-struct ColourRange {
-    double lo = 0.3, hi = 0.999;
-    // InputError naming `what` unless 0 < lo < hi <= 1.
-    void validate(const std::string& what) const;
-    double sOf(double cTT) const;  // -log(cTT), cTT clamped into [lo, hi]
-};
-
-class ColourBasis {
-  public:
-    static constexpr int kMaxFunctions = 12;
-
-    ColourBasis() = default;
-    // table[j][g]: phi_j at node g (s uniform from -log(hi) to -log(lo));
-    // table[0] must be all ones. InputError naming `source` otherwise.
-    ColourBasis(ColourRange range, std::vector<std::vector<double>> table,
-                const std::string& source = "colour basis");
-
-    const ColourRange& range() const { return range_; }
-    int functions() const { return static_cast<int>(table_.size()); }
-    int nodes() const { return table_.empty() ? 0 : static_cast<int>(table_[0].size()); }
-    const std::vector<std::vector<double>>& table() const { return table_; }
-    // s of node g.
-    double nodeS(int g) const;
-
-    // phi_0..phi_{K-1} at C_TT = cTT (clamped into the range), into phi[0..K).
-    void eval(double cTT, double* phi) const;
-
-    nlohmann::json toJson() const;
-    static ColourBasis fromJson(const nlohmann::json& j, const std::string& source);
-
-  private:
-    ColourRange range_;
-    std::vector<std::vector<double>> table_;
-    double sLo_ = 0, sStep_ = 1;
-};
 
 struct ColourBasisFit {
     ColourBasis basis;

@@ -37,36 +37,7 @@ std::vector<ColourPath> syntheticPaths(int perCell, TT&& tt) {
 
 std::vector<int64_t> counts() { return std::vector<int64_t>(kBins.incidentCount(), 1000); }
 
-TEST(ColourBasis, InterpolatesLinearlyInSAndClampsToTheRange) {
-    const ColourRange range{0.25, 1.0};
-    // Nodes at s = 0, ln 2, 2 ln 2 (C_TT = 1, 0.5, 0.25).
-    const ColourBasis basis(range, {{1, 1, 1}, {0, 2, 6}});
-    EXPECT_NEAR(basis.nodeS(1), std::log(2.0), 1e-15);
-    double phi[2];
-    basis.eval(0.5, phi);
-    EXPECT_EQ(phi[0], 1.0);
-    EXPECT_NEAR(phi[1], 2.0, 1e-12);
-    // Halfway in s between C_TT = 0.5 and 0.25: C_TT = 0.5 / sqrt(2).
-    basis.eval(0.5 / std::sqrt(2.0), phi);
-    EXPECT_NEAR(phi[1], 4.0, 1e-12);
-    basis.eval(0.1, phi);  // below the range: its end
-    EXPECT_NEAR(phi[1], 6.0, 1e-12);
-    basis.eval(1.0, phi);
-    EXPECT_NEAR(phi[1], 0.0, 1e-12);
-
-    const ColourBasis back = ColourBasis::fromJson(basis.toJson(), "model.json");
-    EXPECT_EQ(back.table(), basis.table());
-    EXPECT_EQ(back.range().lo, 0.25);
-    testing::expectInputError([&] { ColourBasis(range, {{1, 2, 1}}); }, {"constant 1"});
-    testing::expectInputError([&] { ColourBasis(range, {{1, 1}, {1, 1, 1}}); }, {"function 1"});
-    testing::expectInputError([] { ColourBasis({0.5, 0.4}, {{1, 1}}); }, {"0 < LO < HI <= 1"});
-    nlohmann::json bad = basis.toJson();
-    bad["functions"][1][2] = "x";
-    testing::expectInputError([&] { ColourBasis::fromJson(bad, "model.json"); },
-                              {"model.json", "non-number"});
-}
-
-TEST(ColourBasis, CellsOfOneTTCountNeedTwoFunctions) {
+TEST(ColourBasisFit, CellsOfOneTTCountNeedTwoFunctions) {
     // A cell whose paths all have k TT events: log V = const - k s, affine in
     // s, so the basis {1, phi_1} represents every cell exactly and phi_1 is
     // affine in s.
@@ -81,7 +52,7 @@ TEST(ColourBasis, CellsOfOneTTCountNeedTwoFunctions) {
     EXPECT_EQ(fit.rows, static_cast<int64_t>(kBins.incidentCount() * kBins.outgoingCount() * 3));
 }
 
-TEST(ColourBasis, MixedTTCountsNeedMoreFunctionsAndTheErrorFalls) {
+TEST(ColourBasisFit, MixedTTCountsNeedMoreFunctionsAndTheErrorFalls) {
     // Each cell mixes short (k = 1) and long (k = 15 .. 40) paths in its own
     // proportion: log V is curved in s, and no basis of two functions fits it.
     const auto paths = syntheticPaths(12, [](Rng& rng, size_t cell) {
@@ -102,7 +73,7 @@ TEST(ColourBasis, MixedTTCountsNeedMoreFunctionsAndTheErrorFalls) {
     EXPECT_LT(previous, 2e-2);
 }
 
-TEST(ColourBasis, TooFewPathsOrBadSettingsAreRefused) {
+TEST(ColourBasisFit, TooFewPathsOrBadSettingsAreRefused) {
     const auto few = syntheticPaths(1, [](Rng&, size_t) { return 2; });
     testing::expectInputError(
         [&] {

@@ -59,4 +59,26 @@ std::vector<float> modelMultipleScatteringMap(const YarnModel& model, const RdmB
     return map;
 }
 
+std::vector<float> conditionedMultipleScatteringMap(const NetworkWeights& mNet,
+                                                    const ColourBasis& basis, const RdmBins& bins,
+                                                    const Rgb& cTT) {
+    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
+    const Mlp<float> net(mNet);
+    std::vector<Vec3> outgoing(nOut);
+    for (size_t o = 0; o < nOut; ++o) outgoing[o] = bins.outgoingCentre(o);
+    std::vector<float> map(nIn * nOut * 3);
+    tbb::parallel_for(size_t(0), nIn, [&](size_t i) {
+        Mlp<float>::Matrix x(6, static_cast<Eigen::Index>(nOut));
+        const Vec3 wi = bins.incidentCentre(i);
+        for (size_t o = 0; o < nOut; ++o)
+            setInputColumn(x, static_cast<Eigen::Index>(o), wi, outgoing[o]);
+        const Mlp<float>::Matrix y = net.forward(x);
+        for (size_t o = 0; o < nOut; ++o) {
+            const Rgb m = conditionedM(y.col(static_cast<Eigen::Index>(o)).data(), basis, cTT);
+            for (int c = 0; c < 3; ++c) map[(i * nOut + o) * 3 + c] = static_cast<float>(m[c]);
+        }
+    });
+    return map;
+}
+
 }  // namespace weft

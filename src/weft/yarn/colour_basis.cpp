@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "weft/core/error.h"
 #include "weft/core/json_reader.h"
@@ -79,6 +80,34 @@ ColourBasis ColourBasis::fromJson(const nlohmann::json& j, const std::string& so
         table.push_back(std::move(values));
     }
     return ColourBasis({range[0], range[1]}, std::move(table), source);
+}
+
+NetworkWeights foldColourIntoNetwork(const NetworkWeights& conditioned, const ColourBasis& basis,
+                                     const Rgb& colour) {
+    const int functions = basis.functions();
+    if (conditioned.layers.empty() || conditioned.outputs() != 3 * functions ||
+        conditioned.output != OutputFunction::Identity)
+        throw std::logic_error("foldColourIntoNetwork: not a conditioned network of the basis");
+    NetworkWeights folded = conditioned;
+    const NetworkLayer& last = conditioned.layers.back();
+    NetworkLayer& out = folded.layers.back();
+    out.out = 3;
+    out.weight.assign(static_cast<size_t>(3) * last.in, 0.0f);
+    out.bias.assign(3, 0.0f);
+    double phi[ColourBasis::kMaxFunctions];
+    for (int c = 0; c < 3; ++c) {
+        basis.eval(colour[c], phi);
+        for (int i = 0; i < last.in; ++i) {
+            double w = 0;
+            for (int j = 0; j < functions; ++j) w += phi[j] * last.w(3 * j + c, i);
+            out.weight[static_cast<size_t>(c) * last.in + i] = static_cast<float>(w);
+        }
+        double b = 0;
+        for (int j = 0; j < functions; ++j) b += phi[j] * last.bias[3 * j + c];
+        out.bias[c] = static_cast<float>(b);
+    }
+    folded.output = OutputFunction::Exp;
+    return folded;
 }
 
 Rgb conditionedM(const float* coefficients, const ColourBasis& basis, const Rgb& colour) {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "weft/core/rgb.h"
+#include "weft/yarn/network.h"
 
 namespace weft {
 
@@ -54,6 +55,12 @@ class ColourBasis {
     std::vector<std::vector<double>> table_;
     double sLo_ = 0, sStep_ = 1;
 };
+
+// The ordinary M network (3 outputs, exp output) of a conditioned one (3K
+// outputs, identity) at one colour: the last layer's rows of each channel
+// combined with phi_j(C_TT,c). Its output equals conditionedM for every input.
+NetworkWeights foldColourIntoNetwork(const NetworkWeights& conditioned, const ColourBasis& basis,
+                                     const Rgb& colour);
 
 // M of one direction pair for `colour`: the 3K coefficients of the network
 // (index 3 j + c) combined with the basis per channel, then exp.

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "weft/core/error.h"
+#include "weft/core/limits.h"
 #include "weft/core/file.h"
 #include "weft/core/json_file.h"
 #include "weft/core/rng.h"
@@ -617,8 +618,25 @@ py::dict lossDict(const LossCurve& c) {
 
 py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object& config,
                uint64_t seed, const py::object& threads, const std::string& ablationName,
-               const py::object& reference, const py::object& report, bool quiet) {
+               const py::object& reference, const py::object& report,
+               const py::object& colourRange, int colourFunctions, bool quiet) {
     FitConfig c = fitConfigOf(config);
+    std::unique_ptr<ColourFitOptions> colour;
+    if (!colourRange.is_none()) {
+        std::pair<double, double> range;
+        try {
+            range = colourRange.cast<std::pair<double, double>>();
+        } catch (const py::cast_error&) {
+            throw InputError("colour_range: expected a pair (lo, hi) with 0 < lo < hi <= 1");
+        }
+        colour = std::make_unique<ColourFitOptions>();
+        colour->range = {range.first, range.second};
+        colour->range.validate("colour_range");
+        checkRange("colour_functions =", colourFunctions, 2, ColourBasis::kMaxFunctions);
+        colour->functions = colourFunctions;
+        if (ablationOf(ablationName) != YarnAblation::None)
+            throw InputError("colour_range cannot be combined with an ablation");
+    }
     if (!threads.is_none()) c.threads = threads.cast<int>();
     if (c.threads < 0 || c.threads > 1024)
         throw InputError("threads = " + std::to_string(c.threads) +
@@ -641,7 +659,12 @@ py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object
         const RdmData rdm = loadRdm(rdmDir);
         std::unique_ptr<RdmData> ref;
         if (!referenceDir.empty()) ref = std::make_unique<RdmData>(loadRdm(referenceDir));
-        result = fitYarnModel(rdm, c, seed, quiet, ablation);
+        std::vector<ColourPath> colourPaths;
+        if (colour) {
+            colourPaths = loadColourPaths(rdmDir);
+            colour->paths = &colourPaths;
+        }
+        result = fitYarnModel(rdm, c, seed, quiet, ablation, colour.get());
         if (!outPath.empty()) saveYarnModel(result->model, outPath);
         if (!reportDir.empty()) {
             if (result->model.ablation == YarnAblation::None) {
@@ -669,6 +692,7 @@ py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object
     summary["t_loss"] = lossDict(r.tLoss);
     summary["m_loss"] = lossDict(r.mLoss);
     summary["calibration"] = pyFromJson(r.calibration);
+    summary["colour"] = pyFromJson(r.colour);
     summary["out"] = outPath.empty() ? py::object(py::none()) : py::object(py::str(outPath));
     summary["report"] = reportDir.empty() ? py::object(py::none()) : py::object(py::str(reportDir));
     py::dict d;
@@ -978,8 +1002,12 @@ PYBIND11_MODULE(weft, m) {
     m.def("fit", &pyFit, py::arg("rdm"), py::kw_only(), py::arg("out") = py::none(),
           py::arg("config") = py::none(), py::arg("seed") = 0, py::arg("threads") = py::none(),
           py::arg("ablation") = "none", py::arg("reference") = py::none(),
-          py::arg("report") = py::none(), py::arg("quiet") = true,
-          "`weft fit`: fits a YarnModel to a gather folder; returns {model, report}.");
+          py::arg("report") = py::none(), py::arg("colour_range") = py::none(),
+          py::arg("colour_functions") = 6, py::arg("quiet") = true,
+          "`weft fit`: fits a YarnModel to a gather folder; returns {model, report}. "
+          "colour_range=(lo, hi): `weft fit --colour-range`, a model for every C_TT in the "
+          "range from a gather made with any_colour=True (colour_functions: K, 2..12); "
+          "report['colour'] holds its errors by colour.");
 
     m.def("curves_info", &pyCurvesInfo, py::arg("path"), py::arg("radius") = py::none(),
           "`weft curves info`: the report of a curve file (.bcc, .txt, .obj) as a dict: counts, "

@@ -154,3 +154,17 @@ def test_any_colour_gather_and_recolour(cli, tmp_path):
     with pytest.raises(ValueError, match="not an any-colour gather"):
         weft.gather(**args, out=tmp_path / "plain")
         weft.gather_recolour(tmp_path / "plain", c_tt=[0.5, 0.5, 0.5])
+
+
+def test_colour_range_fit(tmp_path):
+    weft.gather(preset="fleece", paths=6000, bins=[4, 8, 6, 12], seed=1, any_colour=True,
+                out=tmp_path / "ac")
+    fitted = weft.fit(tmp_path / "ac", config=SHORT_FIT, colour_range=(0.3, 0.999),
+                      colour_functions=3, out=tmp_path / "any.json")
+    colour = fitted["report"]["colour"]
+    assert colour["functions"] == 3 and len(colour["m_rel_l2_by_colour"]) == 8
+    assert json.load(open(tmp_path / "any.json"))["version"] == 2
+    with pytest.raises(ValueError, match="colour_range"):
+        weft.fit(tmp_path / "ac", config=SHORT_FIT, colour_range=(0.5, 0.4))
+    with pytest.raises(ValueError, match="colour_functions"):
+        weft.fit(tmp_path / "ac", config=SHORT_FIT, colour_range=(0.3, 0.9), colour_functions=1)

@@ -40,7 +40,10 @@ std::vector<float> modelReflectionMap(const YarnModel& model, const RdmBins& bin
 
 std::vector<float> modelMultipleScatteringMap(const YarnModel& model, const RdmBins& bins) {
     const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
-    const Mlp<float> net(model.mNet);
+    // A conditioned model at its own colour (yarn_model.h).
+    const Mlp<float> net(model.colour
+                             ? foldColourIntoNetwork(model.mNet, *model.colour, model.fiber.cTT)
+                             : model.mNet);
     std::vector<Vec3> outgoing(nOut);
     for (size_t o = 0; o < nOut; ++o) outgoing[o] = bins.outgoingCentre(o);
     std::vector<float> map(nIn * nOut * 3);

@@ -143,16 +143,17 @@ std::vector<ColourPath> readColourPaths(const std::string& dir, const GatherOpti
     return paths;
 }
 
-RecolouredGather recolourGather(const std::string& dir, const Rgb& cTT) {
-    const auto start = std::chrono::steady_clock::now();
+namespace {
+
+// The options of the any-colour gather `dir` from its meta.json.
+GatherOptions anyColourGatherOptions(const std::string& dir, nlohmann::json* metaOut) {
     const std::string metaPath = inDir(dir, "meta.json");
-    const nlohmann::json meta = readJsonFile(metaPath);
+    nlohmann::json meta = readJsonFile(metaPath);
     const JsonObjectReader r(meta, metaPath);
     const std::string format = r.string("format");
     if (format == "weft-gather-part")
-        throw InputError(metaPath +
-                         ": one shard of a gather: merge all its shards with "
-                         "`weft gather merge PART... --out DIR` first");
+        throw InputError(metaPath + ": one shard of a gather: merge all its shards with "
+                                    "`weft gather merge PART... --out DIR` first");
     if (format != "weft-gather")
         throw InputError(metaPath + ": not a weft gather (\"format\" is \"" + format + "\")");
     r.integer("version", {1, 1, " (the gather format this weft reads)"});
@@ -161,6 +162,23 @@ RecolouredGather recolourGather(const std::string& dir, const Rgb& cTT) {
         throw InputError(metaPath +
                          ": not an any-colour gather (\"any_colour\" is false or missing): its "
                          "paths were not recorded; gather again with weft gather --any-colour");
+    if (metaOut) *metaOut = std::move(meta);
+    return o;
+}
+
+}  // namespace
+
+std::vector<ColourPath> loadColourPaths(const std::string& dir, GatherOptions* options) {
+    const GatherOptions o = anyColourGatherOptions(dir, nullptr);
+    if (options) *options = o;
+    return readColourPaths(dir, o, o.paths);
+}
+
+RecolouredGather recolourGather(const std::string& dir, const Rgb& cTT) {
+    const auto start = std::chrono::steady_clock::now();
+    nlohmann::json meta;
+    GatherOptions o = anyColourGatherOptions(dir, &meta);
+    const JsonObjectReader r(meta, inDir(dir, "meta.json"));
     RecolouredGather result;
     result.gatheredCTT = o.fiber.cTT;
     GatherSums& sums = result.sums;

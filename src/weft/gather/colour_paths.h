@@ -82,6 +82,11 @@ void writeColourPaths(const std::string& dir, const std::vector<ColourPath>& pat
 std::vector<ColourPath> readColourPaths(const std::string& dir, const GatherOptions& options,
                                         int64_t maxRows);
 
+// The recorded paths of the any-colour gather directory `dir`, and its
+// options; InputError naming meta.json when the gather is not one (made
+// without --any-colour, or a shard), or naming the file of a damaged record.
+std::vector<ColourPath> loadColourPaths(const std::string& dir, GatherOptions* options = nullptr);
+
 struct RecolouredGather {
     GatherSums sums;
     GatherOptions options;  // the gather's, with fiber.cTT the new colour and anyColour false

@@ -6,6 +6,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/json_reader.h"
+#include "weft/core/text_parse.h"
 
 namespace weft {
 
@@ -13,6 +14,18 @@ void ColourRange::validate(const std::string& what) const {
     if (!(lo > 0 && lo < hi && hi <= 1))
         throw InputError(what + ": " + std::to_string(lo) + "," + std::to_string(hi) +
                          " is not a colour range LO,HI with 0 < LO < HI <= 1");
+}
+
+ColourRange parseColourRange(const std::string& text, const std::string& flag) {
+    const size_t comma = text.find(',');
+    ColourRange range{0, 0};
+    if (comma == std::string::npos ||
+        !parseNumber(trim(std::string_view(text).substr(0, comma)), &range.lo) ||
+        !parseNumber(trim(std::string_view(text).substr(comma + 1)), &range.hi))
+        throw InputError(flag + ": expected LO,HI with 0 < LO < HI <= 1, got \"" +
+                         printable(text) + "\"");
+    range.validate(flag);
+    return range;
 }
 
 double ColourRange::sOf(double cTT) const { return -std::log(std::clamp(cTT, lo, hi)); }

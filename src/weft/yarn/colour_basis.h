@@ -27,6 +27,9 @@ struct ColourRange {
     double sOf(double cTT) const;  // -log(cTT), cTT clamped into [lo, hi]
 };
 
+// "LO,HI" with 0 < LO < HI <= 1; InputError naming `flag` otherwise.
+ColourRange parseColourRange(const std::string& text, const std::string& flag);
+
 class ColourBasis {
   public:
     static constexpr int kMaxFunctions = 12;

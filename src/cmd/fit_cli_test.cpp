@@ -52,6 +52,12 @@ TEST_F(FitCliTest, ColourRangeFitsAModelForAnyColour) {
     EXPECT_EQ(nlohmann::json::parse(readFile(path("any.json"))).at("version"), 2);
     // It renders, checks and makes scenes like any model (at its gathered colour).
     ASSERT_EQ(run("yarn check --model any.json --rdm ac --out check").status, 0);
+    // At another colour, against the RDM of that colour from the same walks.
+    ASSERT_EQ(run("gather recolour ac --c-tt 0.5,0.6,0.7 --out grey").status, 0);
+    ASSERT_EQ(run("yarn check --model any.json --rdm grey --c-tt 0.5,0.6,0.7 --out check2").status,
+              0);
+    expectUserError(run("yarn check --model any.json --rdm grey --c-tt 0.5 --out check3"),
+                    {"--c-tt", "R,G,B"});
     ASSERT_EQ(run("scene closeup --model any.json --width 12 --height 8 --out sc").status, 0);
     ASSERT_EQ(run("render sc/scene.json --spp 2 --quiet --out r.exr").status, 0);
 

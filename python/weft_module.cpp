@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "weft/core/error.h"
+#include "weft/core/limits.h"
 #include "weft/core/file.h"
 #include "weft/core/json_file.h"
 #include "weft/core/rng.h"
@@ -37,6 +38,7 @@
 #include "weft/fiber/fiber_params.h"
 #include "weft/fit/fit.h"
 #include "weft/yarn/yarn_model.h"
+#include "weft/gather/colour_paths.h"
 #include "weft/gather/gather.h"
 #include "weft/gather/gather_merge.h"
 #include "weft/gather/rdm_io.h"
@@ -449,7 +451,7 @@ py::dict pyGather(const py::object& preset, const py::object& params, const py::
                   const py::object& density, const py::object& twist, int64_t paths, uint64_t seed,
                   const py::object& plySeed, const std::vector<int>& bins, int maxDepth,
                   int threads, int segmentsPerTwist, const py::object& shard,
-                  const py::object& out, bool quiet) {
+                  bool anyColour, const py::object& out, bool quiet) {
     GatherOptions o;
     const bool geometry = !fibers.is_none() || !density.is_none() || !twist.is_none();
     if (!preset.is_none()) {
@@ -481,6 +483,7 @@ py::dict pyGather(const py::object& preset, const py::object& params, const py::
     o.threads = threads;
     o.segmentsPerTwist = segmentsPerTwist;
     o.quiet = quiet;
+    o.anyColour = anyColour;
     if (!shard.is_none()) o.shard = shardOf(shard);
     o.validate();
     std::unique_ptr<TempDirCommit> dir;
@@ -526,11 +529,44 @@ py::dict gatherMerge(const std::vector<py::object>& parts, const py::object& out
     {
         py::gil_scoped_release release;
         MergedGather m = mergeGatherParts(dirs);
-        r = normaliseGather(m.sums, m.options, m.shards);
+        r = normaliseGather(std::move(m.sums), m.options, m.shards);
         o = m.options;
         if (dir) writeGather(r, o, *dir);
     }
     return gatherDict(r, o, outPath);
+}
+
+py::dict gatherRecolour(const py::object& gather, const std::vector<double>& cTT,
+                        const py::object& out) {
+    const std::string dir = pathOf(gather, "gather");
+    if (cTT.size() != 3)
+        throw InputError("c_tt: expected three values (r, g, b) in [0, 1], got " +
+                         std::to_string(cTT.size()));
+    const Rgb colour(cTT[0], cTT[1], cTT[2]);
+    std::unique_ptr<TempDirCommit> target;
+    std::string outPath;
+    if (!out.is_none()) {
+        outPath = pathOf(out, "out");
+        checkOutputsSpareInputs({}, {}, {{"gather", dir}}, {{"out", outPath}});
+        target = std::make_unique<TempDirCommit>(outPath);
+    }
+    GatherResult r;
+    GatherOptions o;
+    json source;
+    {
+        py::gil_scoped_release release;
+        RecolouredGather g = recolourGather(dir, colour);
+        o = g.options;
+        source = {{"recoloured_from",
+                   {{"gather", dir},
+                    {"c_tt", {g.gatheredCTT.r, g.gatheredCTT.g, g.gatheredCTT.b}}}}};
+        r = normaliseGather(std::move(g.sums), o);
+        if (target) writeGather(r, o, *target, source);
+    }
+    py::dict d = gatherDict(r, o, outPath);
+    py::dict stats = d["stats"];
+    stats["recoloured_from"] = pyFromJson(source.at("recoloured_from"));
+    return d;
 }
 
 py::dict gatherDict(const GatherResult& r, const GatherOptions& o, const std::string& outPath) {
@@ -543,6 +579,13 @@ py::dict gatherDict(const GatherResult& r, const GatherOptions& o, const std::st
     d["rdm_m"] = ndarray(r.rdmM, {ti, pi, to, po, 3});
     d["truncated"] = ndarray(r.truncated, {ti, pi, 3});
     d["depth"] = ndarray(r.depth, {static_cast<py::ssize_t>(r.depth.size())});
+    if (o.anyColour) {
+        const ColourPathColumns c = colourPathColumns(r.colourPaths);
+        const auto n = static_cast<py::ssize_t>(r.colourPaths.size());
+        d["paths_bins"] = ndarray(c.bins, {n, 3});
+        d["paths_kind"] = ndarray(c.kinds, {n});
+        d["paths_weight"] = ndarray(c.weights, {n, 3});
+    }
     // The gather folder's meta.json, and where it was written (None: nowhere).
     json stats = gatherMetadata(r, o);
     stats["out"] = outPath.empty() ? json() : json(outPath);
@@ -575,8 +618,25 @@ py::dict lossDict(const LossCurve& c) {
 
 py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object& config,
                uint64_t seed, const py::object& threads, const std::string& ablationName,
-               const py::object& reference, const py::object& report, bool quiet) {
+               const py::object& reference, const py::object& report,
+               const py::object& colourRange, int colourFunctions, bool quiet) {
     FitConfig c = fitConfigOf(config);
+    std::unique_ptr<ColourFitOptions> colour;
+    if (!colourRange.is_none()) {
+        std::pair<double, double> range;
+        try {
+            range = colourRange.cast<std::pair<double, double>>();
+        } catch (const py::cast_error&) {
+            throw InputError("colour_range: expected a pair (lo, hi) with 0 < lo < hi <= 1");
+        }
+        colour = std::make_unique<ColourFitOptions>();
+        colour->range = {range.first, range.second};
+        colour->range.validate("colour_range");
+        checkRange("colour_functions =", colourFunctions, 2, ColourBasis::kMaxFunctions);
+        colour->functions = colourFunctions;
+        if (ablationOf(ablationName) != YarnAblation::None)
+            throw InputError("colour_range cannot be combined with an ablation");
+    }
     if (!threads.is_none()) c.threads = threads.cast<int>();
     if (c.threads < 0 || c.threads > 1024)
         throw InputError("threads = " + std::to_string(c.threads) +
@@ -599,7 +659,12 @@ py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object
         const RdmData rdm = loadRdm(rdmDir);
         std::unique_ptr<RdmData> ref;
         if (!referenceDir.empty()) ref = std::make_unique<RdmData>(loadRdm(referenceDir));
-        result = fitYarnModel(rdm, c, seed, quiet, ablation);
+        std::vector<ColourPath> colourPaths;
+        if (colour) {
+            colourPaths = loadColourPaths(rdmDir);
+            colour->paths = &colourPaths;
+        }
+        result = fitYarnModel(rdm, c, seed, quiet, ablation, colour.get());
         if (!outPath.empty()) saveYarnModel(result->model, outPath);
         if (!reportDir.empty()) {
             if (result->model.ablation == YarnAblation::None) {
@@ -627,6 +692,7 @@ py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object
     summary["t_loss"] = lossDict(r.tLoss);
     summary["m_loss"] = lossDict(r.mLoss);
     summary["calibration"] = pyFromJson(r.calibration);
+    summary["colour"] = pyFromJson(r.colour);
     summary["out"] = outPath.empty() ? py::object(py::none()) : py::object(py::str(outPath));
     summary["report"] = reportDir.empty() ? py::object(py::none()) : py::object(py::str(reportDir));
     py::dict d;
@@ -912,11 +978,20 @@ PYBIND11_MODULE(weft, m) {
           py::arg("seed") = 0, py::arg("ply_seed") = py::none(),
           py::arg("bins") = std::vector<int>{22, 90, 45, 90}, py::arg("max_depth") = 1000,
           py::arg("threads") = 0, py::arg("segments_per_twist") = 128,
-          py::arg("shard") = py::none(), py::arg("out") = py::none(), py::arg("quiet") = true,
+          py::arg("shard") = py::none(), py::arg("any_colour") = false,
+          py::arg("out") = py::none(), py::arg("quiet") = true,
           "`weft gather`: the RDM of a ply as a dict of arrays (count, count_t, p_t, rdm_r, "
           "rdm_m, truncated, depth) and stats; out=DIR also writes the gather folder. "
           "shard=(k, n): only shard k of n of the paths, as integer sums (count, count_t, "
-          "sum_r, sum_m, sum_truncated, depth) for gather_merge; out=DIR writes the part.");
+          "sum_r, sum_m, sum_truncated, depth) for gather_merge; out=DIR writes the part. "
+          "any_colour=True: colour-blind lobe choice and the recorded paths (paths_bins, "
+          "paths_kind, paths_weight) for gather_recolour.");
+
+    m.def("gather_recolour", &gatherRecolour, py::arg("gather"), py::kw_only(), py::arg("c_tt"),
+          py::arg("out") = py::none(),
+          "`weft gather recolour`: the gather of another fiber colour c_tt=(r, g, b) from a "
+          "gather folder written with any_colour=True; returns gather()'s dict (stats has "
+          "recoloured_from); out=DIR writes the gather folder.");
 
     m.def("gather_merge", &gatherMerge, py::arg("parts"), py::kw_only(),
           py::arg("out") = py::none(),
@@ -927,8 +1002,12 @@ PYBIND11_MODULE(weft, m) {
     m.def("fit", &pyFit, py::arg("rdm"), py::kw_only(), py::arg("out") = py::none(),
           py::arg("config") = py::none(), py::arg("seed") = 0, py::arg("threads") = py::none(),
           py::arg("ablation") = "none", py::arg("reference") = py::none(),
-          py::arg("report") = py::none(), py::arg("quiet") = true,
-          "`weft fit`: fits a YarnModel to a gather folder; returns {model, report}.");
+          py::arg("report") = py::none(), py::arg("colour_range") = py::none(),
+          py::arg("colour_functions") = 6, py::arg("quiet") = true,
+          "`weft fit`: fits a YarnModel to a gather folder; returns {model, report}. "
+          "colour_range=(lo, hi): `weft fit --colour-range`, a model for every C_TT in the "
+          "range from a gather made with any_colour=True (colour_functions: K, 2..12); "
+          "report['colour'] holds its errors by colour.");
 
     m.def("curves_info", &pyCurvesInfo, py::arg("path"), py::arg("radius") = py::none(),
           "`weft curves info`: the report of a curve file (.bcc, .txt, .obj) as a dict: counts, "

@@ -112,3 +112,59 @@ def test_sharded_gather_and_render_merge(cli, tmp_path, root):
     merged_image, stats = weft.render_merge([tmp_path / "r1.exr", tmp_path / "r0.exr"])
     np.testing.assert_allclose(merged_image, image, rtol=1e-6, atol=1e-12)
     assert stats["spp"] == 4 and stats["shards"]["count"] == 2
+
+
+def test_any_colour_gather_and_recolour(cli, tmp_path):
+    args = dict(preset="fleece", paths=3000, bins=[4, 8, 6, 12], seed=2)
+    g = weft.gather(**args, any_colour=True, out=tmp_path / "ac")
+    rows = g["stats"]["colour_paths"]
+    assert g["paths_bins"].shape == (rows, 3) and g["paths_bins"].dtype == np.int32
+    assert g["paths_kind"].shape == (rows,) and g["paths_kind"].dtype == np.uint8
+    assert g["paths_weight"].shape == (rows, 3) and g["paths_weight"].dtype == np.float32
+    # The gathered colour comes back exactly.
+    same = weft.gather_recolour(tmp_path / "ac", c_tt=[0.452, 0.725, 0.948])
+    for name in GATHER_ARRAYS:
+        np.testing.assert_array_equal(same[name], g[name], err_msg=name)
+    # Another colour, against the records summed here: sum of W0 C_TT^k per cell
+    # over count and the outgoing bin's solid angle (rdm.h).
+    c_tt = np.array([0.2, 0.4, 1.0])
+    blue = weft.gather_recolour(tmp_path / "ac", c_tt=c_tt, out=tmp_path / "blue")
+    assert blue["stats"]["recoloured_from"]["gather"] == str(tmp_path / "ac")
+    ti, pi, to, po = args["bins"]
+    bins, kind, w0 = g["paths_bins"], g["paths_kind"], g["paths_weight"].astype(np.float64)
+    weight = w0 * c_tt[None, :] ** bins[:, 2:3]
+    edges = np.linspace(0, np.pi, to + 1)
+    solid = (np.cos(edges[:-1]) - np.cos(edges[1:]))[:, None] * (2 * np.pi / po) * np.ones(po)
+    for label, name in ((0, "rdm_r"), (1, "rdm_m")):
+        sums = np.zeros((ti * pi, to * po, 3))
+        sel = kind == label
+        np.add.at(sums, (bins[sel, 0], bins[sel, 1]), weight[sel])
+        expected = sums / g["count"].reshape(-1, 1, 1) / solid.reshape(1, -1, 1)
+        np.testing.assert_allclose(blue[name].reshape(ti * pi, to * po, 3), expected,
+                                   rtol=1e-5, atol=1e-9, err_msg=name)
+    # The CLI writes the same folder.
+    cli("gather", "recolour", tmp_path / "ac", "--c-tt", "0.2,0.4,1", "--out", tmp_path / "cli")
+    for name in GATHER_ARRAYS:
+        np.testing.assert_array_equal(np.load(tmp_path / "cli" / f"{name}.npy"),
+                                      np.load(tmp_path / "blue" / f"{name}.npy"), err_msg=name)
+    with pytest.raises(ValueError, match="c_tt"):
+        weft.gather_recolour(tmp_path / "ac", c_tt=[0.5, 0.5])
+    with pytest.raises(ValueError, match="c_tt"):
+        weft.gather_recolour(tmp_path / "ac", c_tt=[1.5, 0.5, 0.5])
+    with pytest.raises(ValueError, match="not an any-colour gather"):
+        weft.gather(**args, out=tmp_path / "plain")
+        weft.gather_recolour(tmp_path / "plain", c_tt=[0.5, 0.5, 0.5])
+
+
+def test_colour_range_fit(tmp_path):
+    weft.gather(preset="fleece", paths=6000, bins=[4, 8, 6, 12], seed=1, any_colour=True,
+                out=tmp_path / "ac")
+    fitted = weft.fit(tmp_path / "ac", config=SHORT_FIT, colour_range=(0.3, 0.999),
+                      colour_functions=3, out=tmp_path / "any.json")
+    colour = fitted["report"]["colour"]
+    assert colour["functions"] == 3 and len(colour["m_rel_l2_by_colour"]) == 8
+    assert json.load(open(tmp_path / "any.json"))["version"] == 2
+    with pytest.raises(ValueError, match="colour_range"):
+        weft.fit(tmp_path / "ac", config=SHORT_FIT, colour_range=(0.5, 0.4))
+    with pytest.raises(ValueError, match="colour_functions"):
+        weft.fit(tmp_path / "ac", config=SHORT_FIT, colour_range=(0.3, 0.9), colour_functions=1)

@@ -33,6 +33,50 @@ protected:
     }
 };
 
+TEST_F(FitCliTest, ColourRangeFitsAModelForAnyColour) {
+    ASSERT_EQ(run("gather --preset fleece --paths 6000 --bins 4,8,6,12 --seed 1 --any-colour "
+                  "--quiet --out ac")
+                  .status,
+              0);
+    const RunResult r = run("fit --rdm ac --out any.json --config short.json --colour-range "
+                            "0.3,0.999 --colour-functions 3 --seed 3 --quiet");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json summary = nlohmann::json::parse(r.out);
+    EXPECT_EQ(summary.at("colour").at("functions"), 3);
+    EXPECT_EQ(summary.at("colour").at("m_rel_l2_by_colour").size(), 8u);
+    const YarnModel model = loadYarnModel(path("any.json"));
+    ASSERT_TRUE(model.colour.has_value());
+    EXPECT_EQ(model.colour->functions(), 3);
+    EXPECT_EQ(model.mNet.widths(), (std::vector<int>{6, 8, 8, 9}));
+    EXPECT_TRUE(model.calibration.empty());
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("any.json"))).at("version"), 2);
+    // It renders, checks and makes scenes like any model (at its gathered colour).
+    ASSERT_EQ(run("yarn check --model any.json --rdm ac --out check").status, 0);
+    // At another colour, against the RDM of that colour from the same walks.
+    ASSERT_EQ(run("gather recolour ac --c-tt 0.5,0.6,0.7 --out grey").status, 0);
+    ASSERT_EQ(run("yarn check --model any.json --rdm grey --c-tt 0.5,0.6,0.7 --out check2").status,
+              0);
+    expectUserError(run("yarn check --model any.json --rdm grey --c-tt 0.5 --out check3"),
+                    {"--c-tt", "R,G,B"});
+    ASSERT_EQ(run("scene closeup --model any.json --width 12 --height 8 --out sc").status, 0);
+    ASSERT_EQ(run("render sc/scene.json --spp 2 --quiet --out r.exr").status, 0);
+
+    expectUserError(run("fit --rdm rdm --out x.json --config short.json --colour-range 0.3,0.999"),
+                    {"rdm/meta.json", "not an any-colour gather", "--any-colour"});
+    expectUserError(run("fit --rdm ac --out x.json --colour-range 0.5,0.4"),
+                    {"--colour-range", "0 < LO < HI <= 1"});
+    expectUserError(run("fit --rdm ac --out x.json --colour-range 0.5"), {"--colour-range", "LO,HI"});
+    expectUserError(run("fit --rdm ac --out x.json --colour-range 0.3,0.9 --colour-functions 20"),
+                    {"--colour-functions = 20"});
+    expectUserError(run("fit --rdm ac --out x.json --colour-functions 4"),
+                    {"--colour-functions needs --colour-range"});
+    expectUserError(run("fit --rdm ac --out x.json --colour-range 0.3,0.9 --ablation naive"),
+                    {"--colour-range", "--ablation"});
+    expectUserError(run("fit --rdm ac --out x.json --recalibrate any.json"),
+                    {"colour-conditioned", "energy calibration"});
+    EXPECT_FALSE(std::filesystem::exists(path("x.json")));
+}
+
 TEST_F(FitCliTest, WritesAValidModelAndItsReport) {
     const RunResult r = run("fit --rdm rdm --out model.json --config short.json --seed 3 --quiet");
     ASSERT_EQ(r.status, 0) << r.err;

@@ -9,16 +9,19 @@
 #include "commands.h"
 #include "weft/core/file.h"
 #include "weft/core/error.h"
+#include "weft/core/limits.h"
 #include "weft/fit/fit.h"
+#include "weft/gather/colour_paths.h"
 
 namespace weft::cmd {
 
 namespace {
 
 struct FitCliOptions {
-    std::string rdm, out, config, reference, report, recalibrate, ablation;
+    std::string rdm, out, config, reference, report, recalibrate, ablation, colourRange;
     uint64_t seed = 0;
-    int threads = -1;
+    int threads = -1, colourFunctions = 6;
+    CLI::Option* colourFunctionsOpt = nullptr;
     bool quiet = false, printConfig = false, noReport = false;
 };
 
@@ -67,12 +70,29 @@ void runFit(const FitCliOptions& c) {
                             {{"--report", c.noReport ? std::string() : reportDir}});
     requireParentDirectory(c.out, "--out");
     if (!c.noReport) requireParentDirectory(reportDir, "--report");
+    // --colour-range: a model for every C_TT of the range (docs/colour.md).
+    std::unique_ptr<ColourFitOptions> colour;
+    std::vector<ColourPath> colourPaths;
+    if (!c.colourRange.empty()) {
+        if (!c.ablation.empty() || !c.recalibrate.empty())
+            throw InputError("--colour-range cannot be combined with --ablation or --recalibrate");
+        colour = std::make_unique<ColourFitOptions>();
+        colour->range = parseColourRange(c.colourRange, "--colour-range");
+        checkRange("--colour-functions =", c.colourFunctions, 2, ColourBasis::kMaxFunctions);
+        colour->functions = c.colourFunctions;
+    } else if (c.colourFunctionsOpt->count()) {
+        throw InputError("--colour-functions needs --colour-range LO,HI");
+    }
     const RdmData rdm = loadRdm(c.rdm);
+    if (colour) {
+        colourPaths = loadColourPaths(c.rdm);
+        colour->paths = &colourPaths;
+    }
     std::unique_ptr<RdmData> reference;
     if (!c.reference.empty()) reference = std::make_unique<RdmData>(loadRdm(c.reference));
     const FitResult fit =
         c.recalibrate.empty()
-            ? fitYarnModel(rdm, config, c.seed, c.quiet, ablation)
+            ? fitYarnModel(rdm, config, c.seed, c.quiet, ablation, colour.get())
             : recalibrateYarnModel(loadYarnModel(c.recalibrate), rdm, config, c.quiet);
     saveYarnModel(fit.model, c.out);
     if (!c.noReport) {
@@ -98,6 +118,7 @@ void runFit(const FitCliOptions& c) {
         {"r_rel_l2_eq8", finiteOrNull(r.rRelL2Eq8)},
         {"seconds", r.seconds},
         {"m_samples_per_second", r.mSamplesPerSecond}};
+    if (colour) summary["colour"] = r.colour;
     std::printf("%s\n", summary.dump().c_str());
 }
 
@@ -128,6 +149,13 @@ void addFitCommand(CLI::App& app) {
                     "fit an ablated variant of paper Fig. 5 instead of the full model: naive (one "
                     "network over the whole RDM, no T or R) or no-r-lobe (no analytic R lobe; the "
                     "M network also carries R); see docs/fit.md");
+    fit->add_option("--colour-range", o->colourRange,
+                    "LO,HI (0 < LO < HI <= 1, e.g. 0.3,0.999): fit a model for every fiber colour "
+                    "C_TT in the range, per channel, from a gather made with --any-colour "
+                    "(docs/colour.md)");
+    o->colourFunctionsOpt = fit->add_option(
+        "--colour-functions", o->colourFunctions,
+        "with --colour-range: the number K of colour functions (2..12, default 6)");
     fit->add_flag("--no-report", o->noReport, "write only the model");
     fit->add_flag("--print-config", o->printConfig,
                   "print the configuration in effect as JSON and exit");

@@ -259,6 +259,60 @@ TEST_F(GatherCliTest, ShardsMergeToTheUnshardedGather) {
     expectUserError(gather("--preset fleece --out x"), {"--paths"});
 }
 
+TEST_F(GatherCliTest, AnyColourGatherRecoloursToAnyCTT) {
+    gatherOk("--preset fleece " + kSmall + " --seed 3 --any-colour --out ac");
+    const nlohmann::json m = meta("ac");
+    EXPECT_EQ(m.at("any_colour"), true);
+    const size_t rows = m.at("colour_paths").get<size_t>();
+    EXPECT_GT(rows, 1000u);
+    readChecked(path("ac"), "paths_bins.npy", "<i4", {rows, 3});
+    readChecked(path("ac"), "paths_kind.npy", "|u1", {rows});
+    readChecked(path("ac"), "paths_weight.npy", "<f4", {rows, 3});
+    EXPECT_TRUE(m.at("arrays").contains("paths_weight"));
+
+    // The gathered colour, from the records: byte for byte the gather's arrays.
+    const RunResult same = run("gather recolour ac --c-tt 0.452,0.725,0.948 --out same");
+    ASSERT_EQ(same.status, 0) << same.err;
+    for (const char* name : kNpyFiles)
+        EXPECT_TRUE(readFile(path("ac") + "/" + name) == readFile(path("same") + "/" + name))
+            << name;
+    EXPECT_FALSE(std::filesystem::exists(path("same/paths_bins.npy")));
+    // Another colour: a gather of that colour, which weft fit reads as any other.
+    ASSERT_EQ(run("gather recolour ac --c-tt 0.2,0.4,1 --out blue").status, 0);
+    const nlohmann::json blue = meta("blue");
+    EXPECT_EQ(blue.at("fiber").at("c_tt"), nlohmann::json({0.2, 0.4, 1.0}));
+    EXPECT_EQ(blue.at("any_colour"), false);
+    EXPECT_EQ(blue.at("recoloured_from").at("gather"), "ac");
+    EXPECT_EQ(blue.at("mean_depth"), m.at("mean_depth"));
+    EXPECT_FALSE(readFile(path("ac/rdm_m.npy")) == readFile(path("blue/rdm_m.npy")));
+
+    // Shards of an any-colour gather merge to its records.
+    for (int k = 0; k < 2; ++k)
+        gatherOk("--preset fleece " + kSmall + " --seed 3 --any-colour --shard " +
+                 std::to_string(k) + "/2 --out acpart" + std::to_string(k));
+    ASSERT_EQ(run("gather merge acpart1 acpart0 --out acmerged").status, 0);
+    for (const char* name : {"paths_bins.npy", "paths_kind.npy", "paths_weight.npy", "rdm_m.npy"})
+        EXPECT_TRUE(readFile(path("ac") + "/" + name) == readFile(path("acmerged") + "/" + name))
+            << name;
+    gatherOk("--preset fleece " + kSmall + " --seed 3 --shard 0/2 --out plainpart0");
+    expectUserError(run("gather merge acpart1 plainpart0 --out bad"),
+                    {"\"any_colour\" is false"});
+
+    // Refused: an ordinary gather, bad colours, a missing gather, damaged records.
+    gatherOk("--preset fleece " + kSmall + " --seed 3 --out plain");
+    expectUserError(run("gather recolour plain --c-tt 0.5,0.5,0.5 --out bad"),
+                    {"plain/meta.json", "not an any-colour gather", "--any-colour"});
+    expectUserError(run("gather recolour ac --c-tt 1.5,0,0 --out bad"), {"--c-tt", "[0, 1]"});
+    expectUserError(run("gather recolour ac --c-tt 0.5,0.5 --out bad"), {"--c-tt", "R,G,B"});
+    expectUserError(run("gather recolour missing --c-tt 0.5,0.5,0.5 --out bad"), {"missing"});
+    expectUserError(run("gather recolour ac --c-tt 0.5,0.5,0.5 --out ac"), {"--out"});
+    const std::string bytes = readFile(path("ac/paths_weight.npy"));
+    writeText("ac/paths_weight.npy", bytes.substr(0, bytes.size() - 7));
+    expectUserError(run("gather recolour ac --c-tt 0.5,0.5,0.5 --out bad"),
+                    {"ac/paths_weight.npy"});
+    for (const std::string& name : listing()) EXPECT_TRUE(name.rfind("bad", 0) != 0) << name;
+}
+
 TEST_F(GatherCliTest, SeedDeterminesTheResult) {
     gatherOk("--preset fleece " + kSmall + " --seed 11 --out a");
     gatherOk("--preset fleece " + kSmall + " --seed 11 --out b");

@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/gather/colour_paths.h"
 #include "weft/gather/gather.h"
 #include "weft/gather/gather_merge.h"
 #include "weft/gather/rdm_image.h"
@@ -24,7 +25,7 @@ struct GatherCliOptions {
     std::string bins = "22,90,45,90", out, shard;
     CLI::Option *pathsOpt = nullptr, *shardOpt = nullptr;
     int maxDepth = 1000, threads = 0, segmentsPerTwist = 128;
-    bool quiet = false;
+    bool quiet = false, anyColour = false;
 };
 
 // The one-line JSON summary of a gather or a merge.
@@ -68,6 +69,7 @@ void runGather(const GatherCliOptions& c) {
     o.threads = c.threads;
     o.segmentsPerTwist = c.segmentsPerTwist;
     o.quiet = c.quiet;
+    o.anyColour = c.anyColour;
     if (c.shardOpt->count()) o.shard = Shard::parse(c.shard, "--shard");
     o.validate();
     checkOutputsSpareInputs({{"--params", c.material.paramsFile}}, {}, {}, {{"--out", c.out}});
@@ -100,9 +102,27 @@ void runGatherMerge(const MergeCliOptions& c) {
     for (const std::string& part : c.parts) inputs.push_back({"part", part});
     checkOutputsSpareInputs({}, {}, inputs, {{"--out", c.out}});
     TempDirCommit out(c.out);
-    const MergedGather merged = mergeGatherParts(c.parts);
-    const GatherResult result = normaliseGather(merged.sums, merged.options, merged.shards);
+    MergedGather merged = mergeGatherParts(c.parts);
+    const GatherResult result =
+        normaliseGather(std::move(merged.sums), merged.options, merged.shards);
     writeGather(result, merged.options, out);
+    printGatherSummary(c.out, result.stats);
+}
+
+struct RecolourCliOptions {
+    std::string gather, cTT, out;
+};
+
+void runGatherRecolour(const RecolourCliOptions& c) {
+    const Rgb cTT = parseColour(c.cTT, "--c-tt");
+    checkOutputsSpareInputs({}, {}, {{"gather", c.gather}}, {{"--out", c.out}});
+    TempDirCommit out(c.out);
+    RecolouredGather recoloured = recolourGather(c.gather, cTT);
+    const Rgb& gathered = recoloured.gatheredCTT;
+    const GatherResult result = normaliseGather(std::move(recoloured.sums), recoloured.options);
+    writeGather(result, recoloured.options, out,
+                {{"recoloured_from",
+                  {{"gather", c.gather}, {"c_tt", {gathered.r, gathered.g, gathered.b}}}}});
     printGatherSummary(c.out, result.stats);
 }
 
@@ -135,6 +155,10 @@ void addGatherCommand(CLI::App& app) {
         "--shard", o->shard,
         "K/N: walk only shard K (0..N-1) of N, paths [K P/N, (K+1) P/N), and write a part "
         "for weft gather merge (docs/cluster.md)");
+    gather->add_flag("--any-colour", o->anyColour,
+                     "choose fiber lobes independently of C_TT and record every path (25 bytes "
+                     "each), so that weft gather recolour gives the RDM of any C_TT "
+                     "(docs/gather.md)");
     gather->add_flag("--quiet", o->quiet, "no progress output");
     gather->add_option("--out", o->out, "output directory (written atomically; required)");
 
@@ -146,9 +170,20 @@ void addGatherCommand(CLI::App& app) {
         ->required();
     merge->add_option("--out", mo->out, "output gather directory (written atomically)")->required();
     merge->callback([mo] { runGatherMerge(*mo); });
+
+    auto ro = std::make_shared<RecolourCliOptions>();
+    CLI::App* recolour = gather->add_subcommand(
+        "recolour", "Write the gather of another fiber colour C_TT from a gather made with "
+                    "--any-colour, without walking again (docs/gather.md)");
+    recolour->add_option("gather", ro->gather, "gather directory written with --any-colour")
+        ->required();
+    recolour->add_option("--c-tt", ro->cTT, "the new C_TT as R,G,B, each in [0, 1]")->required();
+    recolour->add_option("--out", ro->out, "output gather directory (written atomically)")
+        ->required();
+    recolour->callback([ro] { runGatherRecolour(*ro); });
     gather->require_subcommand(0, 1);
-    gather->callback([o, merge] {
-        if (!merge->parsed()) runGather(*o);
+    gather->callback([o, merge, recolour] {
+        if (!merge->parsed() && !recolour->parsed()) runGather(*o);
     });
 
     struct SliceOptions {

@@ -130,7 +130,8 @@ TEST_F(RenderCliTest, ShardedRenderMergesToTheUnshardedImage) {
     expectUserError(run("render merge part0.exr part2.exr --out bad.exr"), {"missing", "1/3"});
     expectUserError(run("render merge part0.exr part1.exr part1.exr part2.exr --out bad.exr"),
                     {"both shard 1/3"});
-    ASSERT_EQ(run("render scene.json --spp 5 --seed 9 --shard 1/3 --quiet --out other.exr").status, 0);
+    ASSERT_EQ(run("render scene.json --spp 5 --seed 9 --shard 1/3 --quiet --out other.exr").status,
+              0);
     expectUserError(run("render merge part0.exr other.exr part2.exr --out bad.exr"),
                     {"other.json", "\"seed\""});
     expectUserError(run("render merge whole.exr --out bad.exr"), {"whole.json", "not a part"});
@@ -141,12 +142,13 @@ TEST_F(RenderCliTest, ShardedRenderMergesToTheUnshardedImage) {
     EXPECT_FALSE(std::filesystem::exists(path("bad.exr")));
     EXPECT_FALSE(std::filesystem::exists(path("bad.json")));
     for (const auto& entry : std::filesystem::directory_iterator(dir_))
-        EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos)
-            << entry.path();
+        EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
     // Bad shards.
     expectUserError(run("render scene.json --spp 2 --shard 2/2 --out a.exr"), {"--shard", "2/2"});
-    expectUserError(run("render scene.json --spp 2 --shard 0/3 --out a.exr"), {"--shard", "N <= 2"});
-    expectUserError(run("render scene.json --time 1 --shard 0/2 --out a.exr"), {"--shard", "--spp"});
+    expectUserError(run("render scene.json --spp 2 --shard 0/3 --out a.exr"),
+                    {"--shard", "N <= 2"});
+    expectUserError(run("render scene.json --time 1 --shard 0/2 --out a.exr"),
+                    {"--shard", "--spp"});
     expectUserError(run("render scene.json --spp 2 --shard x --out a.exr"), {"--shard", "K/N"});
 }
 
@@ -158,7 +160,8 @@ TEST_F(RenderCliTest, WarnsWhenYarnsOverlap) {
         "camera": {"from": [0, 0, 1], "to": [0, 0, 0], "fov_deg": 8},
         "film": {"width": 16, "height": 12},
         "render": {"spp": 1, "seed": 1},
-        "yarns": [{"curves": "pair.txt", "radius": 0.03, "model": ")" + kFleece + R"("}]
+        "yarns": [{"curves": "pair.txt", "radius": 0.03, "model": ")" +
+                                           kFleece + R"("}]
     })");
     for (const std::string mode : {"neural", "fiber"}) {
         const RunResult r = run("render pair.json --mode " + mode + " --out " + mode + ".exr");
@@ -193,6 +196,69 @@ TEST_F(RenderCliTest, WarnsWhenYarnsOverlap) {
     ASSERT_EQ(alone.size(), 1u);
     EXPECT_EQ(alone[0].at("overlap_fraction"), 0.0);
     EXPECT_TRUE(alone[0].at("largest_radius_without_overlap").is_null());
+}
+
+// The mean of each channel of an EXR.
+Rgb meanColour(const Image& image) {
+    Rgb sum;
+    for (size_t k = 0; k < image.pixels.size(); ++k)
+        sum[static_cast<int>(k % 3)] += image.pixels[k];
+    return sum / static_cast<double>(image.pixels.size() / 3);
+}
+
+TEST_F(RenderCliTest, YarnColourInEveryMode) {
+    // fleece-small's C_TT is (0.452, 0.725, 0.948); a green yarn instead.
+    writeScene("green.json", R"(, "colour": [0.2, 0.9, 0.2])");
+    for (const std::string mode : {"fiber", "dual"}) {
+        ASSERT_EQ(
+            run("render scene.json --mode " + mode + " --spp 4 --quiet --out " + mode + ".exr")
+                .status,
+            0);
+        const RunResult r = run("render green.json --mode " + mode + " --spp 4 --quiet --out " +
+                                mode + "-green.exr");
+        ASSERT_EQ(r.status, 0) << r.err;
+        const Rgb plain = meanColour(readImage(path(mode + ".exr")));
+        const Rgb green = meanColour(readImage(path(mode + "-green.exr")));
+        EXPECT_LT(green.r, plain.r) << mode;
+        EXPECT_GT(green.g, plain.g) << mode;
+        EXPECT_LT(green.b, plain.b) << mode;
+    }
+    // Neural mode needs a colour-conditioned model.
+    expectUserError(run("render green.json --spp 2 --quiet --out x.exr"),
+                    {"green.json: yarns[0].colour", "fitted for one colour", "--colour-range"});
+    writeScene("bad.json", R"(, "colour": [1.5, 0, 0])");
+    expectUserError(run("render bad.json --mode fiber --spp 2 --quiet --out x.exr"),
+                    {"bad.json", "colour", "[0, 1]"});
+
+    // A conditioned model: without a colour it renders its gathered colour,
+    // which "colour" then reproduces exactly.
+    writeFileAtomic(path("short.json"), R"({"t_net": {"steps": 100, "batch": 64},
+        "m_net": {"hidden": [8, 8], "steps": 100, "batch": 64}})");
+    ASSERT_EQ(run("gather --preset fleece --paths 3000 --bins 4,8,6,12 --any-colour --quiet "
+                  "--out ac")
+                  .status,
+              0);
+    ASSERT_EQ(run("fit --rdm ac --out any.json --config short.json --colour-range 0.3,0.999 "
+                  "--colour-functions 3 --no-report --quiet")
+                  .status,
+              0);
+    const auto sceneWith = [&](const std::string& name, const std::string& colour) {
+        std::string text = readFile(path("scene.json"));
+        text.replace(text.find(kFleece), kFleece.size(), path("any.json"));
+        if (!colour.empty())
+            text.replace(text.find("\"model\""), 0, "\"colour\": " + colour + ", ");
+        writeFileAtomic(path(name), text);
+    };
+    sceneWith("any.scene.json", "");
+    sceneWith("own.scene.json", "[0.452, 0.725, 0.948]");
+    sceneWith("red.scene.json", "[0.9, 0.1, 0.1]");
+    for (const char* name : {"any", "own", "red"}) {
+        const RunResult r = run(std::string("render ") + name +
+                                ".scene.json --spp 2 --quiet --out img-" + name + ".exr");
+        ASSERT_EQ(r.status, 0) << name << ": " << r.err;
+    }
+    EXPECT_EQ(readImage(path("img-own.exr")).pixels, readImage(path("img-any.exr")).pixels);
+    EXPECT_NE(readImage(path("img-red.exr")).pixels, readImage(path("img-any.exr")).pixels);
 }
 
 TEST_F(RenderCliTest, BadInputIsNamed) {

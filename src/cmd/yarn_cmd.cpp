@@ -10,6 +10,7 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/npy.h"
+#include "weft/gather/colour_paths.h"
 #include "weft/fit/model_check.h"
 #include "weft/gather/rdm_io.h"
 #include "weft/yarn/yarn_bsdf.h"
@@ -31,7 +32,7 @@ struct SampleOptions {
 };
 
 struct CheckOptions {
-    std::string model, rdm, out;
+    std::string model, rdm, out, cTT;
     int64_t minPaths = 1000;
     int threads = 0;
     bool dual = false;
@@ -55,7 +56,9 @@ void runCheck(const CheckOptions& o) {
         throw InputError("--threads " + std::to_string(o.threads) +
                          " is out of range: allowed [0, 1024]");
     checkOutputsSpareInputs({{"--model", o.model}}, {}, {{"--rdm", o.rdm}}, {{"--out", o.out}});
-    const YarnModel model = loadYarnModel(o.model);
+    YarnModel model = loadYarnModel(o.model);
+    // A colour-conditioned model at another colour (docs/colour.md).
+    if (!o.cTT.empty()) model = model.forColour(parseColour(o.cTT, "--c-tt"), "--c-tt");
     const RdmData rdm = loadRdm(o.rdm);
     const nlohmann::json s =
         checkYarnModel(model, o.model, rdm, {o.minPaths, o.threads, o.dual}, o.out);
@@ -143,6 +146,9 @@ void addYarnCommands(CLI::App& app) {
                     "(docs/dual-scattering.md)");
     check->add_option("--threads", checkOpts->threads, "worker threads (0: all cores)")
         ->default_val(0);
+    check->add_option("--c-tt", checkOpts->cTT,
+                      "R,G,B: check a colour-conditioned model (weft fit --colour-range) at this "
+                      "fiber colour, e.g. against weft gather recolour's RDM of that colour");
     check->callback([checkOpts] { runCheck(*checkOpts); });
 }
 

@@ -4,14 +4,17 @@
 
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <utility>
 
 #include "weft/core/error.h"
 #include "weft/fit/metrics.h"
+#include "weft/yarn/material_preset.h"
 #include "weft/yarn/yarn_lobes.h"
 
 namespace weft {
@@ -137,7 +140,9 @@ RdmData ablationTarget(const RdmData& rdm, YarnAblation ablation) {
 }
 
 FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_t seed, bool quiet,
-                       YarnAblation ablation) {
+                       YarnAblation ablation, const ColourFitOptions* colour) {
+    if (colour && ablation != YarnAblation::None)
+        throw InputError("a colour-conditioned fit has no ablations");
     const auto t0 = Clock::now();
     // Every step below sees the ablated model's target; the full model's is the gather itself.
     RdmData ablated;
@@ -205,9 +210,26 @@ FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_
         rFit = std::move(rEq8);
     }
 
-    // 3. M network.
+    // 3. M network: for the gathered colour, or for every colour of the range.
     phase = Clock::now();
-    model.mNet = fitMultipleScatteringNetwork(rdm, config, seed, arena, quiet, &report.mLoss);
+    std::unique_ptr<ColourTargets> targets;
+    if (colour) {
+        const ColourBasisFit basis = fitColourBasis(*colour->paths, bins, rdm.count,
+                                                    colour->range, colour->functions);
+        phaseDone("colour functions", phase);
+        phase = Clock::now();
+        targets = std::make_unique<ColourTargets>(*colour->paths, bins, rdm.count);
+        model.mNet = fitColourConditionedMNetwork(*targets, basis.basis, config, seed, arena,
+                                                  quiet, &report.mLoss);
+        model.colour = basis.basis;
+        report.colour = {{"functions", colour->functions},
+                         {"c_tt_range", {colour->range.lo, colour->range.hi}},
+                         {"basis_rows", basis.rows},
+                         {"basis_error_mean", basis.meanError},
+                         {"basis_error_worst", basis.worstError}};
+    } else {
+        model.mNet = fitMultipleScatteringNetwork(rdm, config, seed, arena, quiet, &report.mLoss);
+    }
     report.mSeconds = secondsSince(phase);
     report.mSamplesPerSecond =
         static_cast<double>(config.m.steps) * config.m.batch / std::max(report.mSeconds, 1e-9);
@@ -216,18 +238,57 @@ FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_
     report.mRelL2 = coarseRelativeL2(mFit, rdm.rdmM, bins);
     phase = Clock::now();
 
-    // 4-5. Energy calibration and sampling lobe.
-    finishFit(model, rdm, config, threads, quiet, rFit, mFit, report);
+    if (colour) {
+        // M at test colours against the RDM of that colour from the records.
+        nlohmann::json byColour = nlohmann::json::array();
+        for (const Rgb& c : colourFitTestColours(colour->range)) {
+            std::vector<float> fitted, target;
+            arena.execute([&] {
+                fitted = conditionedMultipleScatteringMap(model.mNet, *model.colour, bins, c);
+                target = targets->map(c);
+            });
+            byColour.push_back(
+                {{"c_tt", {c.r, c.g, c.b}}, {"m_rel_l2", coarseRelativeL2(fitted, target, bins)}});
+        }
+        report.colour["m_rel_l2_by_colour"] = byColour;
+        // 4-5. No calibration (it would hold for one colour); the sampling
+        // lobe of the gathered colour.
+        FitConfig oneColour = config;
+        oneColour.calibrationDegree = -1;
+        YarnModel own = model.forColour(model.fiber.cTT, "fit");
+        finishFit(own, rdm, oneColour, threads, quiet, rFit, mFit, report);
+        model.sampling = own.sampling;
+    } else {
+        // 4-5. Energy calibration and sampling lobe.
+        finishFit(model, rdm, config, threads, quiet, rFit, mFit, report);
+    }
     if (!model.hasReflectionLobe())
         report.rRelL2 = report.rRelL2Uncalibrated = std::numeric_limits<double>::quiet_NaN();
 
     report.seconds = secondsSince(t0);
     model.fit = fitRecord(report, config, seed, rdm, ablation);
+    if (colour) {
+        model.fit["colour"] = report.colour;
+        model.fit.erase("energy_calibration");
+    }
     return result;
+}
+
+std::vector<Rgb> colourFitTestColours(const ColourRange& range) {
+    // The Table 3 colours (DESIGN.md 3) and three greys, clamped into the range.
+    std::vector<Rgb> colours;
+    for (const MaterialPreset& p : materialPresets()) colours.push_back(p.fiber.cTT);
+    for (double g : {0.0, 0.5, 1.0}) colours.push_back(Rgb(range.lo + g * (range.hi - range.lo)));
+    for (Rgb& c : colours)
+        for (int k = 0; k < 3; ++k) c[k] = std::clamp(c[k], range.lo, range.hi);
+    return colours;
 }
 
 FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& gathered,
                                const FitConfig& config, bool quiet) {
+    if (fitted.colour)
+        throw InputError("--recalibrate: a colour-conditioned model has no energy calibration "
+                         "(it would hold for one colour only)");
     const auto t0 = Clock::now();
     RdmData ablated;
     if (fitted.ablation != YarnAblation::None) ablated = ablationTarget(gathered, fitted.ablation);

@@ -41,6 +41,8 @@
 #include <vector>
 
 #include "weft/fit/calibration.h"
+#include "weft/fit/colour_basis.h"
+#include "weft/fit/colour_targets.h"
 #include "weft/fit/fit_config.h"
 #include "weft/fit/masking_fit.h"
 #include "weft/fit/model_maps.h"
@@ -65,6 +67,19 @@ struct FitReport {
     double tSeconds = 0, mSeconds = 0, seconds = 0;
     double mSamplesPerSecond = 0;
     LossCurve tLoss, mLoss;
+    // A conditioned fit: the colour functions' truncation error and M's error
+    // at test colours against the recoloured RDM (null otherwise).
+    nlohmann::json colour;
+};
+
+// A colour-conditioned fit (docs/colour.md): T and R as usual, the M network
+// for every C_TT in `range` from the recorded paths of an any-colour gather
+// (gather/colour_paths.h), no energy calibration, the sampling lobe fitted at
+// the gathered colour.
+struct ColourFitOptions {
+    ColourRange range;
+    int functions = 6;                                // K colour functions, 2..12
+    const std::vector<ColourPath>* paths = nullptr;  // the gather's records
 };
 
 struct FitResult {
@@ -75,7 +90,12 @@ struct FitResult {
 // Fits every part of the model; `ablation` (recorded in the model and in its
 // fit block) fits one of the variants of paper Fig. 5 instead.
 FitResult fitYarnModel(const RdmData& rdm, const FitConfig& config, uint64_t seed, bool quiet,
-                       YarnAblation ablation = YarnAblation::None);
+                       YarnAblation ablation = YarnAblation::None,
+                       const ColourFitOptions* colour = nullptr);
+
+// The colours at which a conditioned fit reports M's error: the five
+// Table 3 colours and the range's ends and middle (grey), clamped into it.
+std::vector<Rgb> colourFitTestColours(const ColourRange& range);
 
 // The RDM as an ablated model sees it: what each of its parts is fitted to
 // and measured against. None: `rdm` unchanged. NoRLobe: rdmM = RDM_R + RDM_M,

@@ -5,9 +5,6 @@
 
 namespace weft {
 
-namespace {
-
-// Fine -> coarse bin of the same kind, through the fine bin's centre direction.
 std::vector<size_t> incidentMap(const RdmBins& fine, const RdmBins& coarse) {
     std::vector<size_t> m(fine.incidentCount());
     for (size_t i = 0; i < m.size(); ++i) m[i] = coarse.incidentBin(fine.incidentCentre(i));
@@ -19,8 +16,6 @@ std::vector<size_t> outgoingMap(const RdmBins& fine, const RdmBins& coarse) {
     for (size_t o = 0; o < m.size(); ++o) m[o] = coarse.outgoingBin(fine.outgoingCentre(o));
     return m;
 }
-
-}  // namespace
 
 std::vector<double> poolRdm(const std::vector<float>& map, const RdmBins& fine,
                             const RdmBins& coarse) {

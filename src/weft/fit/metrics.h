@@ -23,6 +23,10 @@ namespace weft {
 // Coarse grid with the same layout as RdmBins; defaults from the issue.
 inline constexpr RdmBins kCoarseErrorBins{11, 45, 15, 30};
 
+// Fine -> coarse bin of the same kind, through the fine bin's centre direction.
+std::vector<size_t> incidentMap(const RdmBins& fine, const RdmBins& coarse);
+std::vector<size_t> outgoingMap(const RdmBins& fine, const RdmBins& coarse);
+
 // Pools a (TI, PI, TO, PO, 3) map to `coarse` (same layout), as above.
 std::vector<double> poolRdm(const std::vector<float>& map, const RdmBins& fine,
                             const RdmBins& coarse = kCoarseErrorBins);

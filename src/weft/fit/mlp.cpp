@@ -144,61 +144,46 @@ typename Mlp<Real>::Matrix Mlp<Real>::forward(const Matrix& x) const {
 }
 
 template <typename Real>
-Real Mlp<Real>::lossAndGradient(const Matrix& x, const Matrix& target, Loss loss,
-                                const Vector& sampleWeights, std::vector<Real>& gradient) const {
-    const Eigen::Index batch = x.cols();
-    if (x.rows() != inputs() || target.rows() != outputs() || target.cols() != batch ||
-        (sampleWeights.size() != 0 && sampleWeights.size() != batch))
-        throw std::invalid_argument("Mlp::lossAndGradient: inconsistent shapes");
-    // Forward pass, keeping every layer's input activation and pre-activation.
+typename Mlp<Real>::Tape Mlp<Real>::forwardTape(const Matrix& x) const {
+    if (x.rows() != inputs()) throw std::invalid_argument("Mlp::forwardTape: wrong input size");
     const size_t n = layers_.size();
-    std::vector<Matrix> inputsOf(n), preOf(n);
+    Tape tape;
+    tape.inputsOf.resize(n);
+    tape.preOf.resize(n);
     Matrix a = x;
     for (size_t l = 0; l < n; ++l) {
-        inputsOf[l] = a;
+        tape.inputsOf[l] = a;
         Matrix z = preActivation(static_cast<int>(l), a);
-        preOf[l] = z;
+        tape.preOf[l] = z;
         applyPrelu(static_cast<int>(l), z);
         a = std::move(z);
     }
-    Matrix y = a;
-    applyOutput(output_, y);
+    applyOutput(output_, a);
+    tape.y = std::move(a);
+    return tape;
+}
 
-    // dL/dy for the batch-mean loss.
-    Matrix dy(y.rows(), y.cols());
-    Real total = 0;
-    for (Eigen::Index c = 0; c < batch; ++c) {
-        const Real w = sampleWeights.size() ? sampleWeights(c) : Real(1);
-        for (Eigen::Index r = 0; r < y.rows(); ++r) {
-            Real diff, dDiff;
-            if (loss == Loss::LogMse) {
-                diff = std::log1p(y(r, c)) - std::log1p(target(r, c));
-                dDiff = Real(1) / (Real(1) + y(r, c));
-            } else {
-                diff = y(r, c) - target(r, c);
-                dDiff = Real(1);
-            }
-            total += w * diff * diff;
-            dy(r, c) = Real(2) * w * diff * dDiff / static_cast<Real>(batch);
-        }
-    }
+template <typename Real>
+void Mlp<Real>::backward(const Tape& tape, const Matrix& dy, std::vector<Real>& gradient) const {
+    const Matrix& y = tape.y;
     // Through the output function: sigmoid' = y (1 - y), exp' = y.
     Matrix dz = dy;
-    if (output_ == OutputFunction::Sigmoid) dz = dy.cwiseProduct((y.array() * (Real(1) - y.array())).matrix());
+    if (output_ == OutputFunction::Sigmoid)
+        dz = dy.cwiseProduct((y.array() * (Real(1) - y.array())).matrix());
     if (output_ == OutputFunction::Exp) dz = dy.cwiseProduct(y);
 
     gradient.assign(params_.size(), Real(0));
-    for (size_t li = n; li-- > 0;) {
+    for (size_t li = layers_.size(); li-- > 0;) {
         const Layer& layer = layers_[li];
         Eigen::Map<RowMatrix> dW(gradient.data() + layer.weightOffset, layer.out, layer.in);
         Eigen::Map<Vector> db(gradient.data() + layer.biasOffset, layer.out);
-        dW.noalias() = dz * inputsOf[li].transpose();
+        dW.noalias() = dz * tape.inputsOf[li].transpose();
         db = dz.rowwise().sum();
         if (li == 0) break;
         // dL/d(activation of the previous layer), then through its PReLU.
         Matrix da = weight(static_cast<int>(li)).transpose() * dz;
         const Layer& prev = layers_[li - 1];
-        const Matrix& z = preOf[li - 1];
+        const Matrix& z = tape.preOf[li - 1];
         if (prev.prelu) {
             const auto slopes = preluSlopes(static_cast<int>(li - 1));
             Eigen::Map<Vector> dSlopes(gradient.data() + prev.preluOffset, prev.out);
@@ -212,6 +197,29 @@ Real Mlp<Real>::lossAndGradient(const Matrix& x, const Matrix& target, Loss loss
         }
         dz = std::move(da);
     }
+}
+
+template <typename Real>
+Real Mlp<Real>::lossAndGradient(const Matrix& x, const Matrix& target, Loss loss,
+                                const Vector& sampleWeights, std::vector<Real>& gradient) const {
+    const Eigen::Index batch = x.cols();
+    if (x.rows() != inputs() || target.rows() != outputs() || target.cols() != batch ||
+        (sampleWeights.size() != 0 && sampleWeights.size() != batch))
+        throw std::invalid_argument("Mlp::lossAndGradient: inconsistent shapes");
+    const Tape tape = forwardTape(x);
+    const Matrix& y = tape.y;
+    // dL/dy for the batch-mean loss.
+    Matrix dy(y.rows(), y.cols());
+    Real total = 0;
+    for (Eigen::Index c = 0; c < batch; ++c) {
+        const Real w = sampleWeights.size() ? sampleWeights(c) : Real(1);
+        for (Eigen::Index r = 0; r < y.rows(); ++r) {
+            const auto [diff, dDiff] = lossResidual(loss, y(r, c), target(r, c));
+            total += w * diff * diff;
+            dy(r, c) = Real(2) * w * diff * dDiff / static_cast<Real>(batch);
+        }
+    }
+    backward(tape, dy, gradient);
     return total / static_cast<Real>(batch);
 }
 

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -27,6 +28,18 @@ enum class Loss {
     Mse,     // mean over the batch of sum_k w_k (y_k - t_k)^2
     LogMse,  // the same on log(1 + y) and log(1 + t): tames the range of RDM values
 };
+
+// One sample's residual under a loss: the loss is diff^2 and its derivative
+// with respect to y is 2 diff dDiff.
+template <typename Real>
+struct LossResidual {
+    Real diff, dDiff;
+};
+template <typename Real>
+LossResidual<Real> lossResidual(Loss loss, Real y, Real target) {
+    if (loss == Loss::LogMse) return {std::log1p(y) - std::log1p(target), Real(1) / (Real(1) + y)};
+    return {y - target, Real(1)};
+}
 
 template <typename Real>
 class Mlp {
@@ -77,6 +90,17 @@ public:
     // may be empty for uniform weights.
     Real lossAndGradient(const Matrix& x, const Matrix& target, Loss loss,
                          const Vector& sampleWeights, std::vector<Real>& gradient) const;
+
+    // The two halves of lossAndGradient, for losses on a function of the
+    // outputs (a colour-conditioned head): the forward pass with what the
+    // backward pass needs, and the gradient with respect to parameters()
+    // (resized and overwritten) for dL/dy (outputs x batch, after the output function).
+    struct Tape {
+        std::vector<Matrix> inputsOf, preOf;  // per layer: its input and pre-activation
+        Matrix y;                             // outputs x batch
+    };
+    Tape forwardTape(const Matrix& x) const;
+    void backward(const Tape& tape, const Matrix& dy, std::vector<Real>& gradient) const;
 
 private:
     // W x + b of layer l, and the layer's PReLU (in place; nothing for the last layer).

@@ -38,9 +38,15 @@ std::vector<float> modelReflectionMap(const YarnModel& model, const RdmBins& bin
     return map;
 }
 
-std::vector<float> modelMultipleScatteringMap(const YarnModel& model, const RdmBins& bins) {
+namespace {
+
+// Runs `net` (inputs (wi, wo)) on every pair of bin centres, one incident bin
+// at a time in parallel, and lets store(i, wi, y) write that bin's part of a
+// (TI, PI, TO, PO, 3) map from the outputs y (outputs x TO PO).
+template <typename Store>
+std::vector<float> mapOverBinCentres(const Mlp<float>& net, const RdmBins& bins,
+                                     const Store& store) {
     const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
-    const Mlp<float> net(model.mNet);
     std::vector<Vec3> outgoing(nOut);
     for (size_t o = 0; o < nOut; ++o) outgoing[o] = bins.outgoingCentre(o);
     std::vector<float> map(nIn * nOut * 3);
@@ -49,14 +55,38 @@ std::vector<float> modelMultipleScatteringMap(const YarnModel& model, const RdmB
         const Vec3 wi = bins.incidentCentre(i);
         for (size_t o = 0; o < nOut; ++o)
             setInputColumn(x, static_cast<Eigen::Index>(o), wi, outgoing[o]);
-        const Mlp<float>::Matrix y = net.forward(x);
-        const Rgb scale = model.calibration.scales(wi).m;
-        for (size_t o = 0; o < nOut; ++o)
-            for (int c = 0; c < 3; ++c)
-                map[(i * nOut + o) * 3 + c] =
-                    static_cast<float>(y(c, static_cast<Eigen::Index>(o)) * scale[c]);
+        store(wi, net.forward(x), &map[i * nOut * 3]);
     });
     return map;
+}
+
+}  // namespace
+
+std::vector<float> modelMultipleScatteringMap(const YarnModel& model, const RdmBins& bins) {
+    // A conditioned model at its own colour (yarn_model.h).
+    const Mlp<float> net(model.colour
+                             ? foldColourIntoNetwork(model.mNet, *model.colour, model.fiber.cTT)
+                             : model.mNet);
+    return mapOverBinCentres(net, bins,
+                             [&](const Vec3& wi, const Mlp<float>::Matrix& y, float* out) {
+                                 const Rgb scale = model.calibration.scales(wi).m;
+                                 for (Eigen::Index o = 0; o < y.cols(); ++o)
+                                     for (int c = 0; c < 3; ++c)
+                                         out[o * 3 + c] = static_cast<float>(y(c, o) * scale[c]);
+                             });
+}
+
+std::vector<float> conditionedMultipleScatteringMap(const NetworkWeights& mNet,
+                                                    const ColourBasis& basis, const RdmBins& bins,
+                                                    const Rgb& cTT) {
+    return mapOverBinCentres(Mlp<float>(mNet), bins,
+                             [&](const Vec3&, const Mlp<float>::Matrix& y, float* out) {
+                                 for (Eigen::Index o = 0; o < y.cols(); ++o) {
+                                     const Rgb m = conditionedM(y.col(o).data(), basis, cTT);
+                                     for (int c = 0; c < 3; ++c)
+                                         out[o * 3 + c] = static_cast<float>(m[c]);
+                                 }
+                             });
 }
 
 }  // namespace weft

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "weft/gather/rdm.h"
+#include "weft/yarn/colour_basis.h"
 #include "weft/yarn/network.h"
 #include "weft/yarn/yarn_model.h"
 
@@ -25,5 +26,9 @@ std::vector<double> transmissionMap(const NetworkWeights& tNet, const RdmBins& b
 std::vector<double> modelTransmissionMap(const YarnModel& model, const RdmBins& bins);
 std::vector<float> modelReflectionMap(const YarnModel& model, const RdmBins& bins);
 std::vector<float> modelMultipleScatteringMap(const YarnModel& model, const RdmBins& bins);
+// M of a colour-conditioned network (yarn/colour_basis.h) for one C_TT.
+std::vector<float> conditionedMultipleScatteringMap(const NetworkWeights& mNet,
+                                                    const ColourBasis& basis, const RdmBins& bins,
+                                                    const Rgb& cTT);
 
 }  // namespace weft

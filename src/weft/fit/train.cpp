@@ -13,6 +13,7 @@
 #include "weft/fit/metrics.h"
 #include "weft/fit/mlp.h"
 #include "weft/fit/model_maps.h"
+#include "weft/yarn/colour_basis.h"
 
 namespace weft {
 
@@ -34,13 +35,20 @@ std::string formatLoss(double loss) {
     return buf;
 }
 
+// The rows of a training chunk: the network's inputs and targets, plus
+// `extraInputs` rows after the inputs that only the loss reads (a colour).
+struct ChunkRows {
+    int inputs, targets, extraInputs = 0;
+};
+
 // Trains `net` with Adam. fill(rng, x, target) writes one chunk of samples
-// (columns) drawn with rng. The chunks of a step run in parallel in `arena`,
-// or one after the other when it is null. Returns the loss curve.
-template <typename Fill>
+// (columns) drawn with rng; lossAndGradient(x, target, gradient) returns the
+// chunk's mean loss and its gradient. The chunks of a step run in parallel in
+// `arena`, or one after the other when it is null. Returns the loss curve.
+template <typename Fill, typename LossAndGradient>
 LossCurve train(Mlp<float>& net, const NetworkTraining& cfg, uint64_t seed, uint64_t netId,
                 tbb::task_arena* arena, Progress& progress, bool parallelRestarts,
-                const Fill& fill) {
+                const ChunkRows& rows, const Fill& fill, const LossAndGradient& lossAndGradient) {
     using Matrix = Mlp<float>::Matrix;
     std::vector<int> chunkSize(kChunks, cfg.batch / kChunks);
     for (int c = 0; c < cfg.batch % kChunks; ++c) ++chunkSize[c];
@@ -48,11 +56,10 @@ LossCurve train(Mlp<float>& net, const NetworkTraining& cfg, uint64_t seed, uint
     std::vector<std::vector<float>> gradient(kChunks);
     std::vector<float> chunkLoss(kChunks), total(net.parameters().size());
     for (int c = 0; c < kChunks; ++c) {
-        x[c].resize(net.inputs(), chunkSize[c]);
-        target[c].resize(net.outputs(), chunkSize[c]);
+        x[c].resize(rows.inputs + rows.extraInputs, chunkSize[c]);
+        target[c].resize(rows.targets, chunkSize[c]);
     }
     Adam<float> adam(net.parameters().size(), cfg.learningRate);
-    const Mlp<float>::Vector noWeights;
     const int64_t logEvery = std::max<int64_t>(1, cfg.steps / 200);
     LossCurve curve;
     double intervalLoss = 0;
@@ -62,7 +69,7 @@ LossCurve train(Mlp<float>& net, const NetworkTraining& cfg, uint64_t seed, uint
             if (chunkSize[c] == 0) return;
             Rng rng((netId << 48) ^ (static_cast<uint64_t>(step) * kChunks + c), seed);
             fill(rng, x[c], target[c]);
-            chunkLoss[c] = net.lossAndGradient(x[c], target[c], cfg.loss, noWeights, gradient[c]);
+            chunkLoss[c] = lossAndGradient(x[c], target[c], gradient[c]);
         };
         if (arena) arena->execute([&] { tbb::parallel_for(0, kChunks, chunk); });
         else for (int c = 0; c < kChunks; ++c) chunk(c);
@@ -90,6 +97,20 @@ LossCurve train(Mlp<float>& net, const NetworkTraining& cfg, uint64_t seed, uint
     return curve;
 }
 
+// train() for a network whose outputs are the targets, under cfg.loss.
+template <typename Fill>
+LossCurve trainPlain(Mlp<float>& net, const NetworkTraining& cfg, uint64_t seed, uint64_t netId,
+                     tbb::task_arena* arena, Progress& progress, bool parallelRestarts,
+                     const Fill& fill) {
+    const Mlp<float>::Vector noWeights;
+    return train(net, cfg, seed, netId, arena, progress, parallelRestarts,
+                 {net.inputs(), net.outputs()}, fill,
+                 [&](const Mlp<float>::Matrix& x, const Mlp<float>::Matrix& target,
+                     std::vector<float>& gradient) {
+                     return net.lossAndGradient(x, target, cfg.loss, noWeights, gradient);
+                 });
+}
+
 // Index drawn from a cumulative table (last entry = total) with u in [0, 1).
 size_t drawFromCdf(const std::vector<double>& cdf, double u) {
     const double target = u * cdf.back();
@@ -102,6 +123,35 @@ std::vector<int> widthsOf(int inputs, const std::vector<int>& hidden, int output
     w.insert(w.end(), hidden.begin(), hidden.end());
     w.push_back(outputs);
     return w;
+}
+
+// Outgoing theta rows in proportion to their solid angle (the metric's weight).
+std::vector<double> outgoingRowCdf(const RdmBins& bins) {
+    std::vector<double> rowCdf(bins.thetaO);
+    double sum = 0;
+    for (int t = 0; t < bins.thetaO; ++t)
+        rowCdf[t] = sum += bins.outgoingSolidAngle(static_cast<size_t>(t) * bins.phiO);
+    return rowCdf;
+}
+
+// One training sample of an M network: incident bin uniform, outgoing row in
+// proportion to its solid angle, azimuth bin uniform, directions jittered
+// inside the bins (or their centres).
+struct MSample {
+    size_t i, o;
+    Vec3 wi, wo;
+};
+
+MSample drawMSample(Rng& rng, const RdmBins& bins, const std::vector<double>& rowCdf, bool jitter) {
+    MSample m;
+    m.i = std::min<size_t>(bins.incidentCount() - 1, rng.uniform() * bins.incidentCount());
+    const size_t row = drawFromCdf(rowCdf, rng.uniform());
+    m.o = row * bins.phiO + std::min<size_t>(bins.phiO - 1, rng.uniform() * bins.phiO);
+    const double u1 = rng.uniform(), u2 = rng.uniform();
+    const double u3 = rng.uniform(), u4 = rng.uniform();
+    m.wi = jitter ? bins.incidentDirectionIn(m.i, u1, u2) : bins.incidentCentre(m.i);
+    m.wo = jitter ? bins.outgoingDirectionIn(m.o, u3, u4) : bins.outgoingCentre(m.o);
+    return m;
 }
 
 // The 3-7-7-1 network is small for the sharp grazing-angle edge of P(T | wi)
@@ -125,7 +175,7 @@ NetworkWeights fitTransmissionNetwork(const RdmData& rdm, const FitConfig& confi
         tbb::parallel_for(0, restarts, [&](int r) {
             const uint64_t netSeed = mixBits(seed + 0x9e3779b97f4a7c15ULL * static_cast<uint64_t>(r));
             nets[r] = Mlp<float>(widthsOf(3, config.t.hidden, 1), OutputFunction::Sigmoid, netSeed);
-            curves[r] = train(nets[r], config.t, netSeed, 1, nullptr, progress, restarts > 1,
+            curves[r] = trainPlain(nets[r], config.t, netSeed, 1, nullptr, progress, restarts > 1,
                               [&](Rng& rng, Mlp<float>::Matrix& x, Mlp<float>::Matrix& target) {
                                   for (Eigen::Index k = 0; k < x.cols(); ++k) {
                                       const size_t i = drawFromCdf(cdf, rng.uniform());
@@ -150,36 +200,75 @@ NetworkWeights fitMultipleScatteringNetwork(const RdmData& rdm, const FitConfig&
                                            uint64_t seed, tbb::task_arena& arena, bool quiet,
                                            LossCurve* curve) {
     const RdmBins& bins = rdm.bins;
-    const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
-    // Outgoing theta rows in proportion to their solid angle (the metric's weight).
-    std::vector<double> rowCdf(bins.thetaO);
-    double sum = 0;
-    for (int t = 0; t < bins.thetaO; ++t)
-        rowCdf[t] = sum += bins.outgoingSolidAngle(static_cast<size_t>(t) * bins.phiO);
+    const size_t nOut = bins.outgoingCount();
+    const std::vector<double> rowCdf = outgoingRowCdf(bins);
     Mlp<float> net(widthsOf(6, config.m.hidden, 3), OutputFunction::Exp, seed);
     Progress progress("fit M", static_cast<uint64_t>(config.m.steps), quiet);
-    *curve = train(net, config.m, seed, 2, &arena, progress, false,
-                   [&](Rng& rng, Mlp<float>::Matrix& x, Mlp<float>::Matrix& target) {
-                       for (Eigen::Index k = 0; k < x.cols(); ++k) {
-                           const size_t i = std::min<size_t>(nIn - 1, rng.uniform() * nIn);
-                           const size_t row = drawFromCdf(rowCdf, rng.uniform());
-                           const size_t o =
-                               row * bins.phiO +
-                               std::min<size_t>(bins.phiO - 1, rng.uniform() * bins.phiO);
-                           const double u1 = rng.uniform(), u2 = rng.uniform();
-                           const double u3 = rng.uniform(), u4 = rng.uniform();
-                           const Vec3 wi = config.jitter ? bins.incidentDirectionIn(i, u1, u2)
-                                                         : bins.incidentCentre(i);
-                           const Vec3 wo = config.jitter ? bins.outgoingDirectionIn(o, u3, u4)
-                                                         : bins.outgoingCentre(o);
-                           setInputColumn(x, k, wi, wo);
-                           const float* t = &rdm.rdmM[(i * nOut + o) * 3];
-                           target(0, k) = t[0], target(1, k) = t[1], target(2, k) = t[2];
-                       }
-                   });
+    *curve = trainPlain(net, config.m, seed, 2, &arena, progress, false,
+                        [&](Rng& rng, Mlp<float>::Matrix& x, Mlp<float>::Matrix& target) {
+                            for (Eigen::Index k = 0; k < x.cols(); ++k) {
+                                const MSample m = drawMSample(rng, bins, rowCdf, config.jitter);
+                                setInputColumn(x, k, m.wi, m.wo);
+                                const float* t = &rdm.rdmM[(m.i * nOut + m.o) * 3];
+                                target(0, k) = t[0], target(1, k) = t[1], target(2, k) = t[2];
+                            }
+                        });
     progress.finish();
     return net.weights();
 }
 
+NetworkWeights fitColourConditionedMNetwork(const ColourTargets& targets,
+                                            const ColourBasis& basis, const FitConfig& config,
+                                            uint64_t seed, tbb::task_arena& arena, bool quiet,
+                                            LossCurve* curve) {
+    const RdmBins& bins = targets.bins();
+    const std::vector<double> rowCdf = outgoingRowCdf(bins);
+    const int functions = basis.functions();
+    const ColourRange range = basis.range();
+    Mlp<float> net(widthsOf(6, config.m.hidden, 3 * functions), OutputFunction::Identity, seed);
+    Progress progress("fit M (any colour)", static_cast<uint64_t>(config.m.steps), quiet);
+    using Matrix = Mlp<float>::Matrix;
+    // Inputs: (wi, wo); extra rows: the sample's C_TT per channel, uniform in the range.
+    const auto fill = [&](Rng& rng, Matrix& x, Matrix& target) {
+        for (Eigen::Index k = 0; k < x.cols(); ++k) {
+            const MSample m = drawMSample(rng, bins, rowCdf, config.jitter);
+            setInputColumn(x, k, m.wi, m.wo);
+            Rgb colour;
+            for (int c = 0; c < 3; ++c) colour[c] = range.lo + (range.hi - range.lo) * rng.uniform();
+            const Rgb t = targets.value(m.i, m.o, colour);
+            for (int c = 0; c < 3; ++c) {
+                x(6 + c, k) = static_cast<float>(colour[c]);
+                target(c, k) = static_cast<float>(t[c]);
+            }
+        }
+    };
+    // The loss on M_c = exp(sum_j a_jc phi_j(C_TT,c)) (yarn/colour_basis.h).
+    const auto lossAndGradient = [&](const Matrix& x, const Matrix& target,
+                                     std::vector<float>& gradient) {
+        const Eigen::Index batch = x.cols();
+        const Mlp<float>::Tape tape = net.forwardTape(x.topRows(6));
+        Matrix dy(tape.y.rows(), batch);
+        double total = 0;
+        double phi[ColourBasis::kMaxFunctions];
+        for (Eigen::Index k = 0; k < batch; ++k)
+            for (int c = 0; c < 3; ++c) {
+                basis.eval(x(6 + c, k), phi);
+                double z = 0;
+                for (int j = 0; j < functions; ++j) z += tape.y(3 * j + c, k) * phi[j];
+                const float y = static_cast<float>(std::exp(std::min(z, 80.0)));
+                const auto [diff, dDiff] = lossResidual(config.m.loss, y, target(c, k));
+                total += static_cast<double>(diff) * diff;
+                const double dz = 2.0 * diff * dDiff * y / static_cast<double>(batch);
+                for (int j = 0; j < functions; ++j)
+                    dy(3 * j + c, k) = static_cast<float>(dz * phi[j]);
+            }
+        net.backward(tape, dy, gradient);
+        return static_cast<float>(total / static_cast<double>(batch));
+    };
+    *curve = train(net, config.m, seed, 3, &arena, progress, false, {6, 3, 3}, fill,
+                   lossAndGradient);
+    progress.finish();
+    return net.weights();
+}
 
 }  // namespace weft

@@ -16,8 +16,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "weft/fit/colour_targets.h"
 #include "weft/fit/fit_config.h"
 #include "weft/gather/rdm_io.h"
+#include "weft/yarn/colour_basis.h"
 #include "weft/yarn/network.h"
 
 namespace weft {
@@ -28,6 +30,14 @@ struct LossCurve {
 
 NetworkWeights fitTransmissionNetwork(const RdmData& rdm, const FitConfig& config, uint64_t seed,
                                       tbb::task_arena& arena, bool quiet, LossCurve* curve);
+// The colour-conditioned M network (yarn/colour_basis.h): 6 -> hidden -> 3K
+// coefficients, trained as M but with a C_TT per channel drawn uniformly
+// from the basis's range for every sample and its target computed for that
+// colour from the recorded paths.
+NetworkWeights fitColourConditionedMNetwork(const ColourTargets& targets,
+                                            const ColourBasis& basis, const FitConfig& config,
+                                            uint64_t seed, tbb::task_arena& arena, bool quiet,
+                                            LossCurve* curve);
 NetworkWeights fitMultipleScatteringNetwork(const RdmData& rdm, const FitConfig& config,
                                            uint64_t seed, tbb::task_arena& arena, bool quiet,
                                            LossCurve* curve);

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -14,6 +15,7 @@
 #include "weft/core/curve_io.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/json_reader.h"
 #include "weft/core/limits.h"
 #include "weft/core/math.h"
 #include "weft/core/npy.h"
@@ -21,18 +23,16 @@
 #include "weft/core/rng.h"
 #include "weft/core/sampling.h"
 #include "weft/fiber/fiber_bcsdf.h"
+#include "weft/gather/colour_paths.h"
 #include "weft/gather/ply_tracer.h"
 
 namespace weft {
 
 namespace {
 
-// Fixed-point unit of the accumulators: associative sums, thread-count
-// independent results. 2^-32 resolves weights to 2.3e-10 and leaves room for
-// 2^31 unit-weight paths in one cell.
+// Fixed-point accumulators (GatherSums::toFixed): associative sums,
+// thread-count independent results.
 constexpr double kFixedScale = GatherSums::kFixedScale;
-
-int64_t toFixed(double w) { return std::llround(w * kFixedScale); }
 
 void atomicAdd(int64_t& cell, int64_t v) {
     if (v != 0) std::atomic_ref<int64_t>(cell).fetch_add(v, std::memory_order_relaxed);
@@ -78,6 +78,11 @@ void GatherOptions::validate() const {
     fiber.validate();
     ply.validate();
     bins.validate();
+    if (anyColour)
+        checkMemoryBudget(static_cast<double>(shard.end(paths) - shard.begin(paths)) *
+                              (2.0 * sizeof(ColourPath)),
+                          "the recorded paths of an any-colour gather (" +
+                              std::to_string(paths) + " paths)");
     // The R and M maps: int64 sums while gathering, float results, and their
     // copies on the way to disk: about 96 bytes per cell.
     checkMemoryBudget(static_cast<double>(bins.incidentCount()) * bins.outgoingCount() * 96.0,
@@ -95,10 +100,11 @@ GatherSums gatherSums(const GatherOptions& o) {
     o.validate();
     const auto start = std::chrono::steady_clock::now();
     const FiberBcsdf fiber(o.fiber);
+    // Any colour: lobes chosen as by a white fiber, weighted per lobe (colour_paths.h).
+    const FiberBcsdf colourBlind(colourBlindFiber(o.fiber));
     const PlyGeometry ply = gatherPly(o);
     const PeriodicPlyTracer tracer(ply, o.segmentsPerTwist);
     const RdmBins& bins = o.bins;
-    const size_t nOut = bins.outgoingCount();
     GatherSums sums = zeroSums(o, ply, tracer);
     sums.firstPath = o.shard.begin(o.paths);
     sums.endPath = o.shard.end(o.paths);
@@ -107,6 +113,8 @@ GatherSums gatherSums(const GatherOptions& o) {
     const double period = tracer.period();
     const int64_t firstPath = sums.firstPath, endPath = sums.endPath;
     const int64_t chunks = (endPath - firstPath + kChunk - 1) / kChunk;
+    // Per chunk, so that their concatenation is in path order for any thread count.
+    std::vector<std::vector<ColourPath>> chunkColourPaths(o.anyColour ? chunks : 0);
     Progress progress(o.shard.whole() ? "gather" : "gather " + o.shard.toString(),
                       static_cast<uint64_t>(endPath - firstPath), o.quiet);
     const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
@@ -133,8 +141,9 @@ GatherSums gatherSums(const GatherOptions& o) {
                     const Vec3 wiLocal = sampleUniformHemisphere(uCosTheta, uPhi);
                     const size_t binIn = bins.incidentBin(wiLocal);
                     Vec3 dir = -entry.fromLocal(wiLocal);
+                    // Any colour: weight = W0 C_TT^ttEvents.
                     Rgb weight(1.0);
-                    int depth = 0, excluded = -1;
+                    int depth = 0, excluded = -1, ttEvents = 0;
                     bool truncatedPath = false;
                     for (;;) {
                         const PlyTraceHit hit = tracer.trace(org, dir, excluded);
@@ -151,7 +160,22 @@ GatherSums gatherSums(const GatherOptions& o) {
                         const Frame fiberFrame =
                             Frame::fromX(ply.fiberTangent(hit.fiber, hit.point.z));
                         const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
-                        const BsdfSample s = fiber.sample(fiberFrame.toLocal(-dir), u, rng);
+                        const Vec3 wiFiber = fiberFrame.toLocal(-dir);
+                        BsdfSample s;
+                        if (o.anyColour) {
+                            BsdfIncident prepared;
+                            colourBlind.prepare(wiFiber, prepared);
+                            const auto& in = prepared.get<FiberBcsdf::Incident>();
+                            s = colourBlind.sample(prepared, u, rng);
+                            if (s.lobe == FiberBcsdf::kLobeR) {
+                                s.weight = in.fresnel / in.probabilityR;
+                            } else if (s.valid()) {
+                                s.weight = (Rgb(1.0) - in.fresnel) / (1.0 - in.probabilityR);
+                                ++ttEvents;
+                            }
+                        } else {
+                            s = fiber.sample(wiFiber, u, rng);
+                        }
                         if (!s.valid()) {
                             weight = Rgb();
                             break;
@@ -162,22 +186,32 @@ GatherSums gatherSums(const GatherOptions& o) {
                         excluded = hit.fiber;
                     }
                     atomicAdd(sums.count[binIn], 1);
+                    atomicAdd(sums.depth[truncatedPath ? o.maxDepth + 1 : depth], 1);
                     chunkDepth += depth;
-                    if (truncatedPath) {
-                        atomicAdd(sums.depth[o.maxDepth + 1], 1);
-                        for (int c = 0; c < 3; ++c)
-                            atomicAdd(sums.sumTruncated[binIn * 3 + c], toFixed(weight[c]));
-                        continue;
-                    }
-                    atomicAdd(sums.depth[depth], 1);
-                    if (depth == 0) {
+                    if (depth == 0 && !truncatedPath) {
                         atomicAdd(sums.countT[binIn], 1);
                         continue;
                     }
-                    const Vec3 woLocal = entry.toLocal(dir);
-                    auto& map = (depth == 1 && woLocal.z > 0) ? sums.sumR : sums.sumM;
-                    const size_t cell = (binIn * nOut + bins.outgoingBin(woLocal)) * 3;
-                    for (int c = 0; c < 3; ++c) atomicAdd(map[cell + c], toFixed(weight[c]));
+                    ColourPath path;
+                    path.incidentBin = static_cast<int32_t>(binIn);
+                    path.ttEvents = ttEvents;
+                    if (truncatedPath) {
+                        path.kind = ColourPath::Truncated;
+                    } else {
+                        const Vec3 woLocal = entry.toLocal(dir);
+                        path.kind = depth == 1 && woLocal.z > 0 ? ColourPath::R : ColourPath::M;
+                        path.outgoingBin = static_cast<int32_t>(bins.outgoingBin(woLocal));
+                    }
+                    if (!o.anyColour) {
+                        addPathWeight(sums, path.kind, binIn,
+                                      static_cast<size_t>(std::max(path.outgoingBin, 0)), weight,
+                                      atomicAdd);
+                        continue;
+                    }
+                    if (weight.isBlack()) continue;
+                    for (int c = 0; c < 3; ++c) path.weight[c] = static_cast<float>(weight[c]);
+                    addColourPath(sums, path, o.fiber.cTT, atomicAdd);
+                    chunkColourPaths[chunk].push_back(path);
                 }
                 rays += chunkRays;
                 axial += chunkAxial;
@@ -194,10 +228,17 @@ GatherSums gatherSums(const GatherOptions& o) {
     sums.axialPaths = axial.load();
     sums.depthSum = depthSum.load();
     sums.threads = threads;
+    size_t recorded = 0;
+    for (const auto& c : chunkColourPaths) recorded += c.size();
+    sums.colourPaths.reserve(recorded);
+    for (auto& c : chunkColourPaths) {
+        sums.colourPaths.insert(sums.colourPaths.end(), c.begin(), c.end());
+        std::vector<ColourPath>().swap(c);
+    }
     return sums;
 }
 
-GatherResult normaliseGather(const GatherSums& sums, const GatherOptions& o, int64_t shards) {
+GatherResult normaliseGather(GatherSums sums, const GatherOptions& o, int64_t shards) {
     const auto start = std::chrono::steady_clock::now();
     const RdmBins& bins = sums.bins;
     const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
@@ -233,6 +274,7 @@ GatherResult normaliseGather(const GatherSums& sums, const GatherOptions& o, int
     r.count = sums.count;
     r.countT = sums.countT;
     r.depth = sums.depth;
+    r.colourPaths = std::move(sums.colourPaths);
 
     GatherStats& st = r.stats;
     st.paths = o.paths;
@@ -259,7 +301,8 @@ GatherResult gatherRdm(const GatherOptions& o) {
     return normaliseGather(gatherSums(o), o);
 }
 
-void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& out) {
+void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& out,
+                 const nlohmann::json& extraMeta) {
     const auto file = [&](const char* name) {
         return (std::filesystem::path(out.path()) / name).string();
     };
@@ -273,8 +316,10 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
     writeNpy(file("truncated.npy"), r.truncated.data(), {ti, pi, 3});
     writeNpy(file("depth.npy"), r.depth.data(), {r.depth.size()});
     writePlyLines(file("ply.txt"), r.plyLines, r.fiberRadius);
-
-    writeFileAtomic(file("meta.json"), gatherMetadata(r, o).dump(2) + "\n");
+    if (o.anyColour) writeColourPaths(out.path(), r.colourPaths);
+    nlohmann::json meta = gatherMetadata(r, o);
+    meta.update(extraMeta);
+    writeFileAtomic(file("meta.json"), meta.dump(2) + "\n");
     out.commit();
 }
 
@@ -307,7 +352,38 @@ nlohmann::json gatherInputs(const GatherOptions& o, double fiberRadius, double p
             {"seed", o.seed},
             {"ply_seed", o.placementSeed()},
             {"max_depth", o.maxDepth},
+            {"any_colour", o.anyColour},
             {"versions", {{"weft", WEFT_VERSION}, {"embree", EmbreeDevice::version()}}}};
+}
+
+GatherOptions gatherOptionsFromJson(const nlohmann::json& meta, const std::string& metaPath) {
+    const JsonObjectReader r(meta, metaPath);
+    GatherOptions o;
+    o.material = r.string("material");
+    o.fiber = FiberParams::fromJson(r.value("fiber"), metaPath, "fiber");
+    const JsonObjectReader ply = r.object("ply");
+    o.ply.fibers = static_cast<int>(ply.integer("fibers", {1, INT_MAX}));
+    o.ply.density = ply.number("density");
+    o.ply.twist = ply.number("twist");
+    // A straight ply is one segment whatever the option was (gatherInputs).
+    const int64_t segments = ply.integer("segments_per_twist", {1, INT_MAX});
+    if (o.ply.twist > 0) o.segmentsPerTwist = static_cast<int>(segments);
+    const std::vector<int64_t> bins = r.integers("bins", 4, 4, {1, 4096}, "(TI, PI, TO, PO)");
+    o.bins = {static_cast<int>(bins[0]), static_cast<int>(bins[1]), static_cast<int>(bins[2]),
+              static_cast<int>(bins[3])};
+    o.paths = r.integer("paths", {1, kMaxPaths});
+    o.seed = r.unsignedInteger("seed");
+    o.plySeed = r.unsignedInteger("ply_seed");
+    o.maxDepth = static_cast<int>(r.integer("max_depth", {1, 1000000}));
+    // Gathers written before any-colour gathers existed have no such field.
+    o.anyColour = meta.contains("any_colour") && r.boolean("any_colour");
+    o.quiet = true;
+    try {
+        o.validate();
+    } catch (const InputError& e) {
+        throw InputError(metaPath + ": " + e.what());
+    }
+    return o;
 }
 
 nlohmann::json gatherMetadata(const GatherResult& r, const GatherOptions& o) {
@@ -338,6 +414,12 @@ nlohmann::json gatherMetadata(const GatherResult& r, const GatherOptions& o) {
           {"truncated", "float64 (TI,PI,3): weight of paths cut at max_depth / count"},
           {"depth",
            "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}}});
+    if (o.anyColour) {
+        meta["colour_paths"] = static_cast<int64_t>(r.colourPaths.size());
+        meta["lobe_choice"] =
+            "as for C_TT = 1, each event weighted by its lobe: R F/p_R, TT (1-F) C_TT/(1-p_R)";
+        meta["arrays"].update(colourPathArrayDescriptions());
+    }
     return meta;
 }
 

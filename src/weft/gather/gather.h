@@ -23,12 +23,14 @@
 // sums are added before normalising (gather_merge.h).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "weft/core/rgb.h"
 #include "weft/core/shard.h"
 #include "weft/fiber/fiber_params.h"
 #include "weft/gather/rdm.h"
@@ -55,9 +57,28 @@ struct GatherOptions {
     // The paths this run walks: [shard.begin(paths), shard.end(paths)) of the
     // `paths` of the whole gather (all of them by default).
     Shard shard;
+    // Colour-blind lobe choice and one record per interacting path, from
+    // which the RDM of any C_TT follows (colour_paths.h).
+    bool anyColour = false;
 
     void validate() const;  // InputError naming the option
     uint64_t placementSeed() const { return plySeed.value_or(seed); }
+};
+
+// One interacting path of an any-colour gather (colour_paths.h).
+struct ColourPath {
+    enum Kind : uint8_t { R = 0, M = 1, Truncated = 2 };
+    int32_t incidentBin = 0;
+    int32_t outgoingBin = -1;  // -1 for Truncated
+    int32_t ttEvents = 0;      // k, the number of TT events
+    Kind kind = M;
+    float weight[3] = {0, 0, 0};  // W0: the path's weight for C_TT = 1
+
+    // W0_c C_TT,c^k in channel c: the one formula of a gather and a recolouring.
+    double weightFor(const Rgb& cTT, int c) const {
+        return static_cast<double>(weight[c]) * std::pow(cTT[c], ttEvents);
+    }
+    bool operator==(const ColourPath&) const = default;
 };
 
 struct GatherStats {
@@ -85,6 +106,7 @@ struct GatherResult {
     std::vector<int64_t> depth;            // depth histogram, 0..maxDepth, then truncated
     std::vector<std::vector<Vec3>> plyLines;  // traced fiber centre lines
     double fiberRadius = 0;
+    std::vector<ColourPath> colourPaths;   // any-colour gathers (colour_paths.h)
     GatherStats stats;
 };
 
@@ -105,9 +127,13 @@ struct GatherSums {
     std::vector<std::vector<Vec3>> plyLines;  // fiber centre lines
     double period = 0, fiberRadius = 0;
     int64_t segments = 0, embreeBytes = 0;
+    // Any-colour gathers: the interacting paths with a non-zero weight, in path order.
+    std::vector<ColourPath> colourPaths;
 
-    // One unit of sumR, sumM and sumTruncated.
+    // One unit of sumR, sumM and sumTruncated: 2^-32 resolves weights to
+    // 2.3e-10 and leaves room for 2^31 unit-weight paths in one cell.
     static constexpr double kFixedScale = 4294967296.0;
+    static int64_t toFixed(double w) { return std::llround(w * kFixedScale); }
 };
 
 // Zero sums for the bins and depth of `options`, with the ply's description
@@ -117,17 +143,19 @@ GatherSums emptyGatherSums(const GatherOptions& options);
 GatherSums gatherSums(const GatherOptions& options);
 // The RDM of the sums of the whole gather (every path of options.paths), with
 // the ply's centre lines and statistics; `shards` and the times as GatherStats says.
-GatherResult normaliseGather(const GatherSums& sums, const GatherOptions& options,
+GatherResult normaliseGather(GatherSums sums, const GatherOptions& options,
                              int64_t shards = 1);
 GatherResult gatherRdm(const GatherOptions& options);
 
 class TempDirCommit;
 
 // Writes count.npy, count_t.npy, p_t.npy, rdm_r.npy, rdm_m.npy, truncated.npy,
-// depth.npy, ply.txt and meta.json into the temporary directory and renames
-// it into place. Create `out` before gathering so that an unwritable
-// destination fails at once.
-void writeGather(const GatherResult& result, const GatherOptions& options, TempDirCommit& out);
+// depth.npy, ply.txt, the paths_*.npy of an any-colour gather and meta.json
+// (gatherMetadata updated with `extraMeta`) into the temporary directory and
+// renames it into place. Create `out` before gathering so that an
+// unwritable destination fails at once.
+void writeGather(const GatherResult& result, const GatherOptions& options, TempDirCommit& out,
+                 const nlohmann::json& extraMeta = nlohmann::json::object());
 // ply.txt: the traced fiber centre lines as a curve file (core/curve_io.h).
 void writePlyLines(const std::string& path, const std::vector<std::vector<Vec3>>& lines,
                    double fiberRadius);
@@ -138,5 +166,8 @@ nlohmann::json gatherMetadata(const GatherResult& result, const GatherOptions& o
 // gather share it (gather_merge.h).
 nlohmann::json gatherInputs(const GatherOptions& options, double fiberRadius, double period,
                             int64_t segments);
+// The options gatherInputs() wrote (shard: the whole gather); InputError
+// naming `metaPath` and the field when one is missing or out of range.
+GatherOptions gatherOptionsFromJson(const nlohmann::json& meta, const std::string& metaPath);
 
 }  // namespace weft

@@ -5,12 +5,14 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <numeric>
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/json_file.h"
 #include "weft/core/json_reader.h"
 #include "weft/core/npy.h"
+#include "weft/gather/colour_paths.h"
 
 namespace weft {
 
@@ -45,23 +47,7 @@ Part readPart(const std::string& dir) {
                          "\", expected \"" + kPartFormat + "\")");
     r.integer("version", {1, 1, " (the part format this weft reads)"});
     GatherOptions& o = p.options;
-    o.material = r.string("material");
-    o.fiber = FiberParams::fromJson(r.value("fiber"), p.metaPath, "fiber");
-    const JsonObjectReader ply = r.object("ply");
-    o.ply.fibers = static_cast<int>(ply.integer("fibers", {1, INT_MAX}));
-    o.ply.density = ply.number("density");
-    o.ply.twist = ply.number("twist");
-    // A straight ply is one segment whatever the option was (gatherInputs).
-    const int64_t segments = ply.integer("segments_per_twist", {1, INT_MAX});
-    if (o.ply.twist > 0) o.segmentsPerTwist = static_cast<int>(segments);
-    const std::vector<int64_t> bins = r.integers("bins", 4, 4, {1, 4096}, "(TI, PI, TO, PO)");
-    o.bins = {static_cast<int>(bins[0]), static_cast<int>(bins[1]), static_cast<int>(bins[2]),
-              static_cast<int>(bins[3])};
-    o.paths = r.integer("paths", {1, kMaxPaths});
-    o.seed = r.unsignedInteger("seed");
-    o.plySeed = r.unsignedInteger("ply_seed");
-    o.maxDepth = static_cast<int>(r.integer("max_depth", {1, 1000000}));
-    o.quiet = true;
+    o = gatherOptionsFromJson(p.meta, p.metaPath);
     const JsonObjectReader shard = r.object("shard");
     o.shard.count = shard.integer("count", {1, Shard::kMaxCount});
     o.shard.index = shard.integer("index", {0, o.shard.count - 1});
@@ -95,6 +81,7 @@ std::vector<std::pair<std::string, nlohmann::json>> sharedFields(const Part& p) 
             {"seed", m.at("seed")},
             {"ply_seed", m.at("ply_seed")},
             {"max_depth", m.at("max_depth")},
+            {"any_colour", m.value("any_colour", nlohmann::json(false))},
             {"shard.count", m.at("shard").at("count")},
             {"versions.weft", m.contains("versions") && m.at("versions").is_object() &&
                                       m.at("versions").contains("weft")
@@ -102,10 +89,10 @@ std::vector<std::pair<std::string, nlohmann::json>> sharedFields(const Part& p) 
                                   : nlohmann::json()}};
 }
 
-// Adds the int64 array `path` of `shape` to `into`, element by element; its
-// elements must be >= 0 (counts and weights) and the sums fit in int64.
-void addArray(const std::string& path, const std::vector<size_t>& shape,
-              std::vector<int64_t>& into) {
+}  // namespace
+
+void addInt64Npy(const std::string& path, const std::vector<size_t>& shape,
+                 std::vector<int64_t>& into) {
     const NpyArray a = readNpy(path);
     if (a.descr != "<i8" || a.shape != shape)
         throw InputError(path + ": expected <i8 of shape " + npyShapeString(shape) + ", got " +
@@ -123,14 +110,6 @@ void addArray(const std::string& path, const std::vector<size_t>& shape,
     }
 }
 
-int64_t sumOf(const std::vector<int64_t>& values, size_t first, size_t end) {
-    int64_t sum = 0;
-    for (size_t k = first; k < end; ++k) sum += values[k];
-    return sum;
-}
-
-}  // namespace
-
 void writeGatherPart(const GatherSums& s, const GatherOptions& o, TempDirCommit& out) {
     const auto file = [&](const char* name) { return inDir(out.path(), name); };
     const RdmBins& b = s.bins;
@@ -142,6 +121,7 @@ void writeGatherPart(const GatherSums& s, const GatherOptions& o, TempDirCommit&
     writeNpy(file("sum_truncated.npy"), s.sumTruncated.data(), {ti, pi, 3});
     writeNpy(file("depth.npy"), s.depth.data(), {s.depth.size()});
     writePlyLines(file("ply.txt"), s.plyLines, s.fiberRadius);
+    if (o.anyColour) writeColourPaths(out.path(), s.colourPaths);
     nlohmann::json meta = gatherInputs(o, s.fiberRadius, s.period, s.segments);
     meta.update({
         {"format", kPartFormat},
@@ -165,6 +145,7 @@ void writeGatherPart(const GatherSums& s, const GatherOptions& o, TempDirCommit&
           {"sum_truncated", "int64 (TI,PI,3): summed weight of paths cut at max_depth, 2^-32 units"},
           {"depth", "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}},
     });
+    if (o.anyColour) meta["arrays"].update(colourPathArrayDescriptions());
     writeFileAtomic(file("meta.json"), meta.dump(2) + "\n");
     out.commit();
 }
@@ -199,24 +180,35 @@ MergedGather mergeGatherParts(const std::vector<std::string>& partDirs) {
     const RdmBins& b = m.options.bins;
     const size_t ti = b.thetaI, pi = b.phiI, to = b.thetaO, po = b.phiO;
     const size_t depthSize = sums.depth.size();
+    // Shard order is path order: the recorded paths of an any-colour gather
+    // are concatenated in it.
+    std::sort(parts.begin(), parts.end(), [](const Part& a, const Part& b) {
+        return a.options.shard.index < b.options.shard.index;
+    });
     for (const Part& p : parts) {
         const auto file = [&](const char* name) { return inDir(p.dir, name); };
-        const int64_t paths = p.options.shard.end(m.options.paths) - p.options.shard.begin(m.options.paths);
+        const Shard& shard = p.options.shard;
+        const int64_t paths = shard.end(m.options.paths) - shard.begin(m.options.paths);
         // The counts first, checked against the shard's paths.
         std::vector<int64_t> count(sums.count.size(), 0), depth(depthSize, 0);
-        addArray(file("count.npy"), {ti, pi}, count);
-        addArray(file("depth.npy"), {depthSize}, depth);
-        if (sumOf(count, 0, count.size()) != paths || sumOf(depth, 0, depthSize) != paths)
+        addInt64Npy(file("count.npy"), {ti, pi}, count);
+        addInt64Npy(file("depth.npy"), {depthSize}, depth);
+        const int64_t countSum = std::accumulate(count.begin(), count.end(), int64_t{0});
+        const int64_t depthSum = std::accumulate(depth.begin(), depth.end(), int64_t{0});
+        if (countSum != paths || depthSum != paths)
             throw InputError(p.dir + ": count.npy and depth.npy must each sum to the shard's " +
-                             std::to_string(paths) + " paths, got " +
-                             std::to_string(sumOf(count, 0, count.size())) + " and " +
-                             std::to_string(sumOf(depth, 0, depthSize)));
+                             std::to_string(paths) + " paths, got " + std::to_string(countSum) +
+                             " and " + std::to_string(depthSum));
         for (size_t k = 0; k < count.size(); ++k) sums.count[k] += count[k];
         for (size_t k = 0; k < depthSize; ++k) sums.depth[k] += depth[k];
-        addArray(file("count_t.npy"), {ti, pi}, sums.countT);
-        addArray(file("sum_r.npy"), {ti, pi, to, po, 3}, sums.sumR);
-        addArray(file("sum_m.npy"), {ti, pi, to, po, 3}, sums.sumM);
-        addArray(file("sum_truncated.npy"), {ti, pi, 3}, sums.sumTruncated);
+        addInt64Npy(file("count_t.npy"), {ti, pi}, sums.countT);
+        addInt64Npy(file("sum_r.npy"), {ti, pi, to, po, 3}, sums.sumR);
+        addInt64Npy(file("sum_m.npy"), {ti, pi, to, po, 3}, sums.sumM);
+        addInt64Npy(file("sum_truncated.npy"), {ti, pi, 3}, sums.sumTruncated);
+        if (m.options.anyColour) {
+            const std::vector<ColourPath> recorded = readColourPaths(p.dir, m.options, paths);
+            sums.colourPaths.insert(sums.colourPaths.end(), recorded.begin(), recorded.end());
+        }
         const JsonObjectReader r(p.meta, p.metaPath);
         sums.rays += r.integer("rays", {0, std::numeric_limits<int64_t>::max() / 65536});
         sums.axialPaths += r.integer("axial_paths", {0, paths});

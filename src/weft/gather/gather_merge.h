@@ -50,4 +50,10 @@ struct MergedGather {
 // parts given).
 MergedGather mergeGatherParts(const std::vector<std::string>& partDirs);
 
+// Adds the int64 array in the .npy file `path` to `into` element by element;
+// InputError naming the file unless it is <i8 of `shape`, every element is
+// >= 0 (counts and weights) and the sums fit in int64.
+void addInt64Npy(const std::string& path, const std::vector<size_t>& shape,
+                 std::vector<int64_t>& into);
+
 }  // namespace weft

@@ -172,8 +172,8 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
     for (const LightDesc& light : desc.lights) lights_.push_back(makeLight(light));
     if (lights_.empty()) lights_.push_back(std::make_unique<EnvironmentLight>(skyLight()));
 
-    // One material per distinct model file.
-    std::map<std::string, int> materialOf;
+    // One material per distinct model file and colour.
+    std::map<std::pair<std::string, std::vector<double>>, int> materialOf;
     std::vector<PlyParams> plyOf;
     std::vector<CurveSet> curveSets;
     std::vector<int> yarnMaterial;
@@ -182,9 +182,22 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
         checkCurveExtent(curveSets.back(), desc, curveSets.size() - 1);
         stats_.curves += static_cast<int64_t>(curveSets.back().curves.size());
         stats_.curvePoints += static_cast<int64_t>(curveSets.back().pointCount());
-        auto [it, inserted] = materialOf.try_emplace(yarn.model, static_cast<int>(plyOf.size()));
+        const std::vector<double> colourKey =
+            yarn.colour ? std::vector<double>{yarn.colour->r, yarn.colour->g, yarn.colour->b}
+                        : std::vector<double>{};
+        auto [it, inserted] = materialOf.try_emplace({yarn.model, colourKey},
+                                                     static_cast<int>(plyOf.size()));
         if (inserted) {
-            const YarnModel model = loadYarnModel(yarn.model);
+            YarnModel model = loadYarnModel(yarn.model);
+            if (yarn.colour) {
+                const std::string what = (desc.path.empty() ? std::string("scene") : desc.path) +
+                                         ": yarns[" + std::to_string(curveSets.size() - 1) +
+                                         "].colour";
+                // Neural mode: the conditioned model of that colour; fiber and
+                // dual mode: the fiber itself, whatever the model.
+                if (mode == RenderMode::Neural) model = model.forColour(*yarn.colour, what);
+                else model.fiber.cTT = *yarn.colour;
+            }
             plyOf.push_back(model.ply);
             if (mode == RenderMode::Neural)
                 bsdfs_.push_back(std::make_unique<YarnBsdf>(model, yarn.model, yarnOptions));

@@ -174,7 +174,7 @@ LightDesc readLight(JsonObjectReader r, const std::string& baseDir) {
 }
 
 YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
-    r.allowKeys({"curves", "scale", "radius", "plies", "ply_twist", "model"});
+    r.allowKeys({"curves", "scale", "radius", "plies", "ply_twist", "model", "colour"});
     YarnDesc y;
     y.curves = readFileName(r, "curves", baseDir, {".bcc", ".txt", ".obj"});
     y.model = readFileName(r, "model", baseDir, {});
@@ -183,6 +183,10 @@ YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
     if (r.has("plies")) y.plies = static_cast<int>(r.integer("plies", {1, kMaxPlies}));
     if (r.has("ply_twist"))
         y.plyTwist = r.number("ply_twist", NumberRange::closed(-kMaxPlyTwist, kMaxPlyTwist));
+    if (r.has("colour")) {
+        const std::vector<double> c = r.numbers("colour", 3, NumberRange::closed(0, 1), "(r, g, b)");
+        y.colour = Rgb(c[0], c[1], c[2]);
+    }
     return y;
 }
 
@@ -284,6 +288,7 @@ json toJson(const SceneDesc& scene) {
                    {"ply_twist", y.plyTwist},
                    {"model", y.model}};
         if (y.radius) yj["radius"] = *y.radius;
+        if (y.colour) yj["colour"] = rgbJson(*y.colour);
         yarns.push_back(std::move(yj));
     }
     j["yarns"] = std::move(yarns);

@@ -71,6 +71,10 @@ struct YarnDesc {
     int plies = 1;                 // [1, 16]
     double plyTwist = 0;           // finite, |ply_twist| <= 100; sign: + right-handed
     std::string model;             // resolved path of a MODEL.json from `weft fit` (required)
+    // The fiber colour C_TT of this yarn, each channel in [0, 1]; absent: the
+    // model's. Fiber and dual mode use it with any model; neural mode needs a
+    // colour-conditioned model (docs/colour.md).
+    std::optional<Rgb> colour;
 };
 
 struct SceneDesc {

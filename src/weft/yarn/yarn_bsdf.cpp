@@ -46,6 +46,11 @@ constexpr double kMinimumShare = 1e-3;
 
 YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
                    const YarnBsdfOptions& options)
+    : YarnBsdf(model.colour ? model.forColour(model.fiber.cTT, source) : model, source, options,
+               OneColour{}) {}
+
+YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
+                   const YarnBsdfOptions& options, OneColour)
     : tNet_(validated(model, source).tNet, source + ": t_net"),
       mNet_(model.mNet, source + ": m_net"),
       rLobe_(withSource<RLobe>(source, model.fiber, model.rLobe)),

@@ -135,6 +135,9 @@ class YarnBsdf final : public Bsdf {
     // shapes (3 -> 1 and 6 -> 3), output functions (sigmoid for t_net so that
     // P(T) is a probability, exp for m_net so that S_M >= 0) and sizes that the
     // fixed-size evaluator holds; the fiber, R lobe and sampling parameters.
+    // A colour-conditioned model (yarn_model.h) is rendered at its own
+    // gathered colour, model.forColour(model.fiber.cTT); pass
+    // model.forColour(cTT) for another colour.
     explicit YarnBsdf(const YarnModel& model, const std::string& source = "yarn model",
                       const YarnBsdfOptions& options = {});
     // loadYarnModel(path), then the constructor with the path as source.
@@ -166,6 +169,11 @@ class YarnBsdf final : public Bsdf {
     YarnSampling sampling() const { return sampling_; }
 
   private:
+    // The constructor proper, for a model of one colour.
+    struct OneColour {};
+    YarnBsdf(const YarnModel& model, const std::string& source, const YarnBsdfOptions& options,
+             OneColour);
+
     // What eval and pdf need of wi (in the upper hemisphere): P(T), the
     // calibration of R, and the calibration times the energy guard of M.
     struct Incident {

@@ -214,8 +214,9 @@ EnergyCalibration readCalibration(const JsonObjectReader& model) {
 // (JSON objects are unordered; this is for the human reader). Keys not listed
 // (the free-form "fit" block) follow in alphabetical order.
 // clang-format off
-constexpr std::array<std::string_view, 35> kKeyOrder = {
-    "format",      "version",      "ablation", "fiber",      "ply",         "t_net",
+constexpr std::array<std::string_view, 38> kKeyOrder = {
+    "format",      "version",      "ablation", "fiber",      "ply",  "colour", "c_tt_range",
+    "variable",    "t_net",
     "m_net",       "r_lobe",       "sampling", "energy_calibration", "degree", "r", "m", "fit",
     "layers",      "output",       "weight",   "bias",       "prelu",       "tilt_deg",
     "masking",     "form",         "coefficients", "fibers", "density",     "twist",
@@ -309,9 +310,34 @@ void SamplingParams::validate() const {
 
 void YarnModel::validate() const {
     tNet.validate("t_net", 3, 1, OutputFunction::Sigmoid, "P(T|wi) must lie in [0, 1]");
-    mNet.validate("m_net", 6, 3, OutputFunction::Exp, "S_M must be non-negative");
+    if (colour) {
+        mNet.validate("m_net", 6, 3 * colour->functions(), OutputFunction::Identity,
+                      "a conditioned model's colour functions combine its outputs before exp");
+        if (ablation != YarnAblation::None || !calibration.empty())
+            throw InputError("colour: a conditioned model has no ablation and no "
+                             "energy_calibration");
+    } else {
+        mNet.validate("m_net", 6, 3, OutputFunction::Exp, "S_M must be non-negative");
+    }
     rLobe.validate();
     sampling.validate();
+}
+
+YarnModel YarnModel::forColour(const Rgb& cTT, const std::string& what) const {
+    if (!colour)
+        throw InputError(what + ": the model is fitted for one colour (C_TT " +
+                         formatNumber(fiber.cTT.r) + ", " + formatNumber(fiber.cTT.g) + ", " +
+                         formatNumber(fiber.cTT.b) +
+                         "); for other colours fit it with weft fit --colour-range from a gather "
+                         "made with --any-colour");
+    for (int c = 0; c < 3; ++c)
+        if (!(cTT[c] >= 0 && cTT[c] <= 1))
+            throw InputError(what + ": C_TT " + formatNumber(cTT[c]) + " is out of range: allowed [0, 1]");
+    YarnModel m = *this;
+    m.fiber.cTT = cTT;
+    m.mNet = foldColourIntoNetwork(mNet, *colour, cTT);
+    m.colour.reset();
+    return m;
 }
 
 const char* yarnAblationName(YarnAblation ablation) {
@@ -345,7 +371,7 @@ nlohmann::json yarnModelToJson(const YarnModel& model) {
                        {"r", model.calibration.r},
                        {"m", model.calibration.m}};
     json document = {{"format", kYarnModelFormat},
-                     {"version", kYarnModelVersion},
+                     {"version", model.colour ? 2 : 1},
                      {"fiber", model.fiber.toJson()},
                      {"ply",
                       {{"fibers", model.ply.fibers},
@@ -364,6 +390,7 @@ nlohmann::json yarnModelToJson(const YarnModel& model) {
     // Absent for the full model, so that its files stay as they were.
     if (model.ablation != YarnAblation::None)
         document["ablation"] = yarnAblationName(model.ablation);
+    if (model.colour) document["colour"] = model.colour->toJson();
     return document;
 }
 
@@ -379,19 +406,26 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
         r.fail(std::string("missing key \"format\" (expected \"") + kYarnModelFormat +
                "\": not a weft yarn model?)");
     r.oneOf("format", {kYarnModelFormat});
-    if (r.integer("version") != kYarnModelVersion)
+    const int64_t version = r.integer("version");
+    if (version < 1 || version > kYarnModelVersion)
         r.fail("version", "unsupported version " + describeJson(r.value("version")) +
-                              " (supported: " + std::to_string(kYarnModelVersion) + ")");
+                              " (supported: 1 to " + std::to_string(kYarnModelVersion) + ")");
     // energy_calibration may be absent (files written before it existed);
-    // ablation is absent for the full model.
-    r.allowKeys({"format", "version", "ablation", "fiber", "ply", "t_net", "m_net", "r_lobe",
-                 "sampling", "energy_calibration", "fit"});
+    // ablation is absent for the full model; colour needs version 2.
+    if (version >= 2)
+        r.allowKeys({"format", "version", "ablation", "fiber", "ply", "t_net", "m_net", "r_lobe",
+                     "sampling", "energy_calibration", "fit", "colour"});
+    else
+        r.allowKeys({"format", "version", "ablation", "fiber", "ply", "t_net", "m_net", "r_lobe",
+                     "sampling", "energy_calibration", "fit"});
 
     YarnModel model;
     model.fiber = FiberParams::fromJson(r.value("fiber"), source, "fiber");
     model.ply = readPly(r);
     model.tNet = readNetwork(r, "t_net", 3, 1);
-    model.mNet = readNetwork(r, "m_net", 6, 3);
+    if (version >= 2 && r.has("colour"))
+        model.colour = ColourBasis::fromJson(r.value("colour"), source + ": colour");
+    model.mNet = readNetwork(r, "m_net", 6, model.colour ? 3 * model.colour->functions() : 3);
     model.rLobe = readRLobe(r);
     model.sampling = readSampling(r);
     model.calibration = readCalibration(r);

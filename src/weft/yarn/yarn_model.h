@@ -13,6 +13,13 @@
 //   fit       errors and provenance of the fit (free-form numbers and strings)
 //   ablation  optional: "naive" or "no_r_lobe" for the ablations of paper
 //             Fig. 5 (YarnAblation below); absent for the full model
+//   colour    version 2 only, optional: a colour-conditioned model (fitted
+//             from one any-colour gather, docs/colour.md) for any C_TT in
+//             "c_tt_range": m_net then has 3K outputs and an identity output,
+//             and "functions" holds the K colour functions (yarn/colour_basis.h).
+//             forColour(C_TT) gives the ordinary model of one colour.
+// Version 1 files (no "colour") still load; the writer writes version 1
+// unless the model is conditioned.
 // Networks: {"layers": [{"weight": [[in numbers] x out rows], "bias": [out],
 // "prelu": [out] or null}, ...], "output": "sigmoid" | "exp" | "identity"};
 // layer l computes y = W x + b, then the PReLU when present. Network inputs
@@ -20,10 +27,13 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "weft/core/rgb.h"
 #include "weft/fiber/fiber_params.h"
+#include "weft/yarn/colour_basis.h"
 #include "weft/yarn/energy_calibration.h"
 #include "weft/yarn/network.h"
 #include "weft/ply/ply.h"
@@ -31,7 +41,7 @@
 namespace weft {
 
 inline constexpr const char* kYarnModelFormat = "weft-yarn-model";
-inline constexpr int kYarnModelVersion = 1;
+inline constexpr int kYarnModelVersion = 2;  // the newest; 1 is read too
 
 // The R lobe (paper eq. 8): (1 - P(T|wi)) S_f(wi~, wo~) in the surface fiber
 // frame (tangent tilted by tiltDeg = atan(pi alpha) about n), zero unless both
@@ -76,12 +86,14 @@ struct YarnModel {
     FiberParams fiber;
     PlyParams ply;
     NetworkWeights tNet;  // 3 inputs, 1 output
-    NetworkWeights mNet;  // 6 inputs, 3 outputs
+    NetworkWeights mNet;  // 6 inputs, 3 outputs (3K, identity output, when conditioned)
     RLobeParams rLobe;
     SamplingParams sampling;
     EnergyCalibration calibration;  // empty: none
     nlohmann::json fit = nlohmann::json::object();  // errors and provenance, written as is
     YarnAblation ablation = YarnAblation::None;
+    // A colour-conditioned model: the colour functions of its M network.
+    std::optional<ColourBasis> colour;
 
     // What the renderer needs beyond the file's syntax (InputError naming the
     // key): the networks' shapes (t_net 3 -> 1, m_net 6 -> 3) and output
@@ -89,6 +101,14 @@ struct YarnModel {
     // and the R lobe and sampling parameters' ranges. The reader and YarnBsdf
     // both call it.
     void validate() const;
+
+    // The ordinary model of one fiber colour C_TT (each channel in [0, 1],
+    // clamped into the model's colour range for M): fiber.cTT = cTT, and the
+    // colour functions at cTT folded into m_net's last layer
+    // (foldColourIntoNetwork), so that it renders exactly like a model
+    // fitted for that colour alone and costs the same. InputError naming
+    // `what` for a model that is not conditioned or a colour out of [0, 1].
+    YarnModel forColour(const Rgb& cTT, const std::string& what) const;
 
     // Whether S_T (the T network) and S_R (the analytic lobe) are part of the BSDF.
     bool hasTransmissionLobe() const { return ablation != YarnAblation::Naive; }

@@ -347,8 +347,13 @@ TEST(YarnModel, NetworksMustStayFiniteOverTheirDomain) {
 
 TEST(YarnModel, VersionAndFormat) {
     json j = yarnModelToJson(sampleModel());
+    j["version"] = 3;
+    expectModelError(j, {"version: unsupported version 3 (supported: 1 to 2)"});
+    j["version"] = 0;
+    expectModelError(j, {"version: unsupported version 0"});
+    // Version 2 adds the optional "colour" block; without it a file reads the same.
     j["version"] = 2;
-    expectModelError(j, {"version: unsupported version 2 (supported: 1)"});
+    EXPECT_NO_THROW(yarnModelFromJson(j, "model.json"));
     j = yarnModelToJson(sampleModel());
     j["format"] = "weft-fiber";
     expectModelError(j, {"format: expected \"weft-yarn-model\"", "weft-fiber"});

@@ -1,0 +1,47 @@
+// weft/fit/colour_targets.h — RDM_M of any fiber colour, cell by cell, from an
+// any-colour gather's recorded paths (gather/colour_paths.h).
+//
+// The M paths sorted by cell (incident bin, outgoing bin): the value of a
+// cell for C_TT is sum over its paths of W0_c C_TT,c^k / count(i) /
+// solidAngle(o), exactly what an ordinary gather of that colour holds in
+// rdm_m (DESIGN.md 5), for any colour and without a map per colour. With the
+// paper's 16M paths over 8M cells a cell holds a few paths, so a value costs a
+// few multiplications: the training of a colour-conditioned M network draws
+// a new colour for every sample. Memory: 16 bytes per M path and 4 per cell.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "weft/core/rgb.h"
+#include "weft/gather/gather.h"
+#include "weft/gather/rdm.h"
+
+namespace weft {
+
+class ColourTargets {
+  public:
+    // The M paths of `paths` (others are skipped) for a gather with `bins` and
+    // per-incident-bin path counts `count`.
+    ColourTargets(const std::vector<ColourPath>& paths, const RdmBins& bins,
+                  const std::vector<int64_t>& count);
+
+    const RdmBins& bins() const { return bins_; }
+    size_t paths() const { return entries_.size(); }
+
+    // RDM_M of cell (i, o) for the colour C_TT.
+    Rgb value(size_t incidentBin, size_t outgoingBin, const Rgb& cTT) const;
+    // The whole map (TI, PI, TO, PO, 3) for C_TT, as rdm_m.npy holds it.
+    std::vector<float> map(const Rgb& cTT) const;
+
+  private:
+    struct Entry {
+        int32_t ttEvents;
+        float weight[3];  // W0 / count(i) / solidAngle(o)
+    };
+    RdmBins bins_;
+    std::vector<uint32_t> cellStart_;  // nIn * nOut + 1 offsets into entries_
+    std::vector<Entry> entries_;
+};
+
+}  // namespace weft

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "weft/core/curve_io.h"
@@ -101,7 +102,8 @@ GatherSums gatherSums(const GatherOptions& o) {
     const auto start = std::chrono::steady_clock::now();
     const FiberBcsdf fiber(o.fiber);
     // Any colour: lobes chosen as by a white fiber, weighted per lobe (colour_paths.h).
-    const FiberBcsdf colourBlind(colourBlindFiber(o.fiber));
+    std::optional<FiberBcsdf> colourBlind;
+    if (o.anyColour) colourBlind.emplace(colourBlindFiber(o.fiber));
     const PlyGeometry ply = gatherPly(o);
     const PeriodicPlyTracer tracer(ply, o.segmentsPerTwist);
     const RdmBins& bins = o.bins;
@@ -164,9 +166,9 @@ GatherSums gatherSums(const GatherOptions& o) {
                         BsdfSample s;
                         if (o.anyColour) {
                             BsdfIncident prepared;
-                            colourBlind.prepare(wiFiber, prepared);
+                            colourBlind->prepare(wiFiber, prepared);
                             const auto& in = prepared.get<FiberBcsdf::Incident>();
-                            s = colourBlind.sample(prepared, u, rng);
+                            s = colourBlind->sample(prepared, u, rng);
                             if (s.lobe == FiberBcsdf::kLobeR) {
                                 s.weight = in.fresnel / in.probabilityR;
                             } else if (s.valid()) {

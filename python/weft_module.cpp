@@ -46,6 +46,7 @@
 #include "weft/render/curves.h"
 #include "weft/render/render_merge.h"
 #include "weft/render/renderer.h"
+#include "weft/eval/scene_gen.h"
 #include "weft/render/scene.h"
 #include "weft/render/scene_file.h"
 #include "weft/yarn/material_preset.h"
@@ -796,6 +797,43 @@ py::object pyCurvesInfo(const py::object& pathArg, const py::object& radiusArg) 
     return pyFromJson(report);
 }
 
+py::object pyScene(const std::string& kindName, const py::object& model, const py::object& out,
+                   int size, double radius, int plies, double plyTwist, int width, int height,
+                   int spp, const py::object& envmap, const py::object& colours, int stripe) {
+    const eval::SceneKind kind = eval::parseSceneKind(kindName);
+    eval::SceneOptions o;
+    o.model = pathOf(model, "model");
+    const std::string dir = pathOf(out, "out");
+    o.size = size;
+    o.radius = radius;
+    o.plies = plies;
+    o.plyTwist = plyTwist;
+    o.width = width;
+    o.height = height;
+    o.spp = spp;
+    o.stripe = stripe;
+    if (!envmap.is_none()) o.envmap = pathOf(envmap, "envmap");
+    if (!colours.is_none())
+        for (const auto& c : colours.cast<std::vector<std::vector<double>>>()) {
+            if (c.size() != 3)
+                throw InputError("colours: each colour is (r, g, b) in [0, 1], got " +
+                                 std::to_string(c.size()) + " values");
+            o.colours.emplace_back(c[0], c[1], c[2]);
+        }
+    checkOutputsSpareInputs({{"model", o.model}, {"envmap", o.envmap}}, {}, {}, {{"out", dir}});
+    json summary;
+    std::vector<std::string> warnings;
+    {
+        py::gil_scoped_release release;
+        const eval::GeneratedScene generated = eval::generateScene(kind, o);
+        eval::writeScene(generated, dir);
+        summary = eval::sceneSummary(generated, kind, dir, &warnings);
+    }
+    for (const std::string& w : warnings)
+        if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw py::error_already_set();
+    return pyFromJson(summary);
+}
+
 }  // namespace
 
 }  // namespace weft::python
@@ -1013,6 +1051,15 @@ PYBIND11_MODULE(weft, m) {
           "`weft curves info`: the report of a curve file (.bcc, .txt, .obj) as a dict: counts, "
           "lengths, bounds, the closest contact, the largest radius without overlap and, with "
           "radius=, the overlap at that radius.");
+
+    m.def("scene", &pyScene, py::arg("kind"), py::kw_only(), py::arg("model"), py::arg("out"),
+          py::arg("size") = 6, py::arg("radius") = 0.01, py::arg("plies") = 3,
+          py::arg("ply_twist") = 0.3, py::arg("width") = 512, py::arg("height") = 512,
+          py::arg("spp") = 64, py::arg("envmap") = py::none(), py::arg("colours") = py::none(),
+          py::arg("stripe") = 2,
+          "`weft scene`: writes the generated scene folder `out` (\"closeup\", \"weave\" or "
+          "\"knit\") and returns its summary dict; colours=[(r, g, b)] colours every yarn, two "
+          "colours make a striped knit or a check weave (stripe yarns per stripe).");
 
     m.def("render", &pyRender, py::arg("scene"), py::kw_only(), py::arg("mode") = "neural",
           py::arg("spp") = py::none(), py::arg("seconds") = py::none(), py::arg("threads") = 0,

@@ -168,3 +168,25 @@ def test_colour_range_fit(tmp_path):
         weft.fit(tmp_path / "ac", config=SHORT_FIT, colour_range=(0.5, 0.4))
     with pytest.raises(ValueError, match="colour_functions"):
         weft.fit(tmp_path / "ac", config=SHORT_FIT, colour_range=(0.3, 0.9), colour_functions=1)
+
+
+def test_scene_with_colours_matches_cli(cli, tmp_path, root):
+    model = root / "tests" / "data" / "fleece-small.json"
+    summary = weft.scene("knit", model=model, out=tmp_path / "py", size=2, width=12, height=8,
+                         colours=[(0.9, 0.2, 0.1), (0.1, 0.3, 0.8)], stripe=1)
+    assert summary["kind"] == "knit" and len(summary["curves"]) == 2
+    assert summary["colours"] == [[0.9, 0.2, 0.1], [0.1, 0.3, 0.8]]
+    cli("scene", "knit", "--model", model, "--out", tmp_path / "cli", "--size", 2, "--width", 12,
+        "--height", 8, "--colours", "0.9,0.2,0.1", "0.1,0.3,0.8", "--stripe", 1)
+    for name in ("yarns-1.txt", "yarns-2.txt"):
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
+    py_scene = json.loads((tmp_path / "py" / "scene.json").read_text())
+    cli_scene = json.loads((tmp_path / "cli" / "scene.json").read_text())
+    assert py_scene == cli_scene
+    assert [y["colour"] for y in py_scene["yarns"]] == [[0.9, 0.2, 0.1], [0.1, 0.3, 0.8]]
+    with pytest.raises(ValueError, match="colours"):
+        weft.scene("knit", model=model, out=tmp_path / "bad", colours=[(0.5, 0.5)])
+    with pytest.raises(ValueError, match="one colour"):
+        weft.scene("closeup", model=model, out=tmp_path / "bad", colours=[(0, 0, 0), (1, 1, 1)])
+    with pytest.raises(ValueError, match="closeup, weave, knit"):
+        weft.scene("twill", model=model, out=tmp_path / "bad")

@@ -60,6 +60,13 @@ TEST_F(FitCliTest, ColourRangeFitsAModelForAnyColour) {
                     {"--c-tt", "R,G,B"});
     ASSERT_EQ(run("scene closeup --model any.json --width 12 --height 8 --out sc").status, 0);
     ASSERT_EQ(run("render sc/scene.json --spp 2 --quiet --out r.exr").status, 0);
+    // A striped knit of two other colours, in neural mode.
+    ASSERT_EQ(run("scene knit --model any.json --size 2 --colours 0.9,0.2,0.1 0.1,0.3,0.8 "
+                  "--width 12 --height 8 --out striped")
+                  .status,
+              0);
+    ASSERT_EQ(run("render striped/scene.json --mode neural --spp 2 --quiet --out s.exr").status,
+              0);
 
     expectUserError(run("fit --rdm rdm --out x.json --config short.json --colour-range 0.3,0.999"),
                     {"rdm/meta.json", "not an any-colour gather", "--any-colour"});

@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/text_parse.h"
 #include "weft/gather/colour_paths.h"
 #include "weft/gather/gather.h"
 #include "weft/gather/gather_merge.h"

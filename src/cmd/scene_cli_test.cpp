@@ -94,6 +94,32 @@ TEST_F(SceneCliTest, EveryKindWithDefaults) {
     EXPECT_GE(render::readCurves(s.yarns[0].curves).curves.size(), 4u);
 }
 
+TEST_F(SceneCliTest, TwoColoursMakeTwoYarnEntries) {
+    const RunResult r = run("scene knit --model " + kFleece +
+                            " --size 2 --colours 0.9,0.2,0.1 0.1,0.3,0.8 --stripe 1 --width 12 "
+                            "--height 8 --spp 1 --out striped");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json summary = nlohmann::json::parse(r.out);
+    EXPECT_EQ(summary.at("curves"), nlohmann::json({"striped/yarns-1.txt", "striped/yarns-2.txt"}));
+    EXPECT_EQ(summary.at("colours"), nlohmann::json({{0.9, 0.2, 0.1}, {0.1, 0.3, 0.8}}));
+    EXPECT_EQ(summary.at("yarn_overlap").size(), 2u);
+    const render::SceneDesc s = render::loadScene(path("striped/scene.json"));
+    ASSERT_EQ(s.yarns.size(), 2u);
+    EXPECT_EQ(*s.yarns[1].colour, Rgb(0.1, 0.3, 0.8));
+    // Fiber mode colours the fibers of any model; neural mode needs a
+    // colour-conditioned model and names the yarn entry.
+    const RunResult fiber =
+        run("render striped/scene.json --mode fiber --threads 2 --quiet --out f.exr");
+    EXPECT_EQ(fiber.status, 0) << fiber.err;
+    expectUserError(run("render striped/scene.json --mode neural --quiet --out n.exr"),
+                    {"yarns[0].colour", "--colour-range"});
+    // One colour: one entry in yarns.txt.
+    ASSERT_EQ(
+        run("scene weave --model " + kFleece + " --size 2 --colours 0.5,0.5,0.5 --out grey").status,
+        0);
+    EXPECT_EQ(*render::loadScene(path("grey/scene.json")).yarns.at(0).colour, Rgb(0.5));
+}
+
 TEST_F(SceneCliTest, BadInputIsNamed) {
     const std::string m = " --model " + kFleece;
     expectUserError(run("scene twill" + m + " --out o"), {"twill", "closeup, weave, knit"});
@@ -108,6 +134,16 @@ TEST_F(SceneCliTest, BadInputIsNamed) {
     expectUserError(run("scene weave" + m + " --height 16385 --out o"), {"--height 16385"});
     expectUserError(run("scene weave" + m + " --spp 0 --out o"), {"--spp 0", "[1, 1048576]"});
     expectUserError(run("scene weave --model missing.json --out o"), {"--model", "missing.json"});
+    expectUserError(run("scene knit" + m + " --colours 0.5,0.5 --out o"), {"--colours", "R,G,B"});
+    expectUserError(run("scene knit" + m + " --colours 0.5,0.5,1.5 --out o"),
+                    {"--colours", "[0, 1]"});
+    expectUserError(run("scene knit" + m + " --colours 0,0,0 1,1,1 0.5,0.5,0.5 --out o"),
+                    {"--colours"});
+    expectUserError(run("scene closeup" + m + " --colours 0,0,0 1,1,1 --out o"),
+                    {"--colours", "one colour"});
+    expectUserError(run("scene knit" + m + " --stripe 2 --out o"), {"--stripe", "two --colours"});
+    expectUserError(run("scene knit" + m + " --colours 0,0,0 1,1,1 --stripe 0 --out o"),
+                    {"--stripe 0", "[1, 100]"});
     expectUserError(run("scene weave" + m + " --envmap sky.png --out o"), {"--envmap", "sky.png"});
     expectUserError(run("scene weave" + m + " --envmap sky.exr --out o"), {"--envmap", "sky.exr"});
     // CLI11's own errors (a missing flag, not a number) exit with 2 as well.

@@ -1,17 +1,16 @@
 // weft scene: a generated close-up, plain weave or stockinette knit scene for
 // `weft render` (docs/scenes.md).
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "commands.h"
-#include "weft/core/file.h"
 #include "weft/core/error.h"
+#include "weft/core/file.h"
+#include "weft/core/text_parse.h"
 #include "weft/eval/scene_gen.h"
-#include "weft/render/scene.h"
 
 namespace weft::cmd {
 
@@ -20,36 +19,29 @@ namespace {
 struct SceneCmdOptions {
     std::string kind, out;
     eval::SceneOptions scene;
+    std::vector<std::string> colours;  // --colours: "R,G,B" each
     CLI::Option* sizeOpt = nullptr;
+    CLI::Option* stripeOpt = nullptr;
     bool quiet = false;
 };
 
-void runScene(const SceneCmdOptions& o) {
+void runScene(SceneCmdOptions o) {
     const eval::SceneKind kind = eval::parseSceneKind(o.kind);
     if (kind == eval::SceneKind::Closeup && o.sizeOpt->count())
         throw InputError("--size applies to weave and knit only (a close-up is one yarn)");
+    if (o.stripeOpt->count() && o.colours.size() != 2)
+        throw InputError("--stripe applies to two --colours only");
+    for (const std::string& c : o.colours) o.scene.colours.push_back(parseColour(c, "--colours"));
     checkOutputsSpareInputs({{"--model", o.scene.model}, {"--envmap", o.scene.envmap}}, {}, {},
                             {{"--out", o.out}});
     const eval::GeneratedScene generated = eval::generateScene(kind, o.scene);
     eval::writeScene(generated, o.out);
-    const std::filesystem::path dir(o.out);
-    // The generated yarns at their radius, checked as `weft render` checks a scene.
-    std::vector<render::YarnEntryOverlap> overlap =
-        render::checkYarnOverlap(generated.scene, {generated.curves});
-    for (render::YarnEntryOverlap& entry : overlap) entry.curves = (dir / entry.curves).string();
+    std::vector<std::string> warnings;
+    const nlohmann::json summary = eval::sceneSummary(generated, kind, o.out, &warnings);
     if (!o.quiet)
-        for (const std::string& w :
-             render::yarnOverlapWarnings((dir / "scene.json").string(), overlap))
+        for (const std::string& w : warnings)
             std::fprintf(stderr, "weft: warning: %s\n", w.c_str());
-    std::printf("%s\n", nlohmann::json({{"kind", eval::sceneKindName(kind)},
-                                        {"scene", (dir / "scene.json").string()},
-                                        {"curves", (dir / "yarns.txt").string()},
-                                        {"yarns", generated.curves.curves.size()},
-                                        {"points", generated.curves.pointCount()},
-                                        {"radius", o.scene.radius},
-                                        {"yarn_overlap", render::yarnOverlapJson(overlap)}})
-                            .dump()
-                            .c_str());
+    std::printf("%s\n", summary.dump().c_str());
 }
 
 }  // namespace
@@ -60,8 +52,9 @@ void addSceneCommand(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand(
         "scene",
         "Write a generated scene (docs/scenes.md) for `weft render`: DIR/scene.json and "
-        "DIR/yarns.txt. closeup: one 3-ply yarn across the frame; weave: an N x N plain "
-        "weave; knit: N courses of N stockinette loops.");
+        "DIR/yarns.txt (DIR/yarns-1.txt, yarns-2.txt with two colours). closeup: one 3-ply "
+        "yarn across the frame; weave: an N x N plain weave; knit: N courses of N "
+        "stockinette loops.");
     cmd->add_option("kind", o->kind, "closeup, weave or knit")->required();
     cmd->add_option("--model", s.model, "MODEL.json written by `weft fit` (must load)")->required();
     o->sizeOpt = cmd->add_option("--size", s.size,
@@ -81,6 +74,14 @@ void addSceneCommand(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--envmap", s.envmap,
                     "Lat-long .exr or .hdr environment map instead of the procedural sky");
+    cmd->add_option("--colours", o->colours,
+                    "One or two fiber colours C_TT as R,G,B in [0, 1] (docs/colour.md): one "
+                    "colours every yarn; two make a striped knit or a check weave. Neural "
+                    "mode needs a model fitted with --colour-range");
+    o->stripeOpt = cmd->add_option("--stripe", s.stripe,
+                                   "With two colours: knit courses or weave yarns per stripe, "
+                                   "[1, 100]")
+                       ->capture_default_str();
     cmd->add_flag("--quiet", o->quiet, "No warning when the generated yarns overlap");
     cmd->add_option("--out", o->out,
                     "Output directory (replaced only if it holds nothing but an earlier "

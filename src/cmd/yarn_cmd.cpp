@@ -10,7 +10,7 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/npy.h"
-#include "weft/gather/colour_paths.h"
+#include "weft/core/text_parse.h"
 #include "weft/fit/model_check.h"
 #include "weft/gather/rdm_io.h"
 #include "weft/yarn/yarn_bsdf.h"

@@ -1,15 +1,20 @@
-// weft/core/text_parse.h — tokenising line-based text inputs (curve files).
+// weft/core/text_parse.h — tokenising text inputs: line-based files (curve
+// files) and small flag values (parseColour).
 //
 // Shared by the lenient curve readers of core/curve_io.cpp and the strict ones
 // of render/curves.cpp. Whitespace is ' ', '\t', '\r', '\n', '\f', '\v'.
 #pragma once
 
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <string_view>
 #include <system_error>
 #include <vector>
+
+#include "weft/core/error.h"
+#include "weft/core/rgb.h"
 
 namespace weft {
 
@@ -75,6 +80,28 @@ void forEachLine(std::string_view text, F&& f) {
         f(++lineNo, line);
         pos = end + 1;
     }
+}
+
+// "R,G,B" with each value in [0, 1] (a colour flag such as --c-tt);
+// InputError naming `flag` otherwise.
+inline Rgb parseColour(const std::string& text, const std::string& flag) {
+    const auto fail = [&] {
+        return InputError(flag + ": expected R,G,B with each value in [0, 1], got \"" +
+                          printable(text) + "\"");
+    };
+    Rgb colour;
+    size_t start = 0;
+    for (int c = 0; c < 3; ++c) {
+        const size_t comma = text.find(',', start);
+        if ((c < 2) == (comma == std::string::npos)) throw fail();
+        const std::string_view token =
+            trim(std::string_view(text).substr(start, c < 2 ? comma - start : std::string::npos));
+        double v;
+        if (!parseNumber(token, &v) || !std::isfinite(v) || v < 0 || v > 1) throw fail();
+        colour[c] = v;
+        start = comma + 1;
+    }
+    return colour;
 }
 
 }  // namespace weft

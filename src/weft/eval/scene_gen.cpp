@@ -17,6 +17,7 @@
 #include "weft/core/math.h"
 #include "weft/render/camera.h"
 #include "weft/render/lights.h"
+#include "weft/render/scene.h"
 #include "weft/yarn/yarn_model.h"
 
 namespace weft::eval {
@@ -102,23 +103,50 @@ std::vector<render::LightDesc> paperLights(const render::CameraDesc& camera,
     return lights;
 }
 
-GeneratedScene assemble(render::CurveSet curves, const render::CameraDesc& camera,
+// The generated curves with the colour group (0 or 1) of each: with two
+// colours, group g has colour g; otherwise every curve has the one colour.
+struct PatternedCurves {
+    render::CurveSet set;
+    std::vector<int> group;
+};
+
+GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera,
                         const SceneOptions& o) {
     GeneratedScene g;
-    g.curves = std::move(curves);
     render::SceneDesc& s = g.scene;
     s.camera = camera;
     s.film = {o.width, o.height};
     s.render.spp = o.spp;
     s.lights = paperLights(s.camera, o.envmap);
     render::YarnDesc yarn;
-    yarn.curves = "yarns.txt";
     yarn.radius = o.radius;
     yarn.plies = o.plies;
     yarn.plyTwist = o.plyTwist;
     yarn.model = absolutePath(o.model);
-    s.yarns.push_back(yarn);
+    // One yarn entry per colour used, in the order of the colours (an unused
+    // colour would be an empty curve file).
+    const int groups = o.colours.size() == 2 ? 2 : 1;
+    const auto groupOf = [&](size_t c) { return groups == 2 ? curves.group[c] : 0; };
+    std::vector<int> entryOfGroup(groups, -1);
+    for (size_t c = 0; c < curves.set.curves.size(); ++c) entryOfGroup[groupOf(c)] = 0;
+    for (int group = 0; group < groups; ++group) {
+        if (entryOfGroup[group] < 0) continue;
+        entryOfGroup[group] = static_cast<int>(s.yarns.size());
+        if (!o.colours.empty()) yarn.colour = o.colours[group];
+        s.yarns.push_back(yarn);
+    }
+    for (size_t c = 0; c < curves.set.curves.size(); ++c)
+        g.entryOfCurve.push_back(entryOfGroup[groupOf(c)]);
+    for (int e = 0; e < static_cast<int>(s.yarns.size()); ++e)
+        s.yarns[e].curves = yarnCurveFile(e, static_cast<int>(s.yarns.size()));
+    g.curves = std::move(curves.set);
     return g;
+}
+
+// Stripe s (0, 1, 2, ...; negative below the first) of index i, and its colour group.
+int stripeGroup(int i, int stripe) {
+    const int s = i >= 0 ? i / stripe : -((-i - 1) / stripe) - 1;
+    return s % 2 == 0 ? 0 : 1;
 }
 
 // The shortest extension of the yarns (curvesWithMargin(0), (1), ...) whose
@@ -126,17 +154,31 @@ GeneratedScene assemble(render::CurveSet curves, const render::CameraDesc& camer
 // in neural mode and as flat-cut, splaying fibers in fiber mode, so ends in
 // view would be compared for a difference no model is meant to capture.
 template <class CurvesWithMargin>
-render::CurveSet extendEndsOutOfView(const CurvesWithMargin& curvesWithMargin,
-                                     const render::CameraDesc& camera, const SceneOptions& o) {
+PatternedCurves extendEndsOutOfView(const CurvesWithMargin& curvesWithMargin,
+                                    const render::CameraDesc& camera, const SceneOptions& o) {
     for (int margin = 0; margin <= kMaxEndMargin; ++margin) {
-        render::CurveSet set = curvesWithMargin(margin);
-        const bool allOut = std::all_of(set.curves.begin(), set.curves.end(), [&](const auto& c) {
+        PatternedCurves curves = curvesWithMargin(margin);
+        const auto& set = curves.set.curves;
+        const bool allOut = std::all_of(set.begin(), set.end(), [&](const auto& c) {
             return c.closed || (outOfView(camera, o.width, o.height, c.points.front(), o.radius) &&
                                 outOfView(camera, o.width, o.height, c.points.back(), o.radius));
         });
-        if (allOut) return set;
+        if (allOut) return curves;
     }
     throw std::logic_error("scene generator: yarn ends still in view after the largest margin");
+}
+
+// scene.json, yarns.txt or yarns-N.txt (N = 1, 2, ...): what writeScene writes.
+bool isGeneratedSceneFile(const std::string& name) {
+    if (name == "scene.json" || name == "yarns.txt") return true;
+    const std::string prefix = "yarns-", suffix = ".txt";
+    if (name.size() <= prefix.size() + suffix.size() || name.rfind(prefix, 0) != 0 ||
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+        return false;
+    const std::string digits =
+        name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+    return std::all_of(digits.begin(), digits.end(),
+                       [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
 }
 
 // Patches are seen from the front and a little above; the close-up less so.
@@ -173,6 +215,14 @@ void SceneOptions::validate() const {
     checkInt("--width", width, 1, 16384);
     checkInt("--height", height, 1, 16384);
     checkInt("--spp", spp, 1, 1 << 20);
+    if (colours.size() > 2)
+        throw InputError("--colours takes one or two R,G,B colours, got " +
+                         std::to_string(colours.size()));
+    for (const Rgb& c : colours)
+        for (int ch = 0; ch < 3; ++ch)
+            if (!std::isfinite(c[ch]) || c[ch] < 0 || c[ch] > 1)
+                throw InputError(rangeError("--colours", formatNumber(c[ch]), "[0, 1]"));
+    checkInt("--stripe", stripe, 1, kMaxPatchSize);
     if (!envmap.empty()) {
         const std::string ext = lowercaseExtension(envmap);
         if (ext != ".exr" && ext != ".hdr")
@@ -296,6 +346,8 @@ render::CameraDesc frameCover(double x0, double x1, double y0, double y1, const 
 
 GeneratedScene closeupScene(const SceneOptions& o) {
     o.validate();
+    if (o.colours.size() == 2)
+        throw InputError("--colours: a close-up is one yarn, so it takes one colour, not two");
     // A yarn of length L along x, bowed up in y by 0.08 L and tilted in depth
     // by +-0.04 L: gently curved, seen from the front. The camera frames this
     // length; the yarn then runs on past both sides of the film.
@@ -311,12 +363,13 @@ GeneratedScene closeupScene(const SceneOptions& o) {
             c.points.push_back(
                 {x, 0.08 * len * std::cos(kPi * x / len), 0.04 * len * std::sin(kPi * x / len)});
         }
-        render::CurveSet set;
-        set.curves.push_back(std::move(c));
-        return set;
+        PatternedCurves curves;
+        curves.set.curves.push_back(std::move(c));
+        curves.group.push_back(0);
+        return curves;
     };
     const render::CameraDesc camera =
-        frameBox(padded(render::bounds(yarn(0)), o.radius), kCloseupForward, kFovDeg, o.width,
+        frameBox(padded(render::bounds(yarn(0).set), o.radius), kCloseupForward, kFovDeg, o.width,
                  o.height, kCloseupFill);
     return assemble(extendEndsOutOfView(yarn, camera, o), camera, o);
 }
@@ -334,14 +387,16 @@ GeneratedScene weaveScene(const SceneOptions& o) {
         const int samples = (last - first + 2) * kWeaveSamplesPerSpacing + 1;
         const auto along = [&](int i) { return start + span * i / (samples - 1); };
         const auto parity = [](int j) { return ((j % 2) + 2) % 2 ? -1.0 : 1.0; };
-        render::CurveSet set;
+        // Warp blocks start with colour 0, weft blocks with colour 1 (a check).
+        PatternedCurves curves;
         for (int j = first; j <= last; ++j) {  // warp: along x at y = j d
             render::Curve c;
             for (int i = 0; i < samples; ++i) {
                 const double x = along(i);
                 c.points.push_back({x, j * d, parity(j) * a * std::cos(k * x)});
             }
-            set.curves.push_back(std::move(c));
+            curves.set.curves.push_back(std::move(c));
+            curves.group.push_back(stripeGroup(j, o.stripe));
         }
         for (int i = first; i <= last; ++i) {  // weft: along y at x = i d, opposite phase
             render::Curve c;
@@ -349,9 +404,10 @@ GeneratedScene weaveScene(const SceneOptions& o) {
                 const double y = along(s);
                 c.points.push_back({i * d, y, -parity(i) * a * std::cos(k * y)});
             }
-            set.curves.push_back(std::move(c));
+            curves.set.curves.push_back(std::move(c));
+            curves.group.push_back(1 - stripeGroup(i, o.stripe));
         }
-        return set;
+        return curves;
     };
     const double lo = -0.5 * d, hi = (n - 0.5) * d;
     const render::CameraDesc camera =
@@ -369,15 +425,16 @@ GeneratedScene knitScene(const SceneOptions& o) {
     const auto knit = [&](int margin) {
         const int loops = n + 2 * margin;
         const int samples = loops * kKnitSamplesPerLoop + 1;
-        render::CurveSet set;
+        PatternedCurves curves;
         for (int row = -margin - 1; row <= n + margin; ++row) {
             render::Curve c;
             for (int i = 0; i < samples; ++i)
                 c.points.push_back(knitPoint(
                     g, row, kTwoPi * (static_cast<double>(i) / kKnitSamplesPerLoop - margin)));
-            set.curves.push_back(std::move(c));
+            curves.set.curves.push_back(std::move(c));
+            curves.group.push_back(stripeGroup(row, o.stripe));
         }
-        return set;
+        return curves;
     };
     const double s = g.scale;
     const render::CameraDesc camera =
@@ -398,6 +455,39 @@ GeneratedScene generateScene(SceneKind kind, const SceneOptions& options) {
     throw std::logic_error("unknown scene kind");
 }
 
+std::string yarnCurveFile(int entry, int entryCount) {
+    return entryCount == 1 ? "yarns.txt" : "yarns-" + std::to_string(entry + 1) + ".txt";
+}
+
+std::vector<render::CurveSet> entryCurves(const GeneratedScene& generated) {
+    std::vector<render::CurveSet> sets(generated.scene.yarns.size());
+    for (size_t c = 0; c < generated.curves.curves.size(); ++c)
+        sets.at(generated.entryOfCurve.at(c)).curves.push_back(generated.curves.curves[c]);
+    return sets;
+}
+
+nlohmann::json sceneSummary(const GeneratedScene& generated, SceneKind kind, const std::string& dir,
+                            std::vector<std::string>* warnings) {
+    const fs::path folder(dir);
+    std::vector<render::YarnEntryOverlap> overlap =
+        render::checkYarnOverlap(generated.scene, entryCurves(generated));
+    for (render::YarnEntryOverlap& entry : overlap) entry.curves = (folder / entry.curves).string();
+    *warnings = render::yarnOverlapWarnings((folder / "scene.json").string(), overlap);
+    nlohmann::json curveFiles = nlohmann::json::array(), colours = nlohmann::json::array();
+    for (const render::YarnDesc& yarn : generated.scene.yarns) {
+        curveFiles.push_back((folder / yarn.curves).string());
+        if (yarn.colour) colours.push_back({yarn.colour->r, yarn.colour->g, yarn.colour->b});
+    }
+    return {{"kind", sceneKindName(kind)},
+            {"scene", (folder / "scene.json").string()},
+            {"curves", curveFiles},
+            {"colours", colours},
+            {"yarns", generated.curves.curves.size()},
+            {"points", generated.curves.pointCount()},
+            {"radius", *generated.scene.yarns.at(0).radius},
+            {"yarn_overlap", render::yarnOverlapJson(overlap)}};
+}
+
 std::string curvesText(const render::CurveSet& curves) {
     CurveSet out;
     for (const render::Curve& c : curves.curves) {
@@ -416,15 +506,18 @@ void writeScene(const GeneratedScene& generated, const std::string& dir) {
     if (fs::is_directory(fs::symlink_status(dir, ec))) {
         for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
             const std::string name = e.path().filename().string();
-            if (name != "scene.json" && name != "yarns.txt")
+            if (!isGeneratedSceneFile(name))
                 throw InputError("output directory '" + dir + "' exists and holds '" + name +
                                  "', which is not a file of a generated scene (scene.json, "
-                                 "yarns.txt): remove it or choose another directory");
+                                 "yarns.txt, yarns-N.txt): remove it or choose another "
+                                 "directory");
         }
         if (ec) throw InputError("cannot list output directory '" + dir + "': " + ec.message());
     }
     TempDirCommit out(dir);
-    writeFileAtomic(out.path() + "/yarns.txt", curvesText(generated.curves));
+    const std::vector<render::CurveSet> sets = entryCurves(generated);
+    for (size_t e = 0; e < sets.size(); ++e)
+        writeFileAtomic(out.path() + "/" + generated.scene.yarns[e].curves, curvesText(sets[e]));
     writeFileAtomic(out.path() + "/scene.json", json.dump(2) + "\n");
     out.commit();
 }

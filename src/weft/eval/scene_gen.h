@@ -21,14 +21,24 @@
 //            d cos 2t), courses offset by w along y, scaled to the yarn radius
 //            (knitGeometry; docs/scenes.md). The film is covered by N courses
 //            of N loops; more courses and loops lie around them.
+// Colours (--colours, issue 21, docs/colour.md): one C_TT for every yarn, or
+// two: a striped knit (courses alternate colour every --stripe courses) and a
+// two-colour check weave (warp and weft both in blocks of --stripe yarns,
+// the warp blocks starting with the first colour and the weft blocks with
+// the second: solid blocks of each colour where a warp block crosses a weft
+// block of its own colour, shot blocks where they differ). Each colour is a
+// yarn entry of its own, with its own curve file.
 // Parameters (SceneOptions, flags of `weft scene`): the model file (must
 // load), N (--size), the yarn radius R, plies, ply twist, film size, spp and
 // an optional environment map. Scene units: the world of docs/scene-format.md
 // (+y up); every patch lies in the xy plane and faces +z, where the camera is.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
+#include "weft/core/rgb.h"
 #include "weft/core/vec.h"
 #include "weft/render/curves.h"
 #include "weft/render/scene_file.h"
@@ -48,15 +58,17 @@ inline constexpr int kMaxPatchSize = 100;
 inline constexpr double kMinRadius = 1e-6, kMaxRadius = 1e3;
 
 struct SceneOptions {
-    std::string model;      // --model: MODEL.json from `weft fit`; must exist and load
-    int size = 6;           // --size N: weave N x N yarns, knit N courses x N loops; [1, 100]
-    double radius = 0.01;   // --radius: yarn radius R in scene units; [1e-6, 1e3]
-    int plies = 3;          // --plies: plies per yarn; [1, 16]
-    double plyTwist = 0.3;  // --ply-twist: as the scene file's ply_twist; [-100, 100]
-    int width = 512;        // --width: film width in pixels; [1, 16384]
-    int height = 512;       // --height: film height in pixels; [1, 16384]
-    int spp = 64;           // --spp: the scene's render.spp; [1, 1048576]
-    std::string envmap;     // --envmap: .exr or .hdr lat-long map instead of the sky; "" = sky
+    std::string model;         // --model: MODEL.json from `weft fit`; must exist and load
+    int size = 6;              // --size N: weave N x N yarns, knit N courses x N loops; [1, 100]
+    double radius = 0.01;      // --radius: yarn radius R in scene units; [1e-6, 1e3]
+    int plies = 3;             // --plies: plies per yarn; [1, 16]
+    double plyTwist = 0.3;     // --ply-twist: as the scene file's ply_twist; [-100, 100]
+    int width = 512;           // --width: film width in pixels; [1, 16384]
+    int height = 512;          // --height: film height in pixels; [1, 16384]
+    int spp = 64;              // --spp: the scene's render.spp; [1, 1048576]
+    std::string envmap;        // --envmap: .exr or .hdr lat-long map instead of the sky; "" = sky
+    std::vector<Rgb> colours;  // --colours: none (the model's own), one or two C_TT, [0, 1]
+    int stripe = 2;            // --stripe: courses (knit) or yarns (weave) per stripe; [1, 100]
 
     // Range checks, then the model is loaded (loadYarnModel) and the envmap
     // checked for its extension and readability; InputError naming the flag.
@@ -64,11 +76,20 @@ struct SceneOptions {
 };
 
 struct GeneratedScene {
-    // yarns[0].curves is "yarns.txt" (relative: the folder writeScene writes);
-    // the model and envmap paths are absolute. path and baseDir are empty.
+    // One yarn entry per colour: yarns[i].curves is yarnCurveFile(i, count)
+    // (relative: the folder writeScene writes); the model and envmap paths are
+    // absolute. path and baseDir are empty.
     render::SceneDesc scene;
-    render::CurveSet curves;  // the yarn centre lines in scene units: open polylines
+    render::CurveSet curves;  // every yarn centre line in scene units: open polylines
+    // The yarn entry of each curve (curves.curves.size() entries, each in
+    // [0, scene.yarns.size())).
+    std::vector<int> entryOfCurve;
 };
+
+// "yarns.txt" for a scene with one yarn entry, else "yarns-1.txt", "yarns-2.txt", ...
+std::string yarnCurveFile(int entry, int entryCount);
+// The curves of each yarn entry, in entry order (the sets writeScene writes).
+std::vector<render::CurveSet> entryCurves(const GeneratedScene& generated);
 
 // Each validates `options` first.
 GeneratedScene closeupScene(const SceneOptions& options);
@@ -123,11 +144,20 @@ render::CameraDesc frameCover(double x0, double x1, double y0, double y1, const 
 bool outOfView(const render::CameraDesc& camera, int width, int height, const Vec3& p,
                double radius);
 
-// Writes DIR/yarns.txt (docs/curves.md text format) and DIR/scene.json
-// (docs/scene-format.md) as one atomic directory (TempDirCommit). An existing
-// DIR is replaced only when it holds nothing but those two files (an earlier
-// scene); otherwise InputError naming DIR and the first other entry.
+// Writes the curve files (yarnCurveFile; docs/curves.md text format) and
+// DIR/scene.json (docs/scene-format.md) as one atomic directory
+// (TempDirCommit). An existing DIR is replaced only when it holds nothing but
+// files of an earlier scene (scene.json, yarns.txt, yarns-N.txt); otherwise
+// InputError naming DIR and the first other entry.
 void writeScene(const GeneratedScene& generated, const std::string& dir);
+
+// What `weft scene` reports of `generated` written to `dir` (one JSON line on
+// stdout): kind, scene, curves (one file per yarn entry), colours, yarns
+// (curve count), points, radius and yarn_overlap, the overlap check that
+// `weft render` runs at load (render::checkYarnOverlap); the warnings of
+// overlapping entries go to `warnings`.
+nlohmann::json sceneSummary(const GeneratedScene& generated, SceneKind kind, const std::string& dir,
+                            std::vector<std::string>* warnings);
 
 // The curves as the text that writeScene writes ("x y z" lines, %.9g).
 std::string curvesText(const render::CurveSet& curves);

@@ -482,6 +482,16 @@ TEST(SceneGen, OptionsAreRangeChecked) {
         {[](SceneOptions& o) { o.width = 0; }, {"--width 0", "[1, 16384]"}},
         {[](SceneOptions& o) { o.height = 16385; }, {"--height 16385", "[1, 16384]"}},
         {[](SceneOptions& o) { o.spp = 0; }, {"--spp 0", "[1, 1048576]"}},
+        {[](SceneOptions& o) { o.colours = {Rgb(0.5, 1.5, 0.5)}; }, {"--colours 1.5", "[0, 1]"}},
+        {[](SceneOptions& o) {
+             o.colours = {Rgb(0.5), Rgb(0.5, 0.5, std::nan(""))};
+         },
+         {"--colours nan", "[0, 1]"}},
+        {[](SceneOptions& o) {
+             o.colours = {Rgb(0.1), Rgb(0.2), Rgb(0.3)};
+         },
+         {"--colours", "one or two", "got 3"}},
+        {[](SceneOptions& o) { o.stripe = 0; }, {"--stripe 0", "[1, 100]"}},
         {[](SceneOptions& o) { o.model.clear(); }, {"--model", "required"}},
         {[](SceneOptions& o) { o.model = "no-such-model.json"; },
          {"--model", "no-such-model.json"}},
@@ -502,6 +512,107 @@ TEST(SceneGen, OptionsAreRangeChecked) {
             }
         }
     }
+}
+
+// The stripe of integer position x (rounded) in stripes of `width`, counted
+// from 0 at position 0 and negative below it, as floor(x / width).
+int stripeOf(double x, int width) { return static_cast<int>(std::floor(std::round(x) / width)); }
+bool isEven(int k) { return ((k % 2) + 2) % 2 == 0; }
+
+TEST(SceneGen, TwoColoursMakeAStripedKnitAndACheckWeave) {
+    const Rgb a(0.9, 0.2, 0.1), b(0.1, 0.3, 0.8);
+    for (const int stripe : {1, 2, 3}) {
+        SCOPED_TRACE(stripe);
+        SceneOptions o = options(5);
+        o.colours = {a, b};
+        o.stripe = stripe;
+        // Knit: course `row` (its mean y over whole loops is row * w * scale)
+        // has colour a on even stripes of rows, b on odd ones.
+        const GeneratedScene knit = knitScene(o);
+        ASSERT_EQ(knit.scene.yarns.size(), 2u);
+        EXPECT_EQ(*knit.scene.yarns[0].colour, a);
+        EXPECT_EQ(*knit.scene.yarns[1].colour, b);
+        EXPECT_EQ(knit.scene.yarns[0].curves, "yarns-1.txt");
+        EXPECT_EQ(knit.scene.yarns[1].curves, "yarns-2.txt");
+        const KnitGeometry g = knitGeometry(o.radius);
+        int coursesOfB = 0;
+        for (size_t c = 0; c < knit.curves.curves.size(); ++c) {
+            const auto& points = knit.curves.curves[c].points;
+            double y = 0;
+            for (size_t i = 0; i + 1 < points.size(); ++i) y += points[i].y;  // whole loops
+            const double row = y / (points.size() - 1) / (g.rowSpacing * g.scale);
+            const Rgb want = isEven(stripeOf(row, stripe)) ? a : b;
+            EXPECT_EQ(*knit.scene.yarns.at(knit.entryOfCurve.at(c)).colour, want) << row;
+            coursesOfB += want == b;
+        }
+        EXPECT_GT(coursesOfB, 0);
+        // Weave: warp along x at y = j d in colour a on even stripes of j;
+        // weft along y at x = i d in colour b on even stripes of i.
+        const GeneratedScene weave = weaveScene(o);
+        ASSERT_EQ(weave.scene.yarns.size(), 2u);
+        const double d = weaveGeometry(o.radius).spacing;
+        int solidA = 0, solidB = 0, shot = 0;
+        std::vector<Rgb> warp, weft;
+        for (size_t c = 0; c < weave.curves.curves.size(); ++c) {
+            const auto& points = weave.curves.curves[c].points;
+            const bool isWarp = points.front().y == points.back().y;
+            const double position = (isWarp ? points.front().y : points.front().x) / d;
+            const bool even = isEven(stripeOf(position, stripe));
+            const Rgb want = isWarp == even ? a : b;
+            const Rgb got = *weave.scene.yarns.at(weave.entryOfCurve.at(c)).colour;
+            EXPECT_EQ(got, want) << (isWarp ? "warp " : "weft ") << position;
+            (isWarp ? warp : weft).push_back(got);
+        }
+        for (const Rgb& w : warp)
+            for (const Rgb& f : weft) (w == f ? (w == a ? solidA : solidB) : shot) += 1;
+        EXPECT_GT(solidA, 0);
+        EXPECT_GT(solidB, 0);
+        EXPECT_GT(shot, 0);
+    }
+}
+
+TEST(SceneGen, OneColourColoursEveryYarnAndTheCloseupTakesOne) {
+    SceneOptions o = options(3);
+    o.colours = {Rgb(0.3, 0.6, 0.9)};
+    for (const SceneKind kind : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit}) {
+        const GeneratedScene g = generateScene(kind, o);
+        ASSERT_EQ(g.scene.yarns.size(), 1u);
+        EXPECT_EQ(g.scene.yarns[0].curves, "yarns.txt");
+        EXPECT_EQ(*g.scene.yarns[0].colour, Rgb(0.3, 0.6, 0.9));
+        EXPECT_EQ(std::count(g.entryOfCurve.begin(), g.entryOfCurve.end(), 0),
+                  static_cast<long>(g.curves.curves.size()));
+    }
+    EXPECT_FALSE(generateScene(SceneKind::Knit, options(3)).scene.yarns[0].colour);
+    o.colours.push_back(Rgb(0.5));
+    expectInputError([&] { closeupScene(o); }, {"--colours", "one yarn", "one colour"});
+}
+
+TEST_F(SceneGenFiles, TwoColourFilesReadBackAsTwoEntries) {
+    SceneOptions o = options(3);
+    o.colours = {Rgb(0.8, 0.1, 0.1), Rgb(0.95)};
+    const GeneratedScene g = knitScene(o);
+    writeScene(weaveScene(options(2)), path("out"));
+    writeScene(g, path("out"));  // replaces the one-colour scene, yarns.txt included
+    std::vector<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(path("out")))
+        names.push_back(e.path().filename());
+    std::sort(names.begin(), names.end());
+    EXPECT_EQ(names, (std::vector<std::string>{"scene.json", "yarns-1.txt", "yarns-2.txt"}));
+    const render::SceneDesc s = render::loadScene(path("out/scene.json"));
+    ASSERT_EQ(s.yarns.size(), 2u);
+    size_t total = 0;
+    for (int e = 0; e < 2; ++e) {
+        EXPECT_EQ(*s.yarns[e].colour, o.colours[e]);
+        const render::CurveSet read = render::readCurves(s.yarns[e].curves);
+        EXPECT_EQ(read.curves.size(),
+                  static_cast<size_t>(std::count(g.entryOfCurve.begin(), g.entryOfCurve.end(), e)));
+        total += read.curves.size();
+    }
+    EXPECT_EQ(total, g.curves.curves.size());
+    writeScene(weaveScene(options(2)), path("out"));  // and back: the yarns-N files go
+    EXPECT_FALSE(std::filesystem::exists(path("out/yarns-1.txt")));
+    writeFileAtomic(path("out/yarns-x.txt"), "x");
+    expectInputError([&] { writeScene(g, path("out")); }, {"yarns-x.txt"});
 }
 
 TEST(SceneGen, KindNames) {

@@ -222,24 +222,4 @@ RecolouredGather recolourGather(const std::string& dir, const Rgb& cTT) {
     return result;
 }
 
-Rgb parseColour(const std::string& text, const std::string& flag) {
-    const auto fail = [&] {
-        return InputError(flag + ": expected R,G,B with each value in [0, 1], got \"" +
-                          printable(text) + "\"");
-    };
-    Rgb colour;
-    size_t start = 0;
-    for (int c = 0; c < 3; ++c) {
-        const size_t comma = text.find(',', start);
-        if ((c < 2) == (comma == std::string::npos)) throw fail();
-        const std::string_view token =
-            trim(std::string_view(text).substr(start, c < 2 ? comma - start : std::string::npos));
-        double v;
-        if (!parseNumber(token, &v) || !std::isfinite(v) || v < 0 || v > 1) throw fail();
-        colour[c] = v;
-        start = comma + 1;
-    }
-    return colour;
-}
-
 }  // namespace weft

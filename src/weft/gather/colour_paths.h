@@ -102,7 +102,4 @@ struct RecolouredGather {
 // not gathered with --any-colour, or its arrays disagree with each other.
 RecolouredGather recolourGather(const std::string& dir, const Rgb& cTT);
 
-// "R,G,B" with each value in [0, 1]; InputError naming `flag`.
-Rgb parseColour(const std::string& text, const std::string& flag);
-
 }  // namespace weft

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "weft/core/error.h"
+#include "weft/core/text_parse.h"
 #include "weft/core/file.h"
 #include "weft/core/npy.h"
 #include "weft/core/test_util.h"

@@ -48,7 +48,10 @@ def run_json(cmd):
 
 
 def fmt(value, spec=".4f"):
-    """A number for the table, or n/a (a check with too few paths per bin gives null)."""
+    """A number for the table (a list: its mean, as for the per-channel albedo
+    errors), or n/a (a check with too few paths per bin gives null)."""
+    if isinstance(value, list):
+        value = sum(value) / len(value) if value and None not in value else None
     return "n/a" if value is None else format(value, spec)
 
 
@@ -202,7 +205,7 @@ def main():
     lines += [
         "",
         "| C_TT of | C_TT | M: conditioned | M: dedicated | ratio (target <= 1.3) | R: conditioned | R: dedicated "
-        "| albedo err: cond. / ded. | s/spp cond. / ded. | SSIM cond. vs ded. | dedicated fit s |",
+        "| albedo err. (mean of RGB): cond. / ded. | s/spp cond. / ded. | SSIM cond. vs ded. | dedicated fit s |",
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for r in rows:

@@ -259,6 +259,83 @@ TEST_F(RenderCliTest, YarnColourInEveryMode) {
     }
     EXPECT_EQ(readImage(path("img-own.exr")).pixels, readImage(path("img-any.exr")).pixels);
     EXPECT_NE(readImage(path("img-red.exr")).pixels, readImage(path("img-any.exr")).pixels);
+    // Vertex colours of one colour are that colour, in neural mode too.
+    writeFileAtomic(path("red3.txt"), "0.9 0.1 0.1\n0.9 0.1 0.1\n0.9 0.1 0.1\n");
+    std::string text = readFile(path("red.scene.json"));
+    const std::string colourKey = "\"colour\": [0.9, 0.1, 0.1]";
+    text.replace(text.find(colourKey), colourKey.size(), "\"vertex_colours\": \"red3.txt\"");
+    writeFileAtomic(path("red3.scene.json"), text);
+    const RunResult r = run("render red3.scene.json --spp 2 --quiet --out img-red3.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(readImage(path("img-red3.exr")).pixels, readImage(path("img-red.exr")).pixels);
+}
+
+// The mean colour of the pixels in columns [x0, x1) of the middle two rows.
+Rgb meanColourOfColumns(const Image& image, int x0, int x1) {
+    Rgb sum;
+    for (int y = image.height / 2 - 1; y <= image.height / 2; ++y)
+        for (int x = x0; x < x1; ++x)
+            for (int c = 0; c < 3; ++c)
+                sum[c] += image.pixels[3 * (static_cast<size_t>(y) * image.width + x) + c];
+    return sum / static_cast<double>(2 * (x1 - x0));
+}
+
+TEST_F(RenderCliTest, VertexColoursInEveryMode) {
+    // One colour at every point: the same image as "colour", bit for bit.
+    writeFileAtomic(path("green3.txt"), "0.2 0.9 0.2\n0.2 0.9 0.2\n0.2 0.9 0.2\n");
+    writeScene("green.json", R"(, "colour": [0.2, 0.9, 0.2])");
+    writeScene("green3.json", R"(, "vertex_colours": "green3.txt")");
+    for (const std::string mode : {"fiber", "dual"}) {
+        for (const char* name : {"green", "green3"}) {
+            const RunResult r = run(std::string("render ") + name + ".json --mode " + mode +
+                                    " --spp 2 --quiet --out " + mode + "-" + name + ".exr");
+            ASSERT_EQ(r.status, 0) << r.err;
+        }
+        EXPECT_EQ(readImage(path(mode + "-green3.exr")).pixels,
+                  readImage(path(mode + "-green.exr")).pixels)
+            << mode;
+    }
+    // Space-dyed: red left of x = 0, blue right of it (a wide view of a
+    // straight yarn). Two materials, and each half of the image its colour.
+    writeFileAtomic(path("long.txt"), "-0.5 0 0\n-0.0005 0 0\n0.0005 0 0\n0.5 0 0\n");
+    writeFileAtomic(path("dyed.txt"), "0.9 0.1 0.1\n0.9 0.1 0.1\n0.1 0.1 0.9\n0.1 0.1 0.9\n");
+    std::string text = readFile(path("green3.json"));
+    text.replace(text.find("yarn.txt"), 8, "long.txt");
+    text.replace(text.find("green3.txt"), 10, "dyed.txt");
+    text.replace(text.find("\"fov_deg\": 8"), 12, "\"fov_deg\": 30");
+    writeFileAtomic(path("dyed.json"), text);
+    for (const std::string mode : {"fiber", "dual"}) {
+        const RunResult r =
+            run("render dyed.json --mode " + mode + " --spp 8 --quiet --out dyed-" + mode + ".exr");
+        ASSERT_EQ(r.status, 0) << r.err;
+        const nlohmann::json stats =
+            nlohmann::json::parse(readFile(path("dyed-" + mode + ".json")));
+        EXPECT_EQ(stats.at("scene").at("materials"), 2) << mode;
+        const Image image = readImage(path("dyed-" + mode + ".exr"));
+        const Rgb left = meanColourOfColumns(image, 0, image.width / 2 - 1);
+        const Rgb right = meanColourOfColumns(image, image.width / 2 + 1, image.width);
+        EXPECT_GT(left.r / left.b, 1.2 * right.r / right.b) << mode << ": " << left << " " << right;
+    }
+    // Neural mode needs a colour-conditioned model; a bad file is named by line.
+    expectUserError(run("render dyed.json --spp 2 --quiet --out x.exr"),
+                    {"dyed.json: yarns[0].vertex_colours", "fitted for one colour"});
+    writeFileAtomic(path("dyed.txt"), "0.9 0.1 0.1\n0.9 0.1\n");
+    expectUserError(run("render dyed.json --mode fiber --spp 2 --quiet --out x.exr"),
+                    {"dyed.txt:2:", "'r g b'"});
+    writeFileAtomic(path("dyed.txt"), "0.9 0.1 0.1\n0.9 0.1 0.1\n0.1 0.1 0.9\n");
+    expectUserError(run("render dyed.json --mode fiber --spp 2 --quiet --out x.exr"),
+                    {"dyed.txt", "curve 0 has 3 colours but 4 points"});
+    // Every point its own colour: more materials than a scene may have.
+    std::string many, manyColours;
+    for (int k = 0; k < 300; ++k) {
+        many += std::to_string(-0.5 + k / 299.0) + " 0 0\n";
+        manyColours += std::to_string(k / 299.0) + " 0.5 0.5\n";
+    }
+    writeFileAtomic(path("long.txt"), many);
+    writeFileAtomic(path("dyed.txt"), manyColours);
+    expectUserError(run("render dyed.json --mode fiber --spp 1 --quiet --out x.exr"),
+                    {"dyed.json: yarns[0]", "more than 256 materials"});
+    EXPECT_FALSE(std::filesystem::exists(path("x.exr")));
 }
 
 TEST_F(RenderCliTest, BadInputIsNamed) {

@@ -113,6 +113,22 @@ TEST_F(SceneCliTest, TwoColoursMakeTwoYarnEntries) {
     EXPECT_EQ(fiber.status, 0) << fiber.err;
     expectUserError(run("render striped/scene.json --mode neural --quiet --out n.exr"),
                     {"yarns[0].colour", "--colour-range"});
+    // Space-dyed: one entry with a colour per point, rendered in fiber mode
+    // with the two colours and the steps between them as materials.
+    const RunResult dyed = run("scene closeup --model " + kFleece +
+                               " --colours 0.9,0.2,0.1 0.1,0.3,0.8 --dye-length 3 --width 12 "
+                               "--height 8 --spp 1 --out dyed");
+    ASSERT_EQ(dyed.status, 0) << dyed.err;
+    EXPECT_EQ(nlohmann::json::parse(dyed.out).at("vertex_colours"),
+              nlohmann::json({"dyed/colours.txt"}));
+    ASSERT_EQ(run("render dyed/scene.json --mode fiber --threads 2 --quiet --out d.exr").status, 0);
+    const int64_t materials =
+        nlohmann::json::parse(readFile(path("d.json"))).at("scene").at("materials").get<int64_t>();
+    EXPECT_GE(materials, 2);
+    EXPECT_LE(materials, 17);  // the two colours and at most 15 steps between them
+    expectUserError(run("scene knit --model " + kFleece +
+                        " --colours 0,0,0 1,1,1 --dye-length 3 --stripe 2 --out o"),
+                    {"--stripe", "--dye-length"});
     // One colour: one entry in yarns.txt.
     ASSERT_EQ(
         run("scene weave --model " + kFleece + " --size 2 --colours 0.5,0.5,0.5 --out grey").status,
@@ -140,7 +156,9 @@ TEST_F(SceneCliTest, BadInputIsNamed) {
     expectUserError(run("scene knit" + m + " --colours 0,0,0 1,1,1 0.5,0.5,0.5 --out o"),
                     {"--colours"});
     expectUserError(run("scene closeup" + m + " --colours 0,0,0 1,1,1 --out o"),
-                    {"--colours", "one colour"});
+                    {"--colours", "one colour", "--dye-length"});
+    expectUserError(run("scene closeup" + m + " --colours 0,0,0 1,1,1 --dye-length 0.1 --out o"),
+                    {"--dye-length 0.1", "[0.5, 10000]"});
     expectUserError(run("scene knit" + m + " --stripe 2 --out o"), {"--stripe", "two --colours"});
     expectUserError(run("scene knit" + m + " --colours 0,0,0 1,1,1 --stripe 0 --out o"),
                     {"--stripe 0", "[1, 100]"});

@@ -31,6 +31,10 @@ void runScene(SceneCmdOptions o) {
         throw InputError("--size applies to weave and knit only (a close-up is one yarn)");
     if (o.stripeOpt->count() && o.colours.size() != 2)
         throw InputError("--stripe applies to two --colours only");
+    if (o.stripeOpt->count() && o.scene.dyeLength != 0)
+        throw InputError(
+            "--stripe and --dye-length exclude each other (stripes of yarns, or "
+            "colours along every yarn)");
     for (const std::string& c : o.colours) o.scene.colours.push_back(parseColour(c, "--colours"));
     checkOutputsSpareInputs({{"--model", o.scene.model}, {"--envmap", o.scene.envmap}}, {}, {},
                             {{"--out", o.out}});
@@ -82,6 +86,10 @@ void addSceneCommand(CLI::App& app) {
                                    "With two colours: knit courses or weave yarns per stripe, "
                                    "[1, 100]")
                        ->capture_default_str();
+    cmd->add_option("--dye-length", s.dyeLength,
+                    "With two colours: space-dyed yarns instead of stripes, the colour "
+                    "alternating every L yarn radii along each yarn (a vertex colour file), "
+                    "[0.5, 10000]");
     cmd->add_flag("--quiet", o->quiet, "No warning when the generated yarns overlap");
     cmd->add_option("--out", o->out,
                     "Output directory (replaced only if it holds nothing but an earlier "

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -105,10 +106,33 @@ std::vector<render::LightDesc> paperLights(const render::CameraDesc& camera,
 
 // The generated curves with the colour group (0 or 1) of each: with two
 // colours, group g has colour g; otherwise every curve has the one colour.
+// anchor: per curve, the point where the course parameter is 0 (x = 0 for
+// the close-up and the warp, y = 0 for the weft, t = 0 for a knit course),
+// from which space-dyed colours are measured along the curve, so that the
+// pattern does not move with the margin that hides the ends.
 struct PatternedCurves {
     render::CurveSet set;
     std::vector<int> group;
+    std::vector<size_t> anchor;
 };
+
+// Space-dyed colours (--dye-length): along each curve, colour 0 for
+// L = dyeLength R of arc length from the anchor, then colour 1 for L, and so
+// on both ways; a point takes the colour of the stretch it lies in.
+void spaceDye(render::CurveSet& set, const std::vector<size_t>& anchor, const SceneOptions& o) {
+    const double stretch = o.dyeLength * o.radius;
+    for (size_t c = 0; c < set.curves.size(); ++c) {
+        render::Curve& curve = set.curves[c];
+        std::vector<double> arc(curve.points.size(), 0.0);
+        for (size_t i = 1; i < arc.size(); ++i)
+            arc[i] = arc[i - 1] + length(curve.points[i] - curve.points[i - 1]);
+        curve.colours.clear();
+        for (size_t i = 0; i < arc.size(); ++i) {
+            const auto k = static_cast<int64_t>(std::floor((arc[i] - arc[anchor[c]]) / stretch));
+            curve.colours.push_back(o.colours[k % 2 == 0 ? 0 : 1]);
+        }
+    }
+}
 
 GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera,
                         const SceneOptions& o) {
@@ -123,6 +147,16 @@ GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera
     yarn.plies = o.plies;
     yarn.plyTwist = o.plyTwist;
     yarn.model = absolutePath(o.model);
+    if (o.dyeLength > 0) {
+        // Space-dyed: one entry, a colour per curve point.
+        spaceDye(curves.set, curves.anchor, o);
+        yarn.vertexColours = kVertexColourFile;
+        yarn.curves = yarnCurveFile(0, 1);
+        s.yarns.push_back(yarn);
+        g.entryOfCurve.assign(curves.set.curves.size(), 0);
+        g.curves = std::move(curves.set);
+        return g;
+    }
     // One yarn entry per colour used, in the order of the colours (an unused
     // colour would be an empty curve file).
     const int groups = o.colours.size() == 2 ? 2 : 1;
@@ -170,7 +204,7 @@ PatternedCurves extendEndsOutOfView(const CurvesWithMargin& curvesWithMargin,
 
 // scene.json, yarns.txt or yarns-N.txt (N = 1, 2, ...): what writeScene writes.
 bool isGeneratedSceneFile(const std::string& name) {
-    if (name == "scene.json" || name == "yarns.txt") return true;
+    if (name == "scene.json" || name == "yarns.txt" || name == kVertexColourFile) return true;
     const std::string prefix = "yarns-", suffix = ".txt";
     if (name.size() <= prefix.size() + suffix.size() || name.rfind(prefix, 0) != 0 ||
         name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
@@ -223,6 +257,11 @@ void SceneOptions::validate() const {
             if (!std::isfinite(c[ch]) || c[ch] < 0 || c[ch] > 1)
                 throw InputError(rangeError("--colours", formatNumber(c[ch]), "[0, 1]"));
     checkInt("--stripe", stripe, 1, kMaxPatchSize);
+    if (dyeLength != 0) {
+        checkReal("--dye-length", dyeLength, kMinDyeLength, kMaxDyeLength);
+        if (colours.size() != 2)
+            throw InputError("--dye-length needs two --colours (the yarn alternates between them)");
+    }
     if (!envmap.empty()) {
         const std::string ext = lowercaseExtension(envmap);
         if (ext != ".exr" && ext != ".hdr")
@@ -346,8 +385,10 @@ render::CameraDesc frameCover(double x0, double x1, double y0, double y1, const 
 
 GeneratedScene closeupScene(const SceneOptions& o) {
     o.validate();
-    if (o.colours.size() == 2)
-        throw InputError("--colours: a close-up is one yarn, so it takes one colour, not two");
+    if (o.colours.size() == 2 && o.dyeLength == 0)
+        throw InputError(
+            "--colours: a close-up is one yarn, so it takes one colour, or two "
+            "with --dye-length (a space-dyed yarn)");
     // A yarn of length L along x, bowed up in y by 0.08 L and tilted in depth
     // by +-0.04 L: gently curved, seen from the front. The camera frames this
     // length; the yarn then runs on past both sides of the film.
@@ -366,6 +407,8 @@ GeneratedScene closeupScene(const SceneOptions& o) {
         PatternedCurves curves;
         curves.set.curves.push_back(std::move(c));
         curves.group.push_back(0);
+        curves.anchor.push_back(static_cast<size_t>((kCloseupLengthRadii / 2 + margin) *
+                                                    kCloseupSamplesPerRadius));  // x = 0
         return curves;
     };
     const render::CameraDesc camera =
@@ -397,6 +440,7 @@ GeneratedScene weaveScene(const SceneOptions& o) {
             }
             curves.set.curves.push_back(std::move(c));
             curves.group.push_back(stripeGroup(j, o.stripe));
+            curves.anchor.push_back(static_cast<size_t>((1 - first) * kWeaveSamplesPerSpacing));
         }
         for (int i = first; i <= last; ++i) {  // weft: along y at x = i d, opposite phase
             render::Curve c;
@@ -406,6 +450,7 @@ GeneratedScene weaveScene(const SceneOptions& o) {
             }
             curves.set.curves.push_back(std::move(c));
             curves.group.push_back(1 - stripeGroup(i, o.stripe));
+            curves.anchor.push_back(static_cast<size_t>((1 - first) * kWeaveSamplesPerSpacing));
         }
         return curves;
     };
@@ -433,6 +478,7 @@ GeneratedScene knitScene(const SceneOptions& o) {
                     g, row, kTwoPi * (static_cast<double>(i) / kKnitSamplesPerLoop - margin)));
             curves.set.curves.push_back(std::move(c));
             curves.group.push_back(stripeGroup(row, o.stripe));
+            curves.anchor.push_back(static_cast<size_t>(margin * kKnitSamplesPerLoop));  // t = 0
         }
         return curves;
     };
@@ -473,19 +519,36 @@ nlohmann::json sceneSummary(const GeneratedScene& generated, SceneKind kind, con
         render::checkYarnOverlap(generated.scene, entryCurves(generated));
     for (render::YarnEntryOverlap& entry : overlap) entry.curves = (folder / entry.curves).string();
     *warnings = render::yarnOverlapWarnings((folder / "scene.json").string(), overlap);
-    nlohmann::json curveFiles = nlohmann::json::array(), colours = nlohmann::json::array();
+    nlohmann::json curveFiles = nlohmann::json::array(), colours = nlohmann::json::array(),
+                   colourFiles = nlohmann::json::array();
     for (const render::YarnDesc& yarn : generated.scene.yarns) {
         curveFiles.push_back((folder / yarn.curves).string());
         if (yarn.colour) colours.push_back({yarn.colour->r, yarn.colour->g, yarn.colour->b});
+        if (!yarn.vertexColours.empty())
+            colourFiles.push_back((folder / yarn.vertexColours).string());
     }
     return {{"kind", sceneKindName(kind)},
             {"scene", (folder / "scene.json").string()},
             {"curves", curveFiles},
             {"colours", colours},
+            {"vertex_colours", colourFiles},
             {"yarns", generated.curves.curves.size()},
             {"points", generated.curves.pointCount()},
             {"radius", *generated.scene.yarns.at(0).radius},
             {"yarn_overlap", render::yarnOverlapJson(overlap)}};
+}
+
+std::string vertexColoursText(const render::CurveSet& curves) {
+    std::string text;
+    char line[96];
+    for (size_t c = 0; c < curves.curves.size(); ++c) {
+        if (c > 0) text += "\n";
+        for (const Rgb& colour : curves.curves[c].colours) {
+            std::snprintf(line, sizeof line, "%.9g %.9g %.9g\n", colour.r, colour.g, colour.b);
+            text += line;
+        }
+    }
+    return text;
 }
 
 std::string curvesText(const render::CurveSet& curves) {
@@ -509,15 +572,19 @@ void writeScene(const GeneratedScene& generated, const std::string& dir) {
             if (!isGeneratedSceneFile(name))
                 throw InputError("output directory '" + dir + "' exists and holds '" + name +
                                  "', which is not a file of a generated scene (scene.json, "
-                                 "yarns.txt, yarns-N.txt): remove it or choose another "
-                                 "directory");
+                                 "yarns.txt, yarns-N.txt, colours.txt): remove it or choose "
+                                 "another directory");
         }
         if (ec) throw InputError("cannot list output directory '" + dir + "': " + ec.message());
     }
     TempDirCommit out(dir);
     const std::vector<render::CurveSet> sets = entryCurves(generated);
-    for (size_t e = 0; e < sets.size(); ++e)
-        writeFileAtomic(out.path() + "/" + generated.scene.yarns[e].curves, curvesText(sets[e]));
+    for (size_t e = 0; e < sets.size(); ++e) {
+        const render::YarnDesc& yarn = generated.scene.yarns[e];
+        writeFileAtomic(out.path() + "/" + yarn.curves, curvesText(sets[e]));
+        if (!yarn.vertexColours.empty())
+            writeFileAtomic(out.path() + "/" + yarn.vertexColours, vertexColoursText(sets[e]));
+    }
     writeFileAtomic(out.path() + "/scene.json", json.dump(2) + "\n");
     out.commit();
 }

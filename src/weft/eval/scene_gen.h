@@ -27,7 +27,10 @@
 // the warp blocks starting with the first colour and the weft blocks with
 // the second: solid blocks of each colour where a warp block crosses a weft
 // block of its own colour, shot blocks where they differ). Each colour is a
-// yarn entry of its own, with its own curve file.
+// yarn entry of its own, with its own curve file. With --dye-length L
+// instead, every yarn is space-dyed: one yarn entry whose colour alternates
+// between the two every L yarn radii of arc length along each curve
+// (a colour per curve point in colours.txt, the scene's "vertex_colours").
 // Parameters (SceneOptions, flags of `weft scene`): the model file (must
 // load), N (--size), the yarn radius R, plies, ply twist, film size, spp and
 // an optional environment map. Scene units: the world of docs/scene-format.md
@@ -56,6 +59,9 @@ SceneKind parseSceneKind(const std::string& name);
 // flag and its range).
 inline constexpr int kMaxPatchSize = 100;
 inline constexpr double kMinRadius = 1e-6, kMaxRadius = 1e3;
+inline constexpr double kMinDyeLength = 0.5, kMaxDyeLength = 1e4;
+// The vertex colour file of a space-dyed scene.
+inline constexpr const char* kVertexColourFile = "colours.txt";
 
 struct SceneOptions {
     std::string model;         // --model: MODEL.json from `weft fit`; must exist and load
@@ -69,6 +75,7 @@ struct SceneOptions {
     std::string envmap;        // --envmap: .exr or .hdr lat-long map instead of the sky; "" = sky
     std::vector<Rgb> colours;  // --colours: none (the model's own), one or two C_TT, [0, 1]
     int stripe = 2;            // --stripe: courses (knit) or yarns (weave) per stripe; [1, 100]
+    double dyeLength = 0;      // --dye-length: 0, or space-dyed stretches in radii; [0.5, 10000]
 
     // Range checks, then the model is loaded (loadYarnModel) and the envmap
     // checked for its extension and readability; InputError naming the flag.
@@ -158,6 +165,10 @@ void writeScene(const GeneratedScene& generated, const std::string& dir);
 // overlapping entries go to `warnings`.
 nlohmann::json sceneSummary(const GeneratedScene& generated, SceneKind kind, const std::string& dir,
                             std::vector<std::string>* warnings);
+
+// The curves' colours as a vertex colour file (docs/scene-format.md):
+// "r g b" per point (%.9g), a blank line between curves.
+std::string vertexColoursText(const render::CurveSet& curves);
 
 // The curves as the text that writeScene writes ("x y z" lines, %.9g).
 std::string curvesText(const render::CurveSet& curves);

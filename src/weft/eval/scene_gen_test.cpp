@@ -587,6 +587,66 @@ TEST(SceneGen, OneColourColoursEveryYarnAndTheCloseupTakesOne) {
     expectInputError([&] { closeupScene(o); }, {"--colours", "one yarn", "one colour"});
 }
 
+TEST(SceneGen, SpaceDyedYarnsAlternateEveryDyeLengthAlongTheCurve) {
+    const Rgb a(0.9, 0.2, 0.1), b(0.1, 0.3, 0.8);
+    for (const SceneKind kind : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit}) {
+        SCOPED_TRACE(sceneKindName(kind));
+        SceneOptions o = options(3);
+        o.colours = {a, b};
+        o.dyeLength = 5;
+        const GeneratedScene g = generateScene(kind, o);
+        ASSERT_EQ(g.scene.yarns.size(), 1u);
+        EXPECT_FALSE(g.scene.yarns[0].colour);
+        EXPECT_EQ(g.scene.yarns[0].vertexColours, "colours.txt");
+        const double stretch = 5 * o.radius;
+        for (const render::Curve& c : g.curves.curves) {
+            ASSERT_EQ(c.colours.size(), c.points.size());
+            // Runs of one colour, alternating; every run but the first and
+            // the last spans the dye length to within one point spacing.
+            double runStart = 0, arc = 0, spacing = 0;
+            int runs = 0;
+            for (size_t i = 1; i < c.points.size(); ++i) {
+                const double step = length(c.points[i] - c.points[i - 1]);
+                arc += step;
+                spacing = std::max(spacing, step);
+                ASSERT_TRUE(c.colours[i] == a || c.colours[i] == b);
+                if (c.colours[i] != c.colours[i - 1]) {
+                    if (runs > 0) {
+                        EXPECT_NEAR(arc - runStart, stretch, spacing + 1e-12);
+                    }
+                    ++runs;
+                    runStart = arc;
+                }
+            }
+            EXPECT_GE(runs, 2);
+        }
+    }
+    // The pattern does not move with the film (the margin of hidden yarn).
+    SceneOptions o = options(3);
+    o.colours = {a, b};
+    o.dyeLength = 5;
+    const GeneratedScene square = knitScene(o);
+    o.width = 900;
+    const GeneratedScene wide = knitScene(o);
+    // Courses that are the same row in both have the same colours where their points meet.
+    size_t matched = 0;
+    for (const render::Curve& c0 : square.curves.curves)
+        for (const render::Curve& c1 : wide.curves.curves)
+            for (size_t i = 0; i < c0.points.size(); i += 7)
+                for (size_t j = 0; j < c1.points.size(); ++j)
+                    if (length(c0.points[i] - c1.points[j]) < 1e-12) {
+                        EXPECT_EQ(c0.colours[i], c1.colours[j]);
+                        ++matched;
+                    }
+    EXPECT_GT(matched, 0u);
+    // Two colours are needed, and a length in range.
+    o.colours = {a};
+    expectInputError([&] { knitScene(o); }, {"--dye-length", "two --colours"});
+    o.colours = {a, b};
+    o.dyeLength = 0.1;
+    expectInputError([&] { knitScene(o); }, {"--dye-length 0.1", "[0.5, 10000]"});
+}
+
 TEST_F(SceneGenFiles, TwoColourFilesReadBackAsTwoEntries) {
     SceneOptions o = options(3);
     o.colours = {Rgb(0.8, 0.1, 0.1), Rgb(0.95)};
@@ -611,6 +671,16 @@ TEST_F(SceneGenFiles, TwoColourFilesReadBackAsTwoEntries) {
     EXPECT_EQ(total, g.curves.curves.size());
     writeScene(weaveScene(options(2)), path("out"));  // and back: the yarns-N files go
     EXPECT_FALSE(std::filesystem::exists(path("out/yarns-1.txt")));
+    // Space-dyed: the colour file reads back onto the curves.
+    o.dyeLength = 3;
+    const GeneratedScene dyed = closeupScene(o);
+    writeScene(dyed, path("out"));
+    const render::SceneDesc d = render::loadScene(path("out/scene.json"));
+    ASSERT_EQ(d.yarns.size(), 1u);
+    render::CurveSet read = render::readCurves(d.yarns[0].curves);
+    render::readVertexColours(d.yarns[0].vertexColours, &read);
+    ASSERT_EQ(read.curves.size(), 1u);
+    EXPECT_EQ(read.curves[0].colours, dyed.curves.curves[0].colours);
     writeFileAtomic(path("out/yarns-x.txt"), "x");
     expectInputError([&] { writeScene(g, path("out")); }, {"yarns-x.txt"});
 }

@@ -26,6 +26,7 @@
 #include <string_view>
 #include <vector>
 
+#include "weft/core/rgb.h"
 #include "weft/core/vec.h"
 
 namespace weft::render {
@@ -39,6 +40,9 @@ struct Curve {
     std::vector<float> radii;  // one per point, or empty when the file has none
     bool closed = false;       // the last point joins the first
     CurveBasis basis = CurveBasis::Polyline;
+    // The fiber colour C_TT at each point (a scene's "vertex_colours" file,
+    // readVertexColours), or empty: the yarn entry's colour.
+    std::vector<Rgb> colours;
 };
 
 struct CurveSet {
@@ -67,6 +71,15 @@ CurveSet readCurves(const std::string& path);
 CurveSet parseBccCurves(std::string_view bytes, const std::string& pathForErrors);
 CurveSet parseTextCurves(std::string_view text, const std::string& pathForErrors);
 CurveSet parseObjCurves(std::string_view text, const std::string& pathForErrors);
+
+// Reads a vertex colour file (docs/scene-format.md, "vertex_colours") into
+// the colours of `set`'s curves: text, one "r g b" line per control point,
+// each value in [0, 1], the curves in the order of the curve file and
+// separated by blank lines; '#' starts a comment. InputError naming
+// path:line for a malformed line or a value out of range, and the curve
+// when the colour file's curves or their points do not match the set's.
+void readVertexColours(const std::string& path, CurveSet* set);
+void parseVertexColours(std::string_view text, const std::string& pathForErrors, CurveSet* set);
 
 // Spans between consecutive control points: n - 1 for an open curve of n
 // points, n for a closed one, whatever the basis (an interpolating Catmull-Rom

@@ -180,6 +180,7 @@ nlohmann::json toJson(const RenderStats& s) {
           {"segments", s.scene.segments},
           {"geometry_bvh_bytes", s.scene.embreeBytes},
           {"geometry_bvh_peak_bytes", s.scene.embreePeakBytes},
+          {"materials", s.scene.materials},
           {"material_bytes", s.scene.materialBytes},
           {"build_seconds", s.scene.seconds}}},
         {"yarn_overlap", yarnOverlapJson(s.scene.yarnOverlap)},

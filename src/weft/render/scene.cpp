@@ -122,6 +122,77 @@ std::optional<double> overlapRadius(const YarnDesc& yarn, const CurveSet& set) {
     return yarn.scale * sum / static_cast<double>(count);
 }
 
+// The materials of a scene: one BSDF per distinct model file and colour,
+// built the first time a yarn asks for it (a vertex-coloured yarn asks for
+// each of its colours, yarn_geometry.h kColourSteps).
+class SceneMaterials {
+  public:
+    SceneMaterials(const SceneDesc& desc, RenderMode mode, const YarnBsdfOptions& options,
+                   std::vector<std::unique_ptr<Bsdf>>* bsdfs)
+        : desc_(desc), mode_(mode), options_(options), bsdfs_(bsdfs) {}
+
+    // The model of yarn entry y as its file holds it (each file loaded once).
+    const YarnModel& model(size_t y) {
+        const std::string& path = desc_.yarns[y].model;
+        auto it = models_.find(path);
+        if (it == models_.end()) it = models_.emplace(path, loadYarnModel(path)).first;
+        return it->second;
+    }
+
+    // The material of yarn entry y in `colour` (none: the model's own).
+    int material(size_t y, const std::optional<Rgb>& colour) {
+        const YarnDesc& yarn = desc_.yarns[y];
+        if (colour && last_ && last_->y == y && last_->colour == *colour) return last_->material;
+        const std::vector<double> colourKey =
+            colour ? std::vector<double>{colour->r, colour->g, colour->b} : std::vector<double>{};
+        auto [it, inserted] = index_.try_emplace({yarn.model, colourKey}, 0);
+        if (inserted) {
+            if (bsdfs_->size() >= static_cast<size_t>(kMaxSceneMaterials))
+                throw InputError(entryName(y) + ": more than " + std::to_string(kMaxSceneMaterials) +
+                                 " materials (distinct models and colours) in the scene; give "
+                                 "fewer distinct colours");
+            it->second = static_cast<int>(bsdfs_->size());
+            YarnModel m = model(y);
+            if (colour) {
+                const std::string what =
+                    entryName(y) + (yarn.vertexColours.empty() ? ".colour" : ".vertex_colours");
+                // Neural mode: the conditioned model of that colour; fiber and
+                // dual mode: the fiber itself, whatever the model.
+                if (mode_ == RenderMode::Neural) m = m.forColour(*colour, what);
+                else m.fiber.cTT = *colour;
+            }
+            if (mode_ == RenderMode::Neural)
+                bsdfs_->push_back(std::make_unique<YarnBsdf>(m, yarn.model, options_));
+            else if (mode_ == RenderMode::Dual)
+                bsdfs_->push_back(std::make_unique<DualScatteringBsdf>(m.fiber, m.ply));
+            else
+                bsdfs_->push_back(std::make_unique<FiberBcsdf>(m.fiber));
+        }
+        if (colour) last_ = Last{y, *colour, it->second};
+        return it->second;
+    }
+
+  private:
+    std::string entryName(size_t y) const {
+        return (desc_.path.empty() ? std::string("scene") : desc_.path) + ": yarns[" +
+               std::to_string(y) + "]";
+    }
+
+    const SceneDesc& desc_;
+    RenderMode mode_;
+    YarnBsdfOptions options_;
+    std::vector<std::unique_ptr<Bsdf>>* bsdfs_;
+    std::map<std::string, YarnModel> models_;
+    std::map<std::pair<std::string, std::vector<double>>, int> index_;
+    // The last coloured lookup: neighbouring segments mostly share a colour.
+    struct Last {
+        size_t y;
+        Rgb colour;
+        int material;
+    };
+    std::optional<Last> last_;
+};
+
 }  // namespace
 
 std::vector<YarnEntryOverlap> checkYarnOverlap(const SceneDesc& desc,
@@ -172,41 +243,21 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
     for (const LightDesc& light : desc.lights) lights_.push_back(makeLight(light));
     if (lights_.empty()) lights_.push_back(std::make_unique<EnvironmentLight>(skyLight()));
 
-    // One material per distinct model file and colour.
-    std::map<std::pair<std::string, std::vector<double>>, int> materialOf;
-    std::vector<PlyParams> plyOf;
+    // One material per distinct model file and colour (SceneMaterials).
+    SceneMaterials materials(desc, mode, yarnOptions, &bsdfs_);
     std::vector<CurveSet> curveSets;
-    std::vector<int> yarnMaterial;
-    for (const YarnDesc& yarn : desc.yarns) {
+    for (size_t y = 0; y < desc.yarns.size(); ++y) {
+        const YarnDesc& yarn = desc.yarns[y];
         curveSets.push_back(readCurves(yarn.curves));
-        checkCurveExtent(curveSets.back(), desc, curveSets.size() - 1);
+        if (!yarn.vertexColours.empty()) readVertexColours(yarn.vertexColours, &curveSets.back());
+        checkCurveExtent(curveSets.back(), desc, y);
         stats_.curves += static_cast<int64_t>(curveSets.back().curves.size());
         stats_.curvePoints += static_cast<int64_t>(curveSets.back().pointCount());
-        const std::vector<double> colourKey =
-            yarn.colour ? std::vector<double>{yarn.colour->r, yarn.colour->g, yarn.colour->b}
-                        : std::vector<double>{};
-        auto [it, inserted] = materialOf.try_emplace({yarn.model, colourKey},
-                                                     static_cast<int>(plyOf.size()));
-        if (inserted) {
-            YarnModel model = loadYarnModel(yarn.model);
-            if (yarn.colour) {
-                const std::string what = (desc.path.empty() ? std::string("scene") : desc.path) +
-                                         ": yarns[" + std::to_string(curveSets.size() - 1) +
-                                         "].colour";
-                // Neural mode: the conditioned model of that colour; fiber and
-                // dual mode: the fiber itself, whatever the model.
-                if (mode == RenderMode::Neural) model = model.forColour(*yarn.colour, what);
-                else model.fiber.cTT = *yarn.colour;
-            }
-            plyOf.push_back(model.ply);
-            if (mode == RenderMode::Neural)
-                bsdfs_.push_back(std::make_unique<YarnBsdf>(model, yarn.model, yarnOptions));
-            else if (mode == RenderMode::Dual)
-                bsdfs_.push_back(std::make_unique<DualScatteringBsdf>(model.fiber, model.ply));
-            else
-                bsdfs_.push_back(std::make_unique<FiberBcsdf>(model.fiber));
-        }
-        yarnMaterial.push_back(it->second);
+        // The yarn's own material now, so that its model is checked before any
+        // geometry; vertex-coloured yarns get the rest segment by segment below.
+        const std::vector<Curve>& read = curveSets.back().curves;
+        if (yarn.vertexColours.empty()) materials.material(y, yarn.colour);
+        else if (!read.empty()) materials.material(y, read.front().colours.front());
     }
     // Before the geometry: what the render will draw inside other yarns.
     stats_.yarnOverlap = checkYarnOverlap(desc, curveSets);
@@ -216,8 +267,9 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
     int64_t planned = 0;
     for (size_t y = 0; y < desc.yarns.size(); ++y) {
         const YarnDesc& yarn = desc.yarns[y];
-        const int material = yarnMaterial[y];
-        const PlyParams& fibers = plyOf[material];
+        const bool vertexColoured = !yarn.vertexColours.empty();
+        const int material = vertexColoured ? -1 : materials.material(y, yarn.colour);
+        const PlyParams& fibers = materials.model(y).ply;
         const std::vector<Curve>& curves = curveSets[y].curves;
         for (size_t c = 0; c < curves.size(); ++c) {
             const double radius = largestRadius(curves[c], yarn);
@@ -243,12 +295,23 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
                 const int64_t tubes = drawsPlies(mode) ? 1 : fibers.fibers;
                 planned += tubes * static_cast<int64_t>(plies[j].size());
                 if (planned > kMaxSceneSegments) tooMuchGeometry(desc, y, mode);
+                // A colour per segment: its first sample's (the ply's fibers
+                // share its sample indices, so one list serves them all).
+                std::vector<int> along;
+                if (vertexColoured) {
+                    const size_t segments = plies[j].closed ? plies[j].size() : plies[j].size() - 1;
+                    along.resize(segments);
+                    for (size_t k = 0; k < segments; ++k)
+                        along[k] = materials.material(y, plies[j].colours[k]);
+                }
+                const int first = vertexColoured ? along.front() : material;
                 if (drawsPlies(mode)) {
-                    accel_->addGeometry({toTube(plies[j])}, material);
+                    accel_->addGeometry({toTube(plies[j])}, first, std::move(along));
                 } else {
                     // Seeded by where the ply is, not by the render seed.
                     const uint64_t seed = mixBits(mixBits(mixBits(y + 1) ^ (c + 1)) ^ (j + 1));
-                    accel_->addGeometry(fiberTubes(plies[j], fibers, seed), material);
+                    accel_->addGeometry(fiberTubes(plies[j], fibers, seed), first,
+                                        std::move(along));
                 }
             }
             progress.add();
@@ -260,6 +323,7 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
     stats_.segments = accel_->segmentCount();
     stats_.embreeBytes = accel_->embreeBytes();
     stats_.embreePeakBytes = accel_->embreePeakBytes();
+    stats_.materials = static_cast<int64_t>(bsdfs_.size());
     for (const auto& bsdf : bsdfs_)
         stats_.materialBytes += static_cast<int64_t>(bsdf->memoryBytes());
     stats_.seconds =

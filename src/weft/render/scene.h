@@ -10,7 +10,9 @@
 //         from its "ply" block; generatePly seeded per ply by the yarn,
 //         curve and ply index, so the fibers do not change with the render
 //         seed), shaded with the model's FiberBcsdf;
-//   - the materials, one per distinct model file; in neural mode YarnBsdfs
+//   - the materials, one per distinct model file and colour (a yarn's
+//     "colour", or each colour along a yarn with "vertex_colours": a segment
+//     then carries its material, tube_accel.h); in neural mode YarnBsdfs
 //     built with `yarnOptions` (the sampling ablation of paper Fig. 5).
 // Fiber geometry is generated ply by ply and handed to Embree at once, so the
 // peak memory is Embree's copy plus one ply's fibers.
@@ -43,6 +45,10 @@ constexpr bool drawsPlies(RenderMode mode) { return mode != RenderMode::Fiber; }
 // Largest number of curve segments a scene may hand to Embree (about 60
 // bytes each with the BVH): an InputError naming the yarn beyond it.
 inline constexpr int64_t kMaxSceneSegments = int64_t{200} * 1000 * 1000;
+// Largest number of materials (distinct model files and colours) a scene may
+// have: an InputError naming the yarn entry beyond it. A neural material
+// costs about 0.4 s and 0.5 MB to build (its energy guard and sampling table).
+inline constexpr int kMaxSceneMaterials = 256;
 const char* renderModeName(RenderMode mode);
 // "neural", "fiber" or "dual"; otherwise an InputError naming `field`.
 RenderMode parseRenderMode(const std::string& name, const std::string& field = "--mode");
@@ -76,6 +82,7 @@ struct SceneBuildStats {
     int64_t segments = 0;         // round linear curve segments handed to Embree
     int64_t embreeBytes = 0;      // geometry + BVH after the build (memory monitor)
     int64_t embreePeakBytes = 0;  // largest Embree allocation during the build
+    int64_t materials = 0;        // distinct (model, colour) BSDFs
     int64_t materialBytes = 0;    // the materials' BSDFs (yarn: networks and tables)
     double seconds = 0;           // building time, model loading included
     // Per yarn entry, the overlap check (checkYarnOverlap; empty when it could not run).

@@ -174,7 +174,8 @@ LightDesc readLight(JsonObjectReader r, const std::string& baseDir) {
 }
 
 YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
-    r.allowKeys({"curves", "scale", "radius", "plies", "ply_twist", "model", "colour"});
+    r.allowKeys(
+        {"curves", "scale", "radius", "plies", "ply_twist", "model", "colour", "vertex_colours"});
     YarnDesc y;
     y.curves = readFileName(r, "curves", baseDir, {".bcc", ".txt", ".obj"});
     y.model = readFileName(r, "model", baseDir, {});
@@ -186,6 +187,13 @@ YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
     if (r.has("colour")) {
         const std::vector<double> c = r.numbers("colour", 3, NumberRange::closed(0, 1), "(r, g, b)");
         y.colour = Rgb(c[0], c[1], c[2]);
+    }
+    if (r.has("vertex_colours")) {
+        if (y.colour)
+            r.fail("vertex_colours",
+                   "give a yarn either \"colour\" (one colour) or \"vertex_colours\" (a colour "
+                   "per curve point), not both");
+        y.vertexColours = readFileName(r, "vertex_colours", baseDir, {".txt"});
     }
     return y;
 }
@@ -289,6 +297,7 @@ json toJson(const SceneDesc& scene) {
                    {"model", y.model}};
         if (y.radius) yj["radius"] = *y.radius;
         if (y.colour) yj["colour"] = rgbJson(*y.colour);
+        if (!y.vertexColours.empty()) yj["vertex_colours"] = y.vertexColours;
         yarns.push_back(std::move(yj));
     }
     j["yarns"] = std::move(yarns);
@@ -306,6 +315,8 @@ std::vector<CommandPath> sceneInputs(const SceneDesc& scene, const std::string& 
         const std::string yarn = "the scene's yarns[" + std::to_string(i) + "].";
         inputs.push_back({yarn + "curves", scene.yarns[i].curves});
         inputs.push_back({yarn + "model", scene.yarns[i].model});
+        if (!scene.yarns[i].vertexColours.empty())
+            inputs.push_back({yarn + "vertex_colours", scene.yarns[i].vertexColours});
     }
     return inputs;
 }
@@ -339,6 +350,8 @@ std::string sceneHash(const SceneDesc& scene) {
     for (size_t i = 0; i < scene.yarns.size(); ++i) {
         digest(j["yarns"][i]["curves"], jsonIndexPath("yarns", i) + ".curves");
         digest(j["yarns"][i]["model"], jsonIndexPath("yarns", i) + ".model");
+        if (!scene.yarns[i].vertexColours.empty())
+            digest(j["yarns"][i]["vertex_colours"], jsonIndexPath("yarns", i) + ".vertex_colours");
     }
     // Object keys dump sorted (std::map), so the text is canonical.
     return hex16(fnv1a("weft scene hash 1\n" + j.dump()));

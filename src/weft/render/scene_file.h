@@ -75,6 +75,10 @@ struct YarnDesc {
     // model's. Fiber and dual mode use it with any model; neural mode needs a
     // colour-conditioned model (docs/colour.md).
     std::optional<Rgb> colour;
+    // Resolved path of a vertex colour file (curves.h readVertexColours): a
+    // C_TT per control point, interpolated along the curve (dyed and
+    // space-dyed yarns); "" when absent. Excludes "colour".
+    std::string vertexColours;
 };
 
 struct SceneDesc {

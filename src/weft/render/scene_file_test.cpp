@@ -245,7 +245,7 @@ TEST(SceneFile, UnknownKeysAreNamedWithTheirPath) {
     expectInputError(
         [] { parseJson(fullWith("/yarns/1/twist", 1)); },
         {"yarns[1]: unknown key \"twist\" (allowed: curves, scale, radius, plies, ply_twist, "
-         "model, colour)"});
+         "model, colour, vertex_colours)"});
     // A scene parsed from memory without a name is called "scene".
     expectInputError([] { parseScene(fullWith("/film/depth", 8), "", ""); },
                      {"scene: film: unknown key \"depth\""});
@@ -538,6 +538,38 @@ TEST(SceneFile, RelativePathsResolveAgainstTheBaseDir) {
     EXPECT_EQ(c.yarns[0].model, "../m.json");
 }
 
+TEST(SceneFile, VertexColoursAreAFileBesideTheCurvesAndExcludeColour) {
+    const std::string yarn = R"({"camera": {"from": [0, 0, 1], "to": [0, 0, 0]},
+        "yarns": [{"curves": "knit.bcc", "model": "m.json", )";
+    const SceneDesc s = parseSceneText(yarn + R"("vertex_colours": "dye/knit.txt"}]})",
+                                       "scene.json", "/data");
+    EXPECT_EQ(s.yarns[0].vertexColours, "/data/dye/knit.txt");
+    EXPECT_FALSE(s.yarns[0].colour);
+    EXPECT_EQ(toJson(s)["yarns"][0]["vertex_colours"], "/data/dye/knit.txt");
+    EXPECT_EQ(parseScene(toJson(s), "again.json", "").yarns[0].vertexColours,
+              "/data/dye/knit.txt");
+    EXPECT_FALSE(toJson(parseSceneText(yarn + "\"plies\": 1}]}", "s.json", ""))["yarns"][0]
+                     .contains("vertex_colours"));
+    const std::vector<std::string> inputs = [&] {
+        std::vector<std::string> names;
+        for (const CommandPath& c : sceneInputs(s, "scene.json")) names.push_back(c.path);
+        return names;
+    }();
+    EXPECT_NE(std::find(inputs.begin(), inputs.end(), "/data/dye/knit.txt"), inputs.end());
+    expectInputError(
+        [&] {
+            parseSceneText(yarn + R"("colour": [1, 0, 0], "vertex_colours": "c.txt"}]})",
+                           "scene.json", "");
+        },
+        {"scene.json: yarns[0].vertex_colours", "either \"colour\"", "not both"});
+    expectInputError(
+        [&] { parseSceneText(yarn + R"("vertex_colours": "c.bcc"}]})", "scene.json", ""); },
+        {"yarns[0].vertex_colours", "c.bcc", ".txt"});
+    expectInputError(
+        [&] { parseSceneText(yarn + R"("vertex_colours": 3}]})", "scene.json", ""); },
+        {"yarns[0].vertex_colours", "file name"});
+}
+
 TEST_F(SceneFileTest, LoadSceneResolvesAgainstTheSceneFolder) {
     std::filesystem::create_directories(dir_ / "scenes");
     const std::string file = path("scenes/scene.json");
@@ -591,6 +623,7 @@ class SceneHashTest : public testing::TempDirTest {
         writeFileAtomic((folder / "knit.bcc").string(), std::string("BCC\x44 curve bytes", 16));
         writeFileAtomic((folder / "model.json").string(), "{\"format\": \"model\"}");
         writeFileAtomic((folder / "maps" / "sky.exr").string(), "exr bytes");
+        writeFileAtomic((folder / "dye.txt").string(), "1 0 0\n0 0 1\n");
         writeFileAtomic((folder / "scene.json").string(), sceneText);
     }
     static std::string hashOf(const std::filesystem::path& sceneFile) {
@@ -601,7 +634,7 @@ class SceneHashTest : public testing::TempDirTest {
         "render": {"spp": 16},
         "lights": [{"type": "envmap", "file": "maps/sky.exr"}, {"type": "sky"}],
         "yarns": [{"curves": "knit.bcc", "model": "model.json", "plies": 3},
-                  {"curves": "knit.bcc", "model": "model.json"}]})";
+                  {"curves": "knit.bcc", "model": "model.json", "vertex_colours": "dye.txt"}]})";
 };
 
 TEST_F(SceneHashTest, StableAcrossFoldersAndSensitiveToEveryInput) {
@@ -618,7 +651,7 @@ TEST_F(SceneHashTest, StableAcrossFoldersAndSensitiveToEveryInput) {
     EXPECT_EQ(hashOf(dir_ / "copy" / "elsewhere" / "scene.json"), h);
 
     // One byte of any referenced file changes it.
-    for (const char* file : {"knit.bcc", "model.json", "maps/sky.exr"}) {
+    for (const char* file : {"knit.bcc", "model.json", "maps/sky.exr", "dye.txt"}) {
         SCOPED_TRACE(file);
         writeScene(dir_ / "b", scene_);
         const std::string p = (dir_ / "b" / file).string();

@@ -68,10 +68,17 @@ TubeAccel::~TubeAccel() {
     if (scene_) rtcReleaseScene(scene_);
 }
 
-uint32_t TubeAccel::addGeometry(const std::vector<Tube>& tubes, int material) {
+uint32_t TubeAccel::addGeometry(const std::vector<Tube>& tubes, int material,
+                                std::vector<int> materialAlongTubes) {
     if (committed_) throw std::logic_error("TubeAccel::addGeometry after commit");
     GeometryInfo info;
     info.material = material;
+    for (const Tube& tube : tubes)
+        if (!materialAlongTubes.empty() && tube.segmentCount() != materialAlongTubes.size())
+            throw std::logic_error(
+                "TubeAccel: materialAlongTubes needs one material per segment "
+                "of every tube");
+    info.materialAlong = std::move(materialAlongTubes);
     // Vertex layout per tube: an open tube's points as they are; a closed
     // tube's points framed by its last point before and its first two after,
     // so that every segment, the closing one included, has both neighbours
@@ -154,7 +161,9 @@ bool TubeAccel::intersect(const Vec3& org, const Vec3& dir, double tMax, const T
     hit->t = rh.ray.tfar;
     hit->point = org + dir * hit->t;
     hit->id = {rh.hit.geomID, info.tubeOf(rh.hit.primID)};
-    hit->material = info.material;
+    hit->material = info.materialAlong.empty()
+                        ? info.material
+                        : info.materialAlong[rh.hit.primID - info.tubeFirstSegment[hit->id.tube]];
     // Tangent: the segment direction (the index buffer gives its first vertex).
     const float* v0 = info.vertices + 4 * static_cast<size_t>(info.indices[rh.hit.primID]);
     const float* v1 = v0 + 4;

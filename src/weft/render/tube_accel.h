@@ -61,7 +61,12 @@ class TubeAccel {
 
     // Adds one geometry holding `tubes` (copied into Embree's buffers; the
     // caller may free them), shaded with `material`. Returns its geometry id.
-    uint32_t addGeometry(const std::vector<Tube>& tubes, int material);
+    // materialAlongTubes: empty, or the material of each segment index along
+    // the tubes (segment k of every tube gets element k; every tube must have
+    // that many segments: a ply and its fibers share their sample indices),
+    // for yarns whose colour varies along the curve.
+    uint32_t addGeometry(const std::vector<Tube>& tubes, int material,
+                         std::vector<int> materialAlongTubes = {});
     // Builds the BVH; call once after the last addGeometry.
     void commit();
 
@@ -81,6 +86,7 @@ class TubeAccel {
     // Per-geometry facts the intersection filter needs (public for the filter).
     struct GeometryInfo {
         int material = -1;
+        std::vector<int> materialAlong;          // empty, or per segment index along a tube
         std::vector<uint32_t> tubeFirstSegment;  // ascending; segment -> tube by binary search
         std::vector<float> tubeRadius;           // largest radius of each tube
         // Embree's buffers (owned by the geometry the scene holds), for the hit tangent.

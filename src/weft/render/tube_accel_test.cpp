@@ -59,6 +59,37 @@ TEST(TubeAccel, HitPointTangentAndNormalOfAStraightTube) {
     EXPECT_FALSE(accel.occluded({0.3, 0.0, 5.0}, {0, 0, -1}, 4.0, {}));
 }
 
+TEST(TubeAccel, MaterialsAlongTheTubesFollowTheSegmentIndex) {
+    // Two parallel tubes of 8 segments each (x in [-4, 4], 1 per segment) in
+    // one geometry; segment k of both has material 10 + k; a third tube of
+    // one material in another geometry.
+    TubeAccel accel;
+    std::vector<int> along;
+    for (int k = 0; k < 8; ++k) along.push_back(10 + k);
+    accel.addGeometry({straightTube(0.0, 0.3), straightTube(-2.0, 0.3)}, 3, along);
+    Tube third = straightTube(0.0, 0.3);
+    for (Vec3& p : third.points) p.y = 5;
+    accel.addGeometry({third}, 4);
+    accel.commit();
+    for (int k = 0; k < 8; ++k) {
+        const double x = -4.0 + k + 0.5;
+        TubeHit hit;
+        ASSERT_TRUE(accel.intersect({x, 0.0, 5.0}, {0, 0, -1}, kInf, {}, &hit));
+        EXPECT_EQ(hit.material, 10 + k) << x;
+        EXPECT_EQ(hit.id.tube, 0u);
+        // From below: the second tube of the geometry, the same segment index.
+        ASSERT_TRUE(accel.intersect({x, 0.0, -5.0}, {0, 0, 1}, kInf, {}, &hit));
+        EXPECT_EQ(hit.id.tube, 1u);
+        EXPECT_EQ(hit.material, 10 + k) << x;
+        ASSERT_TRUE(accel.intersect({x, 5.0, 5.0}, {0, 0, -1}, kInf, {}, &hit));
+        EXPECT_EQ(hit.material, 4);
+    }
+    // One material per segment of every tube, or none.
+    TubeAccel bad;
+    EXPECT_THROW(bad.addGeometry({straightTube(0.0, 0.3, 8), straightTube(1.0, 0.3, 7)}, 0, along),
+                 std::logic_error);
+}
+
 TEST(TubeAccel, RaysLeavingATubeIgnoreItsInteriorButSeeOtherTubes) {
     TubeAccel accel;
     accel.addGeometry({straightTube(0.0, 0.5)}, 0);

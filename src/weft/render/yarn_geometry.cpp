@@ -192,7 +192,8 @@ std::vector<double> turnIntegral(const FramedCurve& c, double rate, double* tota
 void checkFramed(const FramedCurve& c, const char* what) {
     const size_t n = c.size();
     if (n < 2 || c.tangents.size() != n || c.normals.size() != n || c.binormals.size() != n ||
-        c.arcLength.size() != n || c.radius.size() != n) {
+        c.arcLength.size() != n || c.radius.size() != n ||
+        !(c.colours.empty() || c.colours.size() == n)) {
         throw std::invalid_argument(std::string(what) +
                                     ": needs a framed curve of >= 2 samples (from frameCurve)");
     }
@@ -218,6 +219,10 @@ FramedCurve frameCurve(const Curve& curve, double scale, std::optional<double> r
             throw InputError(name + ": " + std::to_string(curve.radii.size()) + " radii for " +
                              std::to_string(curve.points.size()) + " points");
     }
+    const bool coloured = !curve.colours.empty();
+    if (coloured && curve.colours.size() != curve.points.size())
+        throw InputError(name + ": " + std::to_string(curve.colours.size()) + " colours for " +
+                         std::to_string(curve.points.size()) + " points");
 
     // Scaled control points and radii, checked, with coincident neighbours dropped.
     Bounds3 box;
@@ -232,6 +237,7 @@ FramedCurve frameCurve(const Curve& curve, double scale, std::optional<double> r
     const double eps = kCoincidentRelative * extent;
     std::vector<Vec3> p;
     std::vector<double> r;
+    std::vector<Rgb> col;  // empty unless coloured
     p.reserve(curve.points.size());
     r.reserve(curve.points.size());
     for (size_t i = 0; i < curve.points.size(); ++i) {
@@ -243,10 +249,12 @@ FramedCurve frameCurve(const Curve& curve, double scale, std::optional<double> r
         if (!p.empty() && length(q - p.back()) <= eps) continue;
         p.push_back(q);
         r.push_back(ri);
+        if (coloured) col.push_back(curve.colours[i]);
     }
     while (curve.closed && p.size() > 1 && length(p.back() - p.front()) <= eps) {
         p.pop_back();
         r.pop_back();
+        if (coloured) col.pop_back();
     }
     if (p.size() < 2)
         throw InputError(name + ": fewer than 2 distinct points (" +
@@ -293,11 +301,24 @@ FramedCurve frameCurve(const Curve& curve, double scale, std::optional<double> r
     c.points.reserve(count);
     c.radius.reserve(count);
     c.tangents.reserve(count);
-    const auto add = [&](const Vec3& x, const Vec3& d, double rad) {
+    if (coloured) c.colours.reserve(count);
+    // Sample at parameter u of span i (u = 1: its end point), radius and
+    // colour linear in u.
+    const auto add = [&](size_t i, double u, const Vec3& x, const Vec3& d) {
         if (!c.points.empty() && length(x - c.points.back()) <= eps) return;
+        const size_t i1 = (i + 1) % n;
         c.points.push_back(x);
         c.tangents.push_back(d);
-        c.radius.push_back(rad);
+        c.radius.push_back(u == 1.0 ? r[i1] : (1.0 - u) * r[i] + u * r[i1]);
+        if (coloured) {
+            // In steps of 1/kColourSteps of the span (header): the colours
+            // are materials, and a span then makes at most kColourSteps - 1 new ones.
+            const double uq = std::round(u * kColourSteps) / kColourSteps;
+            const bool atStart = uq == 0.0 || col[i] == col[i1];
+            c.colours.push_back(atStart     ? col[i]
+                                : uq == 1.0 ? col[i1]
+                                            : (1.0 - uq) * col[i] + uq * col[i1]);
+        }
     };
     for (size_t i = 0; i < spans; ++i) {
         const size_t i1 = (i + 1) % n;
@@ -306,22 +327,23 @@ FramedCurve frameCurve(const Curve& curve, double scale, std::optional<double> r
             const CatmullRomSpan span = spanAt(i);
             for (int64_t j = 0; j < m; ++j) {
                 const double u = static_cast<double>(j) / static_cast<double>(m);
-                add(span.position(u), span.derivative(u), (1.0 - u) * r[i] + u * r[i1]);
+                add(i, u, span.position(u), span.derivative(u));
             }
-            if (!closed && i + 1 == spans) add(p[i1], span.derivative(1.0), r[i1]);
+            if (!closed && i + 1 == spans) add(i, 1.0, p[i1], span.derivative(1.0));
         } else {
             const Vec3 d = p[i1] - p[i];
             for (int64_t j = 0; j < m; ++j) {
                 const double u = static_cast<double>(j) / static_cast<double>(m);
-                add(p[i] + u * d, Vec3{}, (1.0 - u) * r[i] + u * r[i1]);
+                add(i, u, p[i] + u * d, Vec3{});
             }
-            if (!closed && i + 1 == spans) add(p[i1], Vec3{}, r[i1]);
+            if (!closed && i + 1 == spans) add(i, 1.0, p[i1], Vec3{});
         }
     }
     while (closed && c.points.size() > 1 && length(c.points.back() - c.points.front()) <= eps) {
         c.points.pop_back();
         c.tangents.pop_back();
         c.radius.pop_back();
+        if (coloured) c.colours.pop_back();
     }
     if (c.points.size() < (closed ? 3u : 2u))
         throw InputError(name + ": the sampled curve degenerates to fewer than " +
@@ -385,6 +407,7 @@ std::vector<FramedCurve> plyCurves(const FramedCurve& yarn, int plies, double pl
         ply.closed = yarn.closed;
         ply.points.reserve(laps * n);
         ply.radius.reserve(laps * n);
+        ply.colours.reserve(yarn.colours.empty() ? 0 : laps * n);
         for (size_t lap = 0; lap < laps; ++lap) {
             // After `lap` loops ply c has become ply c + lap m (mod k): its
             // phase runs on continuously.
@@ -398,6 +421,7 @@ std::vector<FramedCurve> plyCurves(const FramedCurve& yarn, int plies, double pl
                                      offset * (std::cos(theta) * yarn.normals[i] +
                                                std::sin(theta) * yarn.binormals[i]));
                 ply.radius.push_back(rPly);
+                if (!yarn.colours.empty()) ply.colours.push_back(yarn.colours[i]);
             }
         }
         frameSamples(ply, false);

@@ -20,7 +20,12 @@
 //    ceil(bound / maxStep) pieces, bound = the largest length of the three
 //    control points of the span's (quadratic Bezier) hodograph, which bounds
 //    the speed |p'(t)| and so the arc length of every piece. Per-point radii
-//    are interpolated linearly in the span parameter. T is the analytic
+//    are interpolated linearly in the span parameter u, per-point colours
+//    (Curve::colours) too but with u rounded to a multiple of
+//    1 / kColourSteps: a sample's colour is a material (render/scene.h), so
+//    a colour change between two control points makes at most
+//    kColourSteps - 1 colours between them, and a run of control points of
+//    one colour stays exactly that colour. T is the analytic
 //    spline derivative (Catmull-Rom) or, on polylines, the derivative of the
 //    parabola through a sample and its two neighbours at chord-length spacing
 //    (exact on circles). The first normal is coordinateSystem(T_0) (core/vec.h:
@@ -56,11 +61,15 @@
 #include <string>
 #include <vector>
 
+#include "weft/core/rgb.h"
 #include "weft/core/vec.h"
 #include "weft/ply/ply.h"
 #include "weft/render/curves.h"
 
 namespace weft::render {
+
+// Steps of a colour change between two control points (above).
+inline constexpr int kColourSteps = 16;
 
 // A centre line with a radius per point: what Embree draws as one round
 // linear curve (cones joined by spheres). A closed tube's last point joins
@@ -81,6 +90,8 @@ struct FramedCurve {
     std::vector<Vec3> binormals;    // tangent x normal
     std::vector<double> arcLength;  // from the first sample (0) along the polyline
     std::vector<double> radius;     // > 0
+    // C_TT per sample, interpolated like the radius; empty when the curve has no colours.
+    std::vector<Rgb> colours;
     bool closed = false;
     double length = 0;  // total polyline length, closing segment included
     // Closed curves: the angle (radians, right-handed about T_0, in [-pi, pi])
@@ -112,8 +123,10 @@ double plyRadius(double yarnRadius, int plies);
 
 // The k ply centre lines of a framed yarn (above), each framed, with R_ply per
 // point; ply j of an open yarn is element j and shares the yarn's sample
-// indices. A closed yarn gives gcd(|m|, k) closed curves (above). k = 1 is
-// the yarn itself. InputError unless plies >= 1 and plyTwist is finite.
+// indices. A closed yarn gives gcd(|m|, k) closed curves (above), whose
+// sample lap * n + i lies beside the yarn's sample i. k = 1 is the yarn
+// itself. The plies take the yarn's colours sample by sample. InputError unless plies >= 1 and
+// plyTwist is finite.
 std::vector<FramedCurve> plyCurves(const FramedCurve& yarn, int plies, double plyTwist);
 
 // The curve as one tube (neural mode).

@@ -168,6 +168,71 @@ TEST(FrameCurve, PolylineSpansAreSplitEvenlyWithLinearRadii) {
     EXPECT_NEAR(sq.arcLength.back(), 3.75, 1e-12);
 }
 
+TEST(FrameCurve, ColoursAreLinearInTheSpanInSixteenthsAndExactAtThePoints) {
+    // Scaled lengths 2 and 5 at step 0.6: 4 and 9 pieces (as above).
+    Curve curve = makeCurve({{0, 0, 0}, {1, 0, 0}, {1, 2.5, 0}}, CurveBasis::Polyline);
+    const Rgb a(1, 0, 0), b(0.2, 0.4, 1), c(0.2, 0.4, 1);
+    curve.colours = {a, b, c};
+    const FramedCurve f = frameCurve(curve, 2.0, 0.1, 0.6, "x.txt", 0);
+    ASSERT_EQ(f.colours.size(), f.size());
+    // Sample i of the first span is at u = i / 4: a multiple of 1/16, so exact.
+    for (size_t i = 0; i <= 4; ++i) {
+        const double u = i / 4.0;
+        for (int ch = 0; ch < 3; ++ch)
+            EXPECT_NEAR(f.colours[i][ch], (1 - u) * a[ch] + u * b[ch], 1e-15) << i;
+    }
+    EXPECT_EQ(f.colours[0], a);
+    EXPECT_EQ(f.colours[4], b);
+    // The second span has one colour: every sample exactly it.
+    for (size_t i = 4; i < f.size(); ++i) EXPECT_EQ(f.colours[i], c) << i;
+
+    // A long span of many samples: the colours step by 1/16 of the change,
+    // each sample taking the nearest step to its own u.
+    Curve ramp = makeCurve({{0, 0, 0}, {1, 0, 0}}, CurveBasis::Polyline);
+    ramp.colours = {Rgb(0), Rgb(1, 0.5, 0.25)};
+    const FramedCurve g = frameCurve(ramp, 1.0, 0.1, 1.0 / 64, "x.txt", 0);
+    ASSERT_EQ(g.size(), 65u);
+    std::vector<double> levels;
+    for (size_t i = 0; i < g.size(); ++i) {
+        const double u = i / 64.0, level = g.colours[i].r;
+        EXPECT_LE(std::abs(level - u), 1.0 / 32 + 1e-12) << i;
+        EXPECT_NEAR(level * 16, std::round(level * 16), 1e-12) << i;
+        EXPECT_NEAR(g.colours[i].g, 0.5 * level, 1e-15);
+        if (levels.empty() || levels.back() != level) levels.push_back(level);
+    }
+    EXPECT_EQ(levels.size(), 17u);  // 0, 1/16, ..., 1
+
+    // Colours survive dropped coincident points and a closed curve; plies
+    // take the yarn's colour sample by sample.
+    Curve loop = makeCurve({{0, 0, 0}, {1, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}},
+                           CurveBasis::Polyline, true);
+    loop.colours = {Rgb(1, 0, 0), Rgb(0, 1, 0), Rgb(0.5), Rgb(0, 0, 1), Rgb(1, 1, 1)};
+    const FramedCurve l = frameCurve(loop, 1.0, 0.2, 10.0, "x.txt", 0);
+    ASSERT_EQ(l.size(), 3u);
+    EXPECT_EQ(l.colours, (std::vector<Rgb>{Rgb(1, 0, 0), Rgb(0, 1, 0), Rgb(0, 0, 1)}));
+    const std::vector<FramedCurve> plies = plyCurves(f, 3, 0.3);
+    for (const FramedCurve& p : plies) EXPECT_EQ(p.colours, f.colours);
+    const FramedCurve ring = frameCurve(
+        [] {
+            Curve r;
+            for (int k = 0; k < 12; ++k)
+                r.points.push_back({std::cos(kTwoPi * k / 12), std::sin(kTwoPi * k / 12), 0});
+            for (int k = 0; k < 12; ++k) r.colours.push_back(Rgb(k / 11.0));
+            r.closed = true;
+            return r;
+        }(),
+        1.0, 0.1, 0.05, "ring.txt", 0);
+    for (const FramedCurve& p : plyCurves(ring, 3, 0.7)) {
+        ASSERT_EQ(p.colours.size(), p.size());
+        for (size_t i = 0; i < p.size(); ++i)
+            EXPECT_EQ(p.colours[i], ring.colours[i % ring.size()]);
+    }
+    // One colour per point or none.
+    curve.colours.pop_back();
+    expectInputError([&] { frameCurve(curve, 1.0, 0.1, 0.6, "x.txt", 4); },
+                     {"x.txt: curve 4", "2 colours for 3 points"});
+}
+
 TEST(FrameCurve, NoSpacingExceedsMaxStep) {
     // A wild Catmull-Rom (overshooting spans) and a polyline, open and closed.
     const std::vector<Vec3> p = {{0, 0, 0}, {3, 0, 0}, {3.1, 0.1, 0}, {0, 2, 1}, {0.2, -1, 2}};

@@ -29,6 +29,8 @@ import time
 
 import numpy as np
 
+from render import write_results
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # Table 3 (DESIGN.md 3): C_R, C_TT, beta_R, beta_TT, gamma_TT; N, rho, alpha.
 PRESETS = {
@@ -148,12 +150,7 @@ def main():
     lines += ["", "M: recoloured = relative L2 of the recoloured RDM_M against the seed-3 "
               "dedicated gather; M: dedicated = the same for the seed-2 dedicated gather "
               "(the noise of a gather of that many paths); ratio = recoloured / dedicated.", ""]
-    os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    with open(args.out + ".md", "w") as f:
-        f.write("\n".join(lines))
-    with open(args.out + ".json", "w") as f:
-        json.dump(result, f, indent=2)
-    print("\n".join(lines))
+    write_results(args.out + ".md", lines, result)
 
 
 if __name__ == "__main__":

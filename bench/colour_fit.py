@@ -35,6 +35,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from any_colour import PLY_SEED, PRESETS  # noqa: E402  (Table 3, shared with any_colour.py)
+from render import write_results  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -218,12 +219,7 @@ def main():
             f"{fmt(r['ssim_conditioned_vs_dedicated'])} | {r['dedicated_fit_seconds']:.0f} |")
     lines += ["", f"s/spp: neural render of the close-up at {args.size} x {args.size}, {args.spp} spp, "
               "each in its own process; the ratio is conditioned / dedicated.", ""]
-    os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    with open(args.out + ".md", "w") as f:
-        f.write("\n".join(lines))
-    with open(args.out + ".json", "w") as f:
-        json.dump(result, f, indent=2)
-    print("\n".join(lines))
+    write_results(args.out + ".md", lines, result)
 
 
 if __name__ == "__main__":

@@ -32,6 +32,8 @@ import subprocess
 import sys
 import time
 
+from render import write_results
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # Two colours that are not Table 3's (DESIGN.md 3), inside [0.3, 0.999].
 OCHRE = (0.85, 0.55, 0.3)
@@ -147,11 +149,7 @@ def main():
     lines += ["", "Figure `colour-scenes.png`: a row per case, fiber reference | neural.", ""]
     os.makedirs(os.path.dirname(a.out), exist_ok=True)
     run([weft, "montage", *figure, "--columns", 2, "--out", a.out + ".png"])
-    with open(a.out + ".md", "w") as f:
-        f.write("\n".join(lines))
-    with open(a.out + ".json", "w") as f:
-        json.dump(result, f, indent=2)
-    print("\n".join(lines))
+    write_results(a.out + ".md", lines, result)
 
 
 if __name__ == "__main__":

@@ -64,7 +64,8 @@ class TubeAccel {
     // materialAlongTubes: empty, or the material of each segment index along
     // the tubes (segment k of every tube gets element k; every tube must have
     // that many segments: a ply and its fibers share their sample indices),
-    // for yarns whose colour varies along the curve.
+    // for yarns whose colour varies along the curve; `material` is then
+    // only the geometry's record (GeometryInfo::material), no hit reports it.
     uint32_t addGeometry(const std::vector<Tube>& tubes, int material,
                          std::vector<int> materialAlongTubes = {});
     // Builds the BVH; call once after the last addGeometry.

@@ -1,9 +1,8 @@
-// libFuzzer harness: the image readers. The first byte picks OpenEXR or
-// Radiance HDR (core/image_io.h: envmaps, `weft compare`) or PNG
-// (eval/image_montage.h: `weft montage`).
+// libFuzzer harness: the image readers of core/image_io.h. The first byte
+// picks OpenEXR or Radiance HDR (envmaps, `weft compare`) or PNG (`weft
+// montage`, `weft compare`).
 #include "fuzz_util.h"
 #include "weft/core/image_io.h"
-#include "weft/eval/image_montage.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (size == 0) return 0;
@@ -17,7 +16,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                 weft::decodeImage(bytes, "fuzz.hdr");
                 break;
             default:
-                weft::eval::decodePng(bytes, "fuzz.png");
+                weft::decodePng(bytes, "fuzz.png");
                 break;
         }
     });

@@ -106,6 +106,37 @@ TEST_F(CompareCliTest, DifferentImagesHaveABrighterHeatmap) {
     stbi_image_free(bytes);
 }
 
+TEST_F(CompareCliTest, ScaleAndPngInputs) {
+    // One-pixel checkerboard of 0.125 and 0.375 against its mean 0.25: unlike
+    // at full resolution, at --scale 2 they are the same image.
+    Image checker(24, 24);
+    for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 24; ++x) checker.set(x, y, Rgb((x + y) % 2 ? 0.375 : 0.125));
+    writeExr(path("checker.exr"), checker);
+    writeExr(path("flat.exr"), testing::constantImage(24, 24, Rgb(0.25)));
+    const RunResult full = run("compare checker.exr flat.exr");
+    ASSERT_EQ(full.status, 0) << full.err;
+    const double fullSsim = nlohmann::json::parse(full.out).at("ssim").get<double>();
+    EXPECT_LT(fullSsim, 0.1);
+    const RunResult coarse = run("compare checker.exr flat.exr --scale 2 --heatmap h2.png");
+    ASSERT_EQ(coarse.status, 0) << coarse.err;
+    const nlohmann::json c = nlohmann::json::parse(coarse.out);
+    EXPECT_EQ(c.at("ssim").get<double>(), 1.0);
+    EXPECT_EQ(c.at("scale"), 2);
+    EXPECT_EQ(c.at("width"), 12);
+
+    // The same images as 8-bit PNGs (a figure's panels): SSIM sees the PNG's
+    // sRGB values, which round the EXR's by less than half a step.
+    writePng(path("checker.png"), checker);
+    writePng(path("flat.png"), testing::constantImage(24, 24, Rgb(0.25)));
+    const RunResult png = run("compare checker.png flat.png");
+    ASSERT_EQ(png.status, 0) << png.err;
+    EXPECT_NEAR(nlohmann::json::parse(png.out).at("ssim").get<double>(), fullSsim, 0.01);
+    const RunResult same = run("compare checker.png checker.png");
+    ASSERT_EQ(same.status, 0) << same.err;
+    EXPECT_EQ(nlohmann::json::parse(same.out).at("ssim").get<double>(), 1.0);
+}
+
 TEST_F(CompareCliTest, BadInputIsNamed) {
     writeExr(path("small.exr"), gradient(16, 10, 0.1));
     expectUserError(run("compare small.exr ref.exr --json r.json --heatmap h.png"),
@@ -117,7 +148,11 @@ TEST_F(CompareCliTest, BadInputIsNamed) {
     writeExr(path("nan.exr"), nan);
     expectUserError(run("compare ref.exr nan.exr"), {"nan.exr", "(5, 3)", "NaN"});
     expectUserError(run("compare missing.exr ref.exr"), {"missing.exr"});
-    expectUserError(run("compare ref.exr ref.png"), {"ref.png", ".exr"});
+    expectUserError(run("compare ref.exr ref.jpg"), {"ref.jpg", ".exr, .hdr or .png"});
+    expectUserError(run("compare ref.exr gone.png"), {"gone.png"});
+    expectUserError(run("compare off.exr ref.exr --scale 0"), {"--scale 0", "[1, 64]"});
+    expectUserError(run("compare off.exr ref.exr --scale 2"),
+                    {"off.exr", "16 x 12", "--scale 2", "22 x 22"});
     expectUserError(run("compare off.exr ref.exr --exposure 65"), {"--exposure", "[-64, 64]"});
     expectUserError(run("compare off.exr ref.exr --json nodir/r.json"), {"nodir/r.json"});
     EXPECT_EQ(run("compare off.exr").status, 2);  // the reference is required

@@ -9,6 +9,7 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/image.h"
+#include "weft/core/image_io.h"
 #include "weft/eval/image_montage.h"
 
 namespace weft::cmd {
@@ -32,7 +33,7 @@ void runMontage(const MontageCmdOptions& o) {
     std::vector<Image> images;
     std::vector<bool> linear;
     for (const std::string& path : o.inputs) {
-        images.push_back(eval::readMontageInput(path));
+        images.push_back(readImageOrPng(path));
         linear.push_back(lowercaseExtension(path) != ".png");
     }
     const Image figure = eval::montage(images, linear, o.montage);

@@ -11,7 +11,9 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdint>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -345,6 +347,59 @@ Image decodeImage(const std::string& bytes, const std::string& path) {
     if (ext != ".exr" && ext != ".hdr")
         failRead(path, "unsupported extension '" + ext + "' (expected .exr or .hdr)");
     return ext == ".exr" ? readExr(path, bytes) : readHdr(path, bytes);
+}
+
+namespace {
+
+// stb reserves what a PNG chunk's length field claims before reading it (up
+// to 2 GB): every chunk must fit in the file first.
+void checkPngChunks(const std::string& bytes, const std::string& path) {
+    static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    if (bytes.size() < 8 || std::memcmp(bytes.data(), kSignature, 8) != 0)
+        throw InputError("cannot read PNG image '" + path + "': not a PNG file (bad signature)");
+    for (size_t at = 8; at + 12 <= bytes.size();) {
+        uint32_t length = 0;
+        for (int k = 0; k < 4; ++k)
+            length = length << 8 | static_cast<unsigned char>(bytes[at + k]);
+        if (length > bytes.size() - at - 12)
+            throw InputError("cannot read PNG image '" + path + "': chunk at byte " +
+                             std::to_string(at) + " claims " + std::to_string(length) +
+                             " bytes, the file has " + std::to_string(bytes.size() - at - 12) +
+                             " left (truncated or corrupt)");
+        if (bytes.compare(at + 4, 4, "IEND") == 0) break;
+        at += 12 + length;
+    }
+}
+
+}  // namespace
+
+Image decodePng(const std::string& bytes, const std::string& path) {
+    checkPngChunks(bytes, path);
+    if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
+        throw InputError("cannot read PNG image '" + path + "': file too large");
+    int w = 0, h = 0, channels = 0;
+    // The header first: a 16384 x 16384 PNG is refused before it is decoded.
+    if (!stbi_info_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
+                               static_cast<int>(bytes.size()), &w, &h, &channels))
+        throw InputError("cannot read PNG image '" + path + "': " + stbi_failure_reason());
+    checkImageSize(path, w, h);
+    std::unique_ptr<stbi_uc, void (*)(void*)> data(
+        stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
+                              static_cast<int>(bytes.size()), &w, &h, &channels, 3),
+        stbi_image_free);
+    if (!data) throw InputError("cannot read PNG image '" + path + "': " + stbi_failure_reason());
+    Image image(w, h);
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+        image.pixels[i] = static_cast<float>(srgbToLinear(data.get()[i] / 255.0));
+    return image;
+}
+
+Image readImageOrPng(const std::string& path) {
+    const std::string ext = lowercaseExtension(path);
+    if (ext != ".exr" && ext != ".hdr" && ext != ".png")
+        failRead(path, "unsupported extension '" + ext + "' (expected .exr, .hdr or .png)");
+    if (ext != ".png") return readImage(path);
+    return decodePng(readFile(path), path);
 }
 
 std::string encodeExr(const Image& image, const std::string& path) {

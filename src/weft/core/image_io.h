@@ -3,7 +3,8 @@
 // The one home of linear image files: envmaps (render/lights.h) and the
 // images compared and laid out by eval/ are read here, and renders written
 // here. PNG, an 8-bit display format, is written by writePng (image.h, which
-// this header includes); the linear formats are:
+// this header includes) and read by decodePng / readImageOrPng (figures and
+// heatmaps, never as linear data); the linear formats are:
 //   OpenEXR (.exr)    read: RGB or RGBA channels, any pixel type (alpha
 //                     ignored; Y-only is grey; a missing one of R, G, B reads
 //                     as 0; the data window is the image); luminance/chroma
@@ -39,6 +40,13 @@ Image readImage(const std::string& path);
 // The same on the file's bytes; `path` picks the reader by its extension and
 // names the file in errors.
 Image decodeImage(const std::string& bytes, const std::string& path);
+// A PNG's bytes as linear RGB: 8-bit RGB or RGBA (alpha ignored) decoded from
+// sRGB, so that writePng at exposure 0 gives back the same bytes. InputError
+// naming `path` for a file that is not a PNG, truncated or corrupt, or too large.
+Image decodePng(const std::string& bytes, const std::string& path);
+// readImage, except that a .png file is decoded with decodePng: for the
+// display images that `weft montage` lays out and `weft compare` may score.
+Image readImageOrPng(const std::string& path);
 // Writes linear RGB as an OpenEXR file with 32-bit float R, G, B channels,
 // atomically (temp file + rename). InputError naming the file for an image
 // that fails checkImage or a file that cannot be written.

@@ -126,6 +126,28 @@ Plane ssimMap(const Plane& a, const Plane& b) {
     return map;
 }
 
+Image boxDownsampled(const Image& image, int factor) {
+    if (factor < 1 || image.width < factor || image.height < factor)
+        throw std::invalid_argument("boxDownsampled: factor " + std::to_string(factor) +
+                                    " does not fit a " + sizeText(image.width, image.height) +
+                                    " image");
+    Image out(image.width / factor, image.height / factor);
+    const double weight = 1.0 / (double(factor) * factor);
+    for (int y = 0; y < out.height; ++y)
+        for (int x = 0; x < out.width; ++x) {
+            double sum[3] = {0, 0, 0};
+            for (int j = 0; j < factor; ++j)
+                for (int i = 0; i < factor; ++i) {
+                    const float* p = &image.pixels[3 * (static_cast<size_t>(y * factor + j) *
+                                                            image.width +
+                                                        x * factor + i)];
+                    for (int c = 0; c < 3; ++c) sum[c] += p[c];
+                }
+            out.set(x, y, {sum[0] * weight, sum[1] * weight, sum[2] * weight});
+        }
+    return out;
+}
+
 double mean(const Plane& plane) {
     if (plane.values.empty()) return 0;
     double sum = 0;
@@ -160,25 +182,41 @@ void CompareOptions::validate() const {
     if (!std::isfinite(exposure) || std::abs(exposure) > kMaxExposure)
         throw InputError("--exposure " + std::to_string(exposure) +
                          " is out of range: allowed [-64, 64] stops");
+    if (scale < 1 || scale > kMaxCompareScale)
+        throw InputError("--scale " + std::to_string(scale) +
+                         " is out of range: allowed [1, 64] pixels per block side");
 }
 
-ImageComparison compareImages(const Image& a, const std::string& aName, const Image& b,
+ImageComparison compareImages(const Image& fullA, const std::string& aName, const Image& fullB,
                               const std::string& bName, const CompareOptions& options) {
     options.validate();
-    if (a.width != b.width || a.height != b.height)
-        throw InputError("image sizes differ: " + aName + " is " + sizeText(a.width, a.height) +
-                         ", the reference " + bName + " is " + sizeText(b.width, b.height));
-    if (a.width < kSsimWindow || a.height < kSsimWindow)
-        throw InputError(aName + " and " + bName + " are " + sizeText(a.width, a.height) +
-                         ": SSIM needs at least 11 x 11 pixels (its window)");
-    checkFinite(a, aName);
-    checkFinite(b, bName);
+    if (fullA.width != fullB.width || fullA.height != fullB.height)
+        throw InputError("image sizes differ: " + aName + " is " +
+                         sizeText(fullA.width, fullA.height) + ", the reference " + bName +
+                         " is " + sizeText(fullB.width, fullB.height));
+    const int k = options.scale;
+    if (fullA.width < kSsimWindow * k || fullA.height < kSsimWindow * k)
+        throw InputError(aName + " and " + bName + " are " +
+                         sizeText(fullA.width, fullA.height) +
+                         (k > 1 ? ": at --scale " + std::to_string(k) + " SSIM needs at least " +
+                                      sizeText(kSsimWindow * k, kSsimWindow * k) +
+                                      " pixels (its 11 x 11 window of " + std::to_string(k) +
+                                      " x " + std::to_string(k) + " blocks)"
+                                : std::string(": SSIM needs at least 11 x 11 pixels (its window)")));
+    // Checked at full resolution, so that the pixel named is the file's own.
+    checkFinite(fullA, aName);
+    checkFinite(fullB, bName);
+    Image downA, downB;
+    if (k > 1) downA = boxDownsampled(fullA, k), downB = boxDownsampled(fullB, k);
+    const Image& a = k > 1 ? downA : fullA;
+    const Image& b = k > 1 ? downB : fullB;
 
     ImageComparison c;
     c.a = aName, c.b = bName;
     c.width = a.width, c.height = a.height;
     c.mode = options.mode;
     c.exposure = options.exposure;
+    c.scale = k;
     if (options.mode == SsimMode::Luminance) {
         c.ssimMap = ssimMap(toneMappedLuminance(a, options.exposure),
                             toneMappedLuminance(b, options.exposure));
@@ -199,8 +237,8 @@ ImageComparison compareImages(const Image& a, const std::string& aName, const Im
 ImageComparison compareImageFiles(const std::string& a, const std::string& b,
                                   const CompareOptions& options) {
     options.validate();
-    const Image imageA = readImage(a);
-    const Image imageB = readImage(b);
+    const Image imageA = readImageOrPng(a);
+    const Image imageB = readImageOrPng(b);
     return compareImages(imageA, a, imageB, b, options);
 }
 
@@ -213,7 +251,8 @@ nlohmann::json toJson(const ImageComparison& c) {
             {"ssim_mode", ssimModeName(c.mode)},
             {"rmse", c.rmse},
             {"rel_mse", c.relMse},
-            {"exposure", c.exposure}};
+            {"exposure", c.exposure},
+            {"scale", c.scale}};
 }
 
 Rgb heatmapColorSrgb(double t) {

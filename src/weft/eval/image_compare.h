@@ -21,6 +21,12 @@
 // RMSE and relative MSE are over every pixel and channel of the linear
 // images (no exposure): sqrt(mean (a - b)^2) and mean (a - b)^2 / (b^2 + 0.01),
 // b being the reference.
+//
+// With scale K > 1 both linear images are first averaged over K x K pixel
+// blocks (a box filter, the partial blocks of the right and bottom edges
+// dropped), so every metric sees only structure larger than K pixels: how a
+// ply-level model, which averages over the fibers of a ply, compares at the
+// scale of the ply rather than of one fiber (docs/compare.md, "Scale").
 #pragma once
 
 #include <nlohmann/json_fwd.hpp>
@@ -39,6 +45,7 @@ constexpr double kSsimC1 = (0.01 * 1) * (0.01 * 1);  // (K1 L)^2, L = 1
 constexpr double kSsimC2 = (0.03 * 1) * (0.03 * 1);  // (K2 L)^2
 constexpr double kRelMseEpsilon = 1e-2;              // added to b^2 in relative MSE
 constexpr double kMaxExposure = 64;                  // |exposure| in stops
+constexpr int kMaxCompareScale = 64;                 // --scale, pixels per block side
 
 enum class SsimMode { Luminance, PerChannel };
 
@@ -71,6 +78,12 @@ std::vector<double> ssimWindowWeights();
 // std::invalid_argument otherwise (callers validate user input first).
 Plane ssimMap(const Plane& a, const Plane& b);
 
+// The image averaged over factor x factor blocks of pixels: floor(W / factor)
+// x floor(H / factor) pixels, each the mean of its block (linear RGB); the
+// partial blocks at the right and bottom edges are dropped. std::invalid_argument
+// unless factor >= 1 and the image has at least one whole block.
+Image boxDownsampled(const Image& image, int factor);
+
 // The mean of the values (0 for an empty plane).
 double mean(const Plane& plane);
 
@@ -82,32 +95,40 @@ double relativeMse(const Image& a, const Image& b);
 struct CompareOptions {
     SsimMode mode = SsimMode::Luminance;
     double exposure = 0;  // stops, applied before the tone map of SSIM
+    int scale = 1;        // both images box-downsampled by this factor first; [1, 64]
 
-    // InputError naming --exposure unless it is finite and within [-64, 64].
+    // InputError naming --exposure unless it is finite and within [-64, 64],
+    // and naming --scale unless it is within [1, 64].
     void validate() const;
 };
 
 struct ImageComparison {
-    std::string a, b;  // names (paths) of the image and of the reference
-    int width = 0, height = 0;
+    std::string a, b;           // names (paths) of the image and of the reference
+    int width = 0, height = 0;  // of the compared images: the inputs' divided by scale
     SsimMode mode = SsimMode::Luminance;
     double exposure = 0;
+    int scale = 1;
     double ssim = 0;    // mean of ssimMap
     double rmse = 0;    // linear
     double relMse = 0;  // linear
     Plane ssimMap;      // the valid region, (width - 10) x (height - 10)
 };
 
-// Compares `a` (named aName in messages) against the reference `b`.
-// InputError naming the file(s) when the sizes differ, an image is smaller
-// than 11 x 11, or a pixel is NaN or infinite (the first one, x, y and channel).
+// Compares `a` (named aName in messages) against the reference `b`, both
+// box-downsampled by options.scale first. InputError naming the file(s) when
+// the sizes differ, an image (after the downsampling) is smaller than 11 x 11,
+// or a pixel is NaN or infinite (the first one, x, y and channel).
 ImageComparison compareImages(const Image& a, const std::string& aName, const Image& b,
                               const std::string& bName, const CompareOptions& options);
-// The same for two files read with readImage (core/image_io.h: .exr or .hdr).
+// The same for two files read with readImageOrPng (core/image_io.h: .exr or
+// .hdr linear; .png decoded from sRGB, for figures whose renders are gone:
+// SSIM then sees the PNG's own 8-bit values, RMSE and relative MSE the clipped
+// display values rather than radiance).
 ImageComparison compareImageFiles(const std::string& a, const std::string& b,
                                   const CompareOptions& options);
 
-// {"a", "b", "width", "height", "ssim", "ssim_mode", "rmse", "rel_mse", "exposure"}.
+// {"a", "b", "width", "height", "ssim", "ssim_mode", "rmse", "rel_mse", "exposure",
+// "scale"}.
 nlohmann::json toJson(const ImageComparison& comparison);
 
 // The heatmap colour scale: viridis sampled at t = k/8, k = 0..8 (the nine

@@ -245,7 +245,7 @@ TEST(ImageCompare, JsonHasEveryField) {
         compareImages(constantImage(12, 11, Rgb(0.2)), "x.exr", constantImage(12, 11, Rgb(0.1)),
                       "ref.exr", options(SsimMode::Luminance, 1.5));
     const nlohmann::json j = toJson(c);
-    EXPECT_EQ(j.size(), 9u);
+    EXPECT_EQ(j.size(), 10u);
     EXPECT_EQ(j.at("a"), "x.exr");
     EXPECT_EQ(j.at("b"), "ref.exr");
     EXPECT_EQ(j.at("width"), 12);
@@ -254,6 +254,58 @@ TEST(ImageCompare, JsonHasEveryField) {
     EXPECT_EQ(j.at("rmse").get<double>(), c.rmse);
     EXPECT_EQ(j.at("rel_mse").get<double>(), c.relMse);
     EXPECT_EQ(j.at("exposure").get<double>(), 1.5);
+    EXPECT_EQ(j.at("scale"), 1);
+}
+
+TEST(ImageCompare, BoxDownsampledAveragesBlocksByHand) {
+    // Pixel (x, y) holds (x + 10 y, 2 x, 1): a 5 x 4 image gives 2 x 2 blocks,
+    // the fifth column dropped.
+    Image image(5, 4);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 5; ++x) image.set(x, y, {x + 10.0 * y, 2.0 * x, 1});
+    const Image down = boxDownsampled(image, 2);
+    ASSERT_EQ(down.width, 2);
+    ASSERT_EQ(down.height, 2);
+    // Block (1, 0) covers x 2..3, y 0..1: (2 + 3 + 12 + 13) / 4, (4 + 6) / 2.
+    EXPECT_EQ(down.get(1, 0).r, 7.5);
+    EXPECT_EQ(down.get(1, 0).g, 5.0);
+    EXPECT_EQ(down.get(1, 0).b, 1.0);
+    // Block (0, 1) covers x 0..1, y 2..3: (20 + 21 + 30 + 31) / 4.
+    EXPECT_EQ(down.get(0, 1).r, 25.5);
+    EXPECT_EQ(boxDownsampled(image, 1).pixels, image.pixels);
+    EXPECT_THROW(boxDownsampled(image, 0), std::invalid_argument);
+    EXPECT_THROW(boxDownsampled(image, 5), std::invalid_argument);
+}
+
+TEST(ImageCompare, ScaleComparesStructureLargerThanTheBlock) {
+    // A checkerboard of 0.125 and 0.375 (one-pixel squares) against its mean
+    // 0.25: at full resolution the structure term is 0 (the flat image has no
+    // variance), at scale 2 every block of the checkerboard averages to 0.25
+    // exactly and the two images are the same.
+    Image checker(36, 35);
+    for (int y = 0; y < 35; ++y)
+        for (int x = 0; x < 36; ++x) checker.set(x, y, Rgb((x + y) % 2 ? 0.375 : 0.125));
+    const Image flat = constantImage(36, 35, Rgb(0.25));
+    const ImageComparison full = compareImages(checker, "a.exr", flat, "b.exr", options());
+    EXPECT_LT(full.ssim, 0.1);
+    CompareOptions o = options();
+    o.scale = 2;
+    const ImageComparison coarse = compareImages(checker, "a.exr", flat, "b.exr", o);
+    EXPECT_EQ(coarse.ssim, 1.0);
+    EXPECT_EQ(coarse.rmse, 0.0);
+    EXPECT_EQ(coarse.width, 18);
+    EXPECT_EQ(coarse.height, 17);
+    EXPECT_EQ(coarse.scale, 2);
+    EXPECT_EQ(toJson(coarse).at("scale"), 2);
+    // At scale 3 the blocks hold five of one value and four of the other
+    // (alternating), so structure remains: the SSIM equals that of the
+    // downsampled images compared at full resolution.
+    o.scale = 3;
+    const ImageComparison three = compareImages(checker, "a.exr", flat, "b.exr", o);
+    EXPECT_LT(three.ssim, 0.99);
+    EXPECT_EQ(three.ssim, compareImages(boxDownsampled(checker, 3), "a.exr",
+                                        boxDownsampled(flat, 3), "b.exr", options())
+                              .ssim);
 }
 
 TEST(ImageCompare, HeatmapColourScale) {
@@ -365,6 +417,16 @@ TEST_F(ImageCompareFiles, ErrorsNameTheFile) {
                 compareImageFiles(path("a.exr"), path("a.exr"), options(SsimMode::Luminance, e));
             },
             {"--exposure", "[-64, 64]"});
+    for (int scale : {0, 65}) {
+        CompareOptions o = options();
+        o.scale = scale;
+        expectInputError([&] { compareImageFiles(path("a.exr"), path("a.exr"), o); },
+                         {"--scale " + std::to_string(scale), "[1, 64]"});
+    }
+    CompareOptions two = options();
+    two.scale = 2;
+    expectInputError([&] { compareImageFiles(path("a.exr"), path("a.exr"), two); },
+                     {"a.exr", "12 x 12", "--scale 2", "22 x 22"});
 }
 
 TEST(ImageCompare, PlaneLevelMisuseIsABug) {

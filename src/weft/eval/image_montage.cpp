@@ -1,13 +1,8 @@
 #include "weft/eval/image_montage.h"
 
-#include <stb/stb_image.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
-#include <limits>
-#include <memory>
 #include <string>
 
 #include "weft/core/error.h"
@@ -26,56 +21,6 @@ void MontageOptions::validate() const {
     if (!std::isfinite(exposure) || std::abs(exposure) > 64)
         throw InputError("--exposure " + formatNumber(exposure) +
                          " is out of range: allowed [-64, 64]");
-}
-
-Image readMontageInput(const std::string& path) {
-    if (lowercaseExtension(path) != ".png") return readImage(path);
-    return decodePng(readFile(path), path);
-}
-
-namespace {
-
-// stb reserves what a PNG chunk's length field claims before reading it (up
-// to 2 GB): every chunk must fit in the file first.
-void checkPngChunks(const std::string& bytes, const std::string& path) {
-    static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-    if (bytes.size() < 8 || std::memcmp(bytes.data(), kSignature, 8) != 0)
-        throw InputError("cannot read PNG image '" + path + "': not a PNG file (bad signature)");
-    for (size_t at = 8; at + 12 <= bytes.size();) {
-        uint32_t length = 0;
-        for (int k = 0; k < 4; ++k)
-            length = length << 8 | static_cast<unsigned char>(bytes[at + k]);
-        if (length > bytes.size() - at - 12)
-            throw InputError("cannot read PNG image '" + path + "': chunk at byte " +
-                             std::to_string(at) + " claims " + std::to_string(length) +
-                             " bytes, the file has " + std::to_string(bytes.size() - at - 12) +
-                             " left (truncated or corrupt)");
-        if (bytes.compare(at + 4, 4, "IEND") == 0) break;
-        at += 12 + length;
-    }
-}
-
-}  // namespace
-
-Image decodePng(const std::string& bytes, const std::string& path) {
-    checkPngChunks(bytes, path);
-    if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
-        throw InputError("cannot read PNG image '" + path + "': file too large");
-    int w = 0, h = 0, channels = 0;
-    // The header first: a 16384 x 16384 PNG is refused before it is decoded.
-    if (!stbi_info_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
-                               static_cast<int>(bytes.size()), &w, &h, &channels))
-        throw InputError("cannot read PNG image '" + path + "': " + stbi_failure_reason());
-    checkImageSize(path, w, h);
-    std::unique_ptr<stbi_uc, void (*)(void*)> data(
-        stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
-                              static_cast<int>(bytes.size()), &w, &h, &channels, 3),
-        stbi_image_free);
-    if (!data) throw InputError("cannot read PNG image '" + path + "': " + stbi_failure_reason());
-    Image image(w, h);
-    for (size_t i = 0; i < image.pixels.size(); ++i)
-        image.pixels[i] = static_cast<float>(srgbToLinear(data.get()[i] / 255.0));
-    return image;
 }
 
 Image montage(const std::vector<Image>& images, const std::vector<bool>& isLinear,

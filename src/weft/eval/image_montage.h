@@ -27,12 +27,6 @@ struct MontageOptions {
     void validate() const;  // InputError naming the flag and its range
 };
 
-// An image file as linear RGB: .exr/.hdr as stored, .png decoded from sRGB
-// (8-bit RGB or RGBA; alpha ignored). InputError naming the file otherwise.
-Image readMontageInput(const std::string& path);
-// A PNG's bytes as linear RGB (sRGB decoded); InputError naming `path`.
-Image decodePng(const std::string& bytes, const std::string& path);
-
 // The figure; InputError when `images` is empty or has more than 64 entries.
 Image montage(const std::vector<Image>& images, const std::vector<bool>& isLinear,
               const MontageOptions& options);

@@ -77,7 +77,7 @@ TEST_F(MontageFiles, PngInputsKeepTheirEightBitValues) {
         ramp.set(x, 0, {v, v, v});
     }
     writePng(path("ramp.png"), ramp);
-    const Image back = readMontageInput(path("ramp.png"));
+    const Image back = readImageOrPng(path("ramp.png"));
     MontageOptions o;
     o.gap = 0;
     writePng(path("fig.png"), montage({back}, {false}, o));
@@ -91,14 +91,14 @@ TEST_F(MontageFiles, PngInputsKeepTheirEightBitValues) {
 
 TEST_F(MontageFiles, ExrInputsAreReadAsStored) {
     writeExr(path("a.exr"), constantImage(2, 2, {0.1, 0.2, 0.3}));
-    const Image im = readMontageInput(path("a.exr"));
+    const Image im = readImageOrPng(path("a.exr"));
     EXPECT_FLOAT_EQ(static_cast<float>(im.get(1, 1).g), 0.2f);
 }
 
 TEST_F(MontageFiles, BadInputsNameTheFileOrFlag) {
     writeFileAtomic(path("bad.png"), "not a png");
-    expectInputError([&] { readMontageInput(path("bad.png")); }, {"bad.png"});
-    expectInputError([&] { readMontageInput(path("missing.exr")); }, {"missing.exr"});
+    expectInputError([&] { readImageOrPng(path("bad.png")); }, {"bad.png"});
+    expectInputError([&] { readImageOrPng(path("missing.exr")); }, {"missing.exr"});
     expectInputError([&] { montage({}, {}, MontageOptions{}); }, {"no images"});
     MontageOptions o;
     o.columns = -1;

@@ -799,8 +799,8 @@ py::object pyCurvesInfo(const py::object& pathArg, const py::object& radiusArg) 
 
 py::object pyScene(const std::string& kindName, const py::object& model, const py::object& out,
                    int size, double radius, int plies, double plyTwist, int width, int height,
-                   int spp, const py::object& envmap, const py::object& colours, int stripe,
-                   double dyeLength) {
+                   int spp, const py::object& envmap, const py::object& colours,
+                   const py::object& stripe, double dyeLength) {
     const eval::SceneKind kind = eval::parseSceneKind(kindName);
     eval::SceneOptions o;
     o.model = pathOf(model, "model");
@@ -812,7 +812,7 @@ py::object pyScene(const std::string& kindName, const py::object& model, const p
     o.width = width;
     o.height = height;
     o.spp = spp;
-    o.stripe = stripe;
+    if (!stripe.is_none()) o.stripe = stripe.cast<int>();
     o.dyeLength = dyeLength;
     if (!envmap.is_none()) o.envmap = pathOf(envmap, "envmap");
     if (!colours.is_none())
@@ -1058,10 +1058,10 @@ PYBIND11_MODULE(weft, m) {
           py::arg("size") = 6, py::arg("radius") = 0.01, py::arg("plies") = 3,
           py::arg("ply_twist") = 0.3, py::arg("width") = 512, py::arg("height") = 512,
           py::arg("spp") = 64, py::arg("envmap") = py::none(), py::arg("colours") = py::none(),
-          py::arg("stripe") = 2, py::arg("dye_length") = 0.0,
+          py::arg("stripe") = py::none(), py::arg("dye_length") = 0.0,
           "`weft scene`: writes the generated scene folder `out` (\"closeup\", \"weave\" or "
           "\"knit\") and returns its summary dict; colours=[(r, g, b)] colours every yarn, two "
-          "colours make a striped knit or a check weave (stripe yarns per stripe), or with "
+          "colours make a striped knit or a check weave (stripe yarns per stripe, default 2), or with "
           "dye_length=L space-dyed yarns (the colour alternating every L yarn radii).");
 
     m.def("render", &pyRender, py::arg("scene"), py::kw_only(), py::arg("mode") = "neural",

@@ -188,5 +188,11 @@ def test_scene_with_colours_matches_cli(cli, tmp_path, root):
         weft.scene("knit", model=model, out=tmp_path / "bad", colours=[(0.5, 0.5)])
     with pytest.raises(ValueError, match="one colour"):
         weft.scene("closeup", model=model, out=tmp_path / "bad", colours=[(0, 0, 0), (1, 1, 1)])
+    # The CLI's flag rules hold here too (SceneOptions::validate).
+    with pytest.raises(ValueError, match="--stripe and --dye-length"):
+        weft.scene("knit", model=model, out=tmp_path / "bad", colours=[(0, 0, 0), (1, 1, 1)],
+                   stripe=2, dye_length=3)
+    with pytest.raises(ValueError, match="two --colours"):
+        weft.scene("knit", model=model, out=tmp_path / "bad", stripe=2)
     with pytest.raises(ValueError, match="closeup, weave, knit"):
         weft.scene("twill", model=model, out=tmp_path / "bad")

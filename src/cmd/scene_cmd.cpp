@@ -22,6 +22,7 @@ struct SceneCmdOptions {
     std::vector<std::string> colours;  // --colours: "R,G,B" each
     CLI::Option* sizeOpt = nullptr;
     CLI::Option* stripeOpt = nullptr;
+    int stripe = eval::kDefaultStripe;
     bool quiet = false;
 };
 
@@ -29,12 +30,7 @@ void runScene(SceneCmdOptions o) {
     const eval::SceneKind kind = eval::parseSceneKind(o.kind);
     if (kind == eval::SceneKind::Closeup && o.sizeOpt->count())
         throw InputError("--size applies to weave and knit only (a close-up is one yarn)");
-    if (o.stripeOpt->count() && o.colours.size() != 2)
-        throw InputError("--stripe applies to two --colours only");
-    if (o.stripeOpt->count() && o.scene.dyeLength != 0)
-        throw InputError(
-            "--stripe and --dye-length exclude each other (stripes of yarns, or "
-            "colours along every yarn)");
+    if (o.stripeOpt->count()) o.scene.stripe = o.stripe;
     for (const std::string& c : o.colours) o.scene.colours.push_back(parseColour(c, "--colours"));
     checkOutputsSpareInputs({{"--model", o.scene.model}, {"--envmap", o.scene.envmap}}, {}, {},
                             {{"--out", o.out}});
@@ -82,7 +78,7 @@ void addSceneCommand(CLI::App& app) {
                     "One or two fiber colours C_TT as R,G,B in [0, 1] (docs/colour.md): one "
                     "colours every yarn; two make a striped knit or a check weave. Neural "
                     "mode needs a model fitted with --colour-range");
-    o->stripeOpt = cmd->add_option("--stripe", s.stripe,
+    o->stripeOpt = cmd->add_option("--stripe", o->stripe,
                                    "With two colours: knit courses or weave yarns per stripe, "
                                    "[1, 100]")
                        ->capture_default_str();

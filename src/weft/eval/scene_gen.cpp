@@ -256,7 +256,14 @@ void SceneOptions::validate() const {
         for (int ch = 0; ch < 3; ++ch)
             if (!std::isfinite(c[ch]) || c[ch] < 0 || c[ch] > 1)
                 throw InputError(rangeError("--colours", formatNumber(c[ch]), "[0, 1]"));
-    checkInt("--stripe", stripe, 1, kMaxPatchSize);
+    if (stripe) {
+        checkInt("--stripe", *stripe, 1, kMaxPatchSize);
+        if (colours.size() != 2) throw InputError("--stripe applies to two --colours only");
+        if (dyeLength != 0)
+            throw InputError(
+                "--stripe and --dye-length exclude each other (stripes of yarns, or "
+                "colours along every yarn)");
+    }
     if (dyeLength != 0) {
         checkReal("--dye-length", dyeLength, kMinDyeLength, kMaxDyeLength);
         if (colours.size() != 2)
@@ -439,7 +446,7 @@ GeneratedScene weaveScene(const SceneOptions& o) {
                 c.points.push_back({x, j * d, parity(j) * a * std::cos(k * x)});
             }
             curves.set.curves.push_back(std::move(c));
-            curves.group.push_back(stripeGroup(j, o.stripe));
+            curves.group.push_back(stripeGroup(j, o.stripeWidth()));
             curves.anchor.push_back(static_cast<size_t>((1 - first) * kWeaveSamplesPerSpacing));
         }
         for (int i = first; i <= last; ++i) {  // weft: along y at x = i d, opposite phase
@@ -449,7 +456,7 @@ GeneratedScene weaveScene(const SceneOptions& o) {
                 c.points.push_back({i * d, y, -parity(i) * a * std::cos(k * y)});
             }
             curves.set.curves.push_back(std::move(c));
-            curves.group.push_back(1 - stripeGroup(i, o.stripe));
+            curves.group.push_back(1 - stripeGroup(i, o.stripeWidth()));
             curves.anchor.push_back(static_cast<size_t>((1 - first) * kWeaveSamplesPerSpacing));
         }
         return curves;
@@ -477,7 +484,7 @@ GeneratedScene knitScene(const SceneOptions& o) {
                 c.points.push_back(knitPoint(
                     g, row, kTwoPi * (static_cast<double>(i) / kKnitSamplesPerLoop - margin)));
             curves.set.curves.push_back(std::move(c));
-            curves.group.push_back(stripeGroup(row, o.stripe));
+            curves.group.push_back(stripeGroup(row, o.stripeWidth()));
             curves.anchor.push_back(static_cast<size_t>(margin * kKnitSamplesPerLoop));  // t = 0
         }
         return curves;

@@ -38,6 +38,7 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -60,6 +61,7 @@ SceneKind parseSceneKind(const std::string& name);
 inline constexpr int kMaxPatchSize = 100;
 inline constexpr double kMinRadius = 1e-6, kMaxRadius = 1e3;
 inline constexpr double kMinDyeLength = 0.5, kMaxDyeLength = 1e4;
+inline constexpr int kDefaultStripe = 2;
 // The vertex colour file of a space-dyed scene.
 inline constexpr const char* kVertexColourFile = "colours.txt";
 
@@ -74,12 +76,16 @@ struct SceneOptions {
     int spp = 64;              // --spp: the scene's render.spp; [1, 1048576]
     std::string envmap;        // --envmap: .exr or .hdr lat-long map instead of the sky; "" = sky
     std::vector<Rgb> colours;  // --colours: none (the model's own), one or two C_TT, [0, 1]
-    int stripe = 2;            // --stripe: courses (knit) or yarns (weave) per stripe; [1, 100]
-    double dyeLength = 0;      // --dye-length: 0, or space-dyed stretches in radii; [0.5, 10000]
+    // --stripe: courses (knit) or yarns (weave) per stripe, [1, 100]; only with
+    // two colours and no dyeLength; unset: kDefaultStripe.
+    std::optional<int> stripe;
+    double dyeLength = 0;  // --dye-length: 0, or space-dyed stretches in radii; [0.5, 10000]
 
-    // Range checks, then the model is loaded (loadYarnModel) and the envmap
-    // checked for its extension and readability; InputError naming the flag.
+    // Range checks and the flags' combinations, then the model is loaded
+    // (loadYarnModel) and the envmap checked for its extension and
+    // readability; InputError naming the flag.
     void validate() const;
+    int stripeWidth() const { return stripe.value_or(kDefaultStripe); }
 };
 
 struct GeneratedScene {

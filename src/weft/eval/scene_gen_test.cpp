@@ -492,6 +492,17 @@ TEST(SceneGen, OptionsAreRangeChecked) {
          },
          {"--colours", "one or two", "got 3"}},
         {[](SceneOptions& o) { o.stripe = 0; }, {"--stripe 0", "[1, 100]"}},
+        {[](SceneOptions& o) {
+             o.colours = {Rgb(0.5)};
+             o.stripe = 3;
+         },
+         {"--stripe", "two --colours"}},
+        {[](SceneOptions& o) {
+             o.colours = {Rgb(0.1), Rgb(0.9)};
+             o.stripe = 3;
+             o.dyeLength = 4;
+         },
+         {"--stripe", "--dye-length", "exclude"}},
         {[](SceneOptions& o) { o.model.clear(); }, {"--model", "required"}},
         {[](SceneOptions& o) { o.model = "no-such-model.json"; },
          {"--model", "no-such-model.json"}},

@@ -246,6 +246,7 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
     // One material per distinct model file and colour (SceneMaterials).
     SceneMaterials materials(desc, mode, yarnOptions, &bsdfs_);
     std::vector<CurveSet> curveSets;
+    std::vector<int> entryMaterial(desc.yarns.size(), -1);  // -1: vertex-coloured
     for (size_t y = 0; y < desc.yarns.size(); ++y) {
         const YarnDesc& yarn = desc.yarns[y];
         curveSets.push_back(readCurves(yarn.curves));
@@ -256,7 +257,7 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
         // The yarn's own material now, so that its model is checked before any
         // geometry; vertex-coloured yarns get the rest segment by segment below.
         const std::vector<Curve>& read = curveSets.back().curves;
-        if (yarn.vertexColours.empty()) materials.material(y, yarn.colour);
+        if (yarn.vertexColours.empty()) entryMaterial[y] = materials.material(y, yarn.colour);
         else if (!read.empty()) materials.material(y, read.front().colours.front());
     }
     // Before the geometry: what the render will draw inside other yarns.
@@ -268,7 +269,7 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
     for (size_t y = 0; y < desc.yarns.size(); ++y) {
         const YarnDesc& yarn = desc.yarns[y];
         const bool vertexColoured = !yarn.vertexColours.empty();
-        const int material = vertexColoured ? -1 : materials.material(y, yarn.colour);
+        const int material = entryMaterial[y];
         const PlyParams& fibers = materials.model(y).ply;
         const std::vector<Curve>& curves = curveSets[y].curves;
         for (size_t c = 0; c < curves.size(); ++c) {

@@ -14,6 +14,7 @@
 #include "weft/core/npy.h"
 #include "weft/core/text_parse.h"
 #include "weft/gather/gather_merge.h"
+#include "weft/gather/rdm_io.h"
 
 namespace weft {
 
@@ -149,14 +150,7 @@ namespace {
 GatherOptions anyColourGatherOptions(const std::string& dir, nlohmann::json* metaOut) {
     const std::string metaPath = inDir(dir, "meta.json");
     nlohmann::json meta = readJsonFile(metaPath);
-    const JsonObjectReader r(meta, metaPath);
-    const std::string format = r.string("format");
-    if (format == "weft-gather-part")
-        throw InputError(metaPath + ": one shard of a gather: merge all its shards with "
-                                    "`weft gather merge PART... --out DIR` first");
-    if (format != "weft-gather")
-        throw InputError(metaPath + ": not a weft gather (\"format\" is \"" + format + "\")");
-    r.integer("version", {1, 1, " (the gather format this weft reads)"});
+    checkGatherMeta(meta, metaPath);
     GatherOptions o = gatherOptionsFromJson(meta, metaPath);
     if (!o.anyColour)
         throw InputError(metaPath +

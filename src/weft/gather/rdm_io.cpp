@@ -33,21 +33,25 @@ std::vector<T> readArray(const std::string& path, const std::string& descr,
 
 }  // namespace
 
+void checkGatherMeta(const nlohmann::json& meta, const std::string& metaPath) {
+    if (meta.is_object() && meta.contains("format") && meta.at("format") == "weft-gather-part")
+        throw InputError(metaPath +
+                         ": one shard of a gather (\"format\" is \"weft-gather-part\"): merge "
+                         "all its shards with `weft gather merge PART... --out DIR` first");
+    if (!meta.is_object() || meta.value("format", "") != "weft-gather")
+        throw InputError(metaPath + ": not a weft gather (\"format\" must be \"weft-gather\")");
+    if (meta.value("version", 0) != 1)
+        throw InputError(metaPath + ": unsupported version " +
+                         meta.value("version", nlohmann::json()).dump() + " (supported: 1)");
+}
+
 RdmData loadRdm(const std::string& dir) {
     namespace fs = std::filesystem;
     RdmData d;
     d.dir = dir;
     const std::string metaPath = (fs::path(dir) / "meta.json").string();
     d.meta = readJsonFile(metaPath);
-    if (d.meta.is_object() && d.meta.contains("format") && d.meta.at("format") == "weft-gather-part")
-        throw InputError(metaPath +
-                         ": one shard of a gather (\"format\" is \"weft-gather-part\"): merge "
-                         "all its shards with `weft gather merge PART... --out DIR` first");
-    if (!d.meta.is_object() || d.meta.value("format", "") != "weft-gather")
-        throw InputError(metaPath + ": not a weft gather (\"format\" must be \"weft-gather\")");
-    if (d.meta.value("version", 0) != 1)
-        throw InputError(metaPath + ": unsupported version " + d.meta.value("version", nlohmann::json()).dump() +
-                         " (supported: 1)");
+    checkGatherMeta(d.meta, metaPath);
     const auto& b = d.meta.contains("bins") ? d.meta.at("bins") : nlohmann::json();
     if (!b.is_array() || b.size() != 4 || !b[0].is_number_integer() || !b[1].is_number_integer() ||
         !b[2].is_number_integer() || !b[3].is_number_integer())

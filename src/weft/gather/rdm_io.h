@@ -27,4 +27,8 @@ struct RdmData {
 
 RdmData loadRdm(const std::string& dir);
 
+// InputError naming metaPath unless `meta` (a gather's meta.json) is a whole
+// weft gather of format version 1; a shard of one is told to merge first.
+void checkGatherMeta(const nlohmann::json& meta, const std::string& metaPath);
+
 }  // namespace weft

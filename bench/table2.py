@@ -71,6 +71,13 @@ each); assembling adds a baseline table and RESULTS/table2/fig10-<preset>.png.
 On a chunk already made it renders only the baseline (the chunk's fiber and
 neural renders come from the work folder's cache).
 
+Each chunk also scores neural mode (and the baseline) against the fiber
+reference after averaging both over 2 x 2 and 4 x 4 pixel blocks (`weft
+compare --scale`): single fibers, which a ply-level model averages by design,
+then no longer count. --rescore adds these scores to chunk files made before
+them, from the cached renders or, where those are gone, from the committed
+figures' 8-bit panels (Pillow, Debian python3-pil; marked "figure png").
+
 Everything is cached under the work folder (scene folders, renders, their
 JSON statistics, comparisons); a step is redone only when its command line
 changes, so an interrupted chunk resumes where it stopped. A chunk whose
@@ -82,6 +89,7 @@ result file already records the same settings is not run again (--redo).
     bench/table2.py                       # every chunk of --presets x --scenes, then assemble
     bench/table2.py --quick               # the one-run quick table (below)
     bench/table2.py --chunk fleece,weave --baseline dual   # adds the baseline's columns
+    bench/table2.py --rescore             # SSIM at 2x2 / 4x4 px blocks for chunks without it
   common: [--work DIR] [--results DIR] [--weft build/release/weft]
 
 --quick (unchanged): 128 x 128, 256 spp references, ladder N/16 and N/4,
@@ -123,6 +131,12 @@ DEFAULT_FIBER_LADDER = {("cotton", "knit"): (64, 16)}
 DEFAULT_PATCH = 3
 SEEDS = {"reference": 1, "ladder": 10, "equal_time": 3}
 CHUNK_FORMAT = 1
+# weft compare --scale: SSIM after averaging both images over K x K pixel blocks,
+# so that structure finer than a block (single fibers) no longer counts and what
+# remains is the ply-scale appearance a ply-level model is meant to match.
+PLY_SCALES = (2, 4)
+# weft montage's default gap (pixels between and around the cells of a figure).
+MONTAGE_GAP = 4
 BUDGET_MINUTES = 60
 
 
@@ -194,9 +208,15 @@ class Bench:
         with open(os.path.join(folder, "image.json")) as f:
             return json.load(f), exr
 
-    def compare(self, a, b, heatmap=None):
+    def compare(self, a, b, heatmap=None, scale=1):
         cmd = [self.weft, "compare", a, b] + (["--heatmap", heatmap] if heatmap else [])
+        if scale != 1:
+            cmd += ["--scale", str(scale)]
         return json.loads(self.run(cmd))
+
+    def ssim_scales(self, a, b):
+        """SSIM of a against the reference b at each of PLY_SCALES ({"2": .., "4": ..})."""
+        return {str(k): self.compare(a, b, scale=k)["ssim"] for k in PLY_SCALES}
 
 
 def convergence(bench, scene, folder, mode, ref_exr, ref_spp, divisors, extra=()):
@@ -272,6 +292,7 @@ def scene_cell(bench, s, preset, kind, folder, figure):
         "threads_used": fiber_stats.get("threads"),
         "scene_stats": {"fiber": fiber_stats["scene"], "neural": neural_stats["scene"]},
         "ssim": quality["ssim"], "rel_mse": quality["rel_mse"],
+        "ssim_scales": bench.ssim_scales(neural_ref, fiber_ref), "ssim_scales_source": "exr",
         # relMSE of two converged renders = their difference + each one's noise
         # (c / N): what is left after the noise is the neural model's error.
         "rel_mse_minus_noise": quality["rel_mse"] - noise,
@@ -328,6 +349,7 @@ def dual_baseline(bench, s, preset, kind, folder, cell, figure):
     return {
         "name": "dual-scattering baseline (after ZMA23)",
         "ssim": quality["ssim"], "rel_mse": quality["rel_mse"],
+        "ssim_scales": bench.ssim_scales(dual_ref, fiber_ref), "ssim_scales_source": "exr",
         "rel_mse_minus_noise": quality["rel_mse"] - fiber_eq["reference_noise"]
         - dual_eq["reference_noise"],
         "seconds_per_spp": dual_stats["seconds_per_spp"], "seconds": dual_stats["seconds"],
@@ -514,6 +536,14 @@ def mb(n):
     return "%.3g" % (n / 1e6)
 
 
+def ssim_scales_text(c):
+    """'a / b' of SSIM at PLY_SCALES, marked when measured on a figure's 8-bit panels."""
+    if "ssim_scales" not in c:
+        return "-"
+    return " / ".join("%.3f" % c["ssim_scales"][str(k)] for k in PLY_SCALES) + (
+        " (png)" if c.get("ssim_scales_source") == "figure png" else "")
+
+
 def c_levels(eq):
     return ", ".join("%d: %.3g" % (l["spp"], l["c"]) for l in eq["levels"])
 
@@ -562,7 +592,11 @@ def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
         if c["memory_ratio"] < 200:
             flags.append("memory < 200x")
         if c["ssim"] < 0.97:
-            flags.append("SSIM < 0.97")
+            coarse = c.get("ssim_scales", {}).get(str(PLY_SCALES[-1]))
+            flags.append("SSIM < 0.97" + ("" if coarse is None else
+                                          " (%s 0.97 at %dx%d px)" % (
+                                              ">=" if coarse >= 0.97 else "<", PLY_SCALES[-1],
+                                              PLY_SCALES[-1])))
         if c["neural"]["equal_quality"]["c_spread"] > 1.25:
             flags.append("neural c spread > 1.25")
         return ", ".join(flags) or "met"
@@ -572,17 +606,24 @@ def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
                   key=lambda r: order.get((r[1]["preset"], r[1]["scene"]) if r[0] == "cell"
                                           else r[1], 0))
     lines += ["## Quality: neural vs the fiber reference, and each reference's own noise", "",
-              "| material | scene | pixels | ref spp | SSIM | relMSE | fiber ref noise c/N "
-              "| neural ref noise c/N | relMSE minus noise | issue 17 targets |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
+              "SSIM at 2x2 / 4x4 px: the same images averaged over 2 x 2 and 4 x 4 pixel "
+              "blocks first (`weft compare --scale`, docs/compare.md): structure finer than a "
+              "block (single fibers, which a ply-level model averages by design) no longer "
+              "counts. (png): measured on the 8-bit panels of the committed figure, the renders "
+              "being gone (`bench/table2.py --rescore`).", "",
+              "| material | scene | pixels | ref spp | SSIM | SSIM at 2x2 / 4x4 px | relMSE "
+              "| fiber ref noise c/N | neural ref noise c/N | relMSE minus noise "
+              "| issue 17 targets |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for kind, c in rows:
         if kind == "missing":
-            lines.append("| %s | %s | *missing: `%s`* | | | | | | | |" % (
+            lines.append("| %s | %s | *missing: `%s`* | | | | | | | | |" % (
                 c[0], c[1], chunk_command(*c)))
             continue
         f, n = c["fiber"]["equal_quality"], c["neural"]["equal_quality"]
-        lines.append("| %s | %s | %d | %d | %.3f | %.4f | %.2g | %.2g | %.4f | %s |" % (
-            c["preset"], c["scene"], c["size"], c["ref_spp"], c["ssim"], c["rel_mse"],
+        lines.append("| %s | %s | %d | %d | %.3f | %s | %.4f | %.2g | %.2g | %.4f | %s |" % (
+            c["preset"], c["scene"], c["size"], c["ref_spp"], c["ssim"], ssim_scales_text(c),
+            c["rel_mse"],
             f["reference_noise"], n["reference_noise"], c["rel_mse_minus_noise"], targets(c)))
     lines += ["", "## Time at equal quality (relative MSE %.2f) and memory" % TARGET_REL_MSE, "",
               "| material | scene | fiber s (EQ) | neural s (EQ) | speed-up | fiber s/spp "
@@ -626,15 +667,19 @@ def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
                   "analytic fiber count, re-implemented without the authors' text or code. "
                   "Equal-quality times as for neural mode (relative MSE %.2f against its own "
                   "converged render)." % TARGET_REL_MSE, "",
-                  "| material | scene | baseline SSIM | neural SSIM | baseline relMSE minus noise "
+                  "| material | scene | baseline SSIM | neural SSIM | baseline / neural SSIM at "
+                  "4x4 px | baseline relMSE minus noise "
                   "| neural relMSE minus noise | baseline s (EQ) | neural s (EQ) | fiber s (EQ) "
                   "| neural speed-up over baseline | baseline memory ratio | baseline c |",
-                  "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
         for c in duals:
             d = c["dual"]
-            lines.append("| %s | %s | %.3f | %.3f | %.4f | %.4f | %.1f | %.2f | %.1f | **%.1fx** "
-                         "| %.0fx | %s |" % (
+            coarse = str(PLY_SCALES[-1])
+            lines.append("| %s | %s | %.3f | %.3f | %s | %.4f | %.4f | %.1f | %.2f | %.1f "
+                         "| **%.1fx** | %.0fx | %s |" % (
                              c["preset"], c["scene"], d["ssim"], c["ssim"],
+                             "%.3f / %.3f" % (d["ssim_scales"][coarse], c["ssim_scales"][coarse])
+                             if "ssim_scales" in d and "ssim_scales" in c else "-",
                              d["rel_mse_minus_noise"], c["rel_mse_minus_noise"],
                              d["equal_quality"]["seconds_to_target"],
                              c["neural"]["equal_quality"]["seconds_to_target"],
@@ -751,6 +796,70 @@ def add_baselines(bench, args, folder, preset, kind, s, path):
     os.replace(path + ".tmp", path)
     bench.say("%s %s: baseline in %.1f minutes, wrote %s" % (
         preset, kind, cell["dual"]["run"]["wall_seconds"] / 60, shown_path(path)))
+
+
+def figure_panels(figure, size, indices, out_dir):
+    """Cuts panels `indices` (0 = leftmost) of a one-row `weft montage` figure of size x size
+    renders into out_dir/panel-<i>.png (8-bit values kept); returns their paths."""
+    try:
+        from PIL import Image  # Debian: python3-pil; only for chunks whose renders are gone
+    except ImportError:
+        sys.exit("table2: --rescore from a figure needs Pillow (apt-get install python3-pil)")
+    os.makedirs(out_dir, exist_ok=True)
+    paths = []
+    with Image.open(figure) as im:
+        rgb = im.convert("RGB")
+        for i in indices:
+            x0 = MONTAGE_GAP + i * (size + MONTAGE_GAP)
+            if x0 + size > rgb.width or MONTAGE_GAP + size > rgb.height:
+                sys.exit("table2: %s is %d x %d: no panel %d of %d px" % (
+                    figure, rgb.width, rgb.height, i, size))
+            path = os.path.join(out_dir, "panel-%d.png" % i)
+            rgb.crop((x0, MONTAGE_GAP, x0 + size, MONTAGE_GAP + size)).save(path)
+            paths.append(path)
+    return paths
+
+
+def rescore(bench, args, results, name):
+    """--rescore: adds SSIM at PLY_SCALES (neural and baseline vs the fiber reference) to the
+    chunk files that lack it: from the cached renders when the work folder still holds them,
+    else from the 8-bit panels of the chunk's committed figures (marked "figure png"; its SSIM
+    at full resolution is kept beside, to show how closely the PNG reproduces the EXR's)."""
+    folder = os.path.join(results, name)
+    for path in sorted(glob.glob(os.path.join(folder, "*-*.json"))):
+        with open(path) as f:
+            cell = json.load(f)
+        if cell.get("format") != CHUNK_FORMAT:
+            continue
+        if "ssim_scales" in cell and not args.redo:
+            continue
+        preset, kind, size = cell["preset"], cell["scene"], cell["size"]
+        work = os.path.join(bench.work, preset, kind)
+        refs = {m: os.path.join(work, m + "-ref", "image.exr") for m in ("fiber", "neural", "dual")}
+        pairs = [(cell, refs["neural"])] + ([(cell["dual"], refs["dual"])] if "dual" in cell else [])
+        if all(os.path.exists(p) for p in [refs["fiber"]] + [r for _, r in pairs]):
+            for target, image in pairs:
+                target["ssim_scales"] = bench.ssim_scales(image, refs["fiber"])
+                target["ssim_scales_source"] = "exr"
+        else:
+            cut = os.path.join(bench.work, "rescore", "%s-%s" % (preset, kind))
+            # Row figure: reference | neural | ...; Fig. 10 row: reference | baseline | neural.
+            figures = [(cell, cell["figure"], (0, 1))]
+            if "dual" in cell:
+                figures.append((cell["dual"], cell["dual"]["figure"], (0, 1)))
+            for target, figure, indices in figures:
+                ref, image = figure_panels(os.path.join(results, figure), size, indices,
+                                           os.path.join(cut, os.path.basename(figure)[:-4]))
+                target["ssim_scales"] = bench.ssim_scales(image, ref)
+                target["ssim_scales_source"] = "figure png"
+                target["ssim_figure_png"] = bench.compare(image, ref)["ssim"]
+        with open(path + ".tmp", "w") as f:
+            json.dump(cell, f, indent=1)
+        os.replace(path + ".tmp", path)
+        bench.say("%s %s: SSIM at %s px blocks %s (from %s)" % (
+            preset, kind, " / ".join("%dx%d" % (k, k) for k in PLY_SCALES),
+            " / ".join("%.3f" % cell["ssim_scales"][str(k)] for k in PLY_SCALES),
+            cell["ssim_scales_source"]))
 
 
 def assemble(results, name, weft):
@@ -898,6 +1007,10 @@ def main():
     what.add_argument("--plan", action="store_true",
                       help="print each chunk's command line, settings and estimated minutes")
     what.add_argument("--quick", action="store_true", help="the one-run quick table (42 min)")
+    what.add_argument("--rescore", action="store_true",
+                      help="add SSIM at 2x2 and 4x4 pixel blocks (weft compare --scale) to the "
+                           "chunk files that lack it, from the cached renders or else from the "
+                           "committed figures' 8-bit panels (needs python3-pil), then assemble")
     p.add_argument("--weft", default=os.path.join(ROOT, "build", "release", "weft"))
     p.add_argument("--work", default=None, help="cache folder (default bench/work/NAME)")
     p.add_argument("--results", default=os.path.join(ROOT, "bench", "results"),
@@ -996,6 +1109,11 @@ def main():
     if not os.access(args.weft, os.X_OK):
         sys.exit("table2: %s is not an executable weft (build first, or pass --weft)" % args.weft)
     bench = Bench(args)
+    if args.rescore:
+        rescore(bench, args, results, name)
+        text, count, missing = assemble(results, name, bench.weft)
+        print(text)
+        return
     if args.quick:
         print(run_quick(bench, args, results, name, sorted({c[0] for c in chunks},
                                                            key=PRESETS.index),

@@ -248,8 +248,8 @@ def scene_bytes(stats):
     return stats["scene"]["geometry_bvh_bytes"] + stats["scene"].get("material_bytes", 0)
 
 
-def scene_cell(bench, s, preset, kind, folder, figure):
-    """One Table 2 row: renders, comparisons and the row's figure; s holds its settings."""
+def chunk_scene(bench, s, preset, kind, folder):
+    """The chunk's scene (weft scene, cached in folder/scene): the path of its scene.json."""
     model = os.path.join(ROOT, "models", preset + ".json")
     scene_dir = os.path.join(folder, "scene")
     cmd = [bench.weft, "scene", kind, "--model", model, "--width", str(s["size"]),
@@ -261,7 +261,12 @@ def scene_cell(bench, s, preset, kind, folder, figure):
         bench.run(cmd + ["--out", os.path.join(d, "s")])
 
     bench.cached(scene_dir, {"cmd": cmd[1:]}, make)
-    scene = os.path.join(scene_dir, "s", "scene.json")
+    return os.path.join(scene_dir, "s", "scene.json")
+
+
+def scene_cell(bench, s, preset, kind, folder, figure):
+    """One Table 2 row: renders, comparisons and the row's figure; s holds its settings."""
+    scene = chunk_scene(bench, s, preset, kind, folder)
     ref_spp = s["ref_spp"]
     seed = SEEDS["reference"]
 
@@ -330,9 +335,8 @@ def dual_baseline(bench, s, preset, kind, folder, cell, figure):
     against the fiber reference, its time at equal quality and memory, and the Fig. 10 row
     (reference | baseline | neural | 1 - SSIM of the baseline | 1 - SSIM of neural)."""
     t0 = time.time()
-    scene = os.path.join(folder, "scene", "s", "scene.json")
-    if not os.path.exists(scene):
-        sys.exit("table2: %s is missing: run the chunk itself first" % scene)
+    # The same scene as the chunk's (re-made, identically, when the work folder lost it).
+    scene = chunk_scene(bench, s, preset, kind, folder)
     ref_spp, seed = s["ref_spp"], SEEDS["reference"]
     fiber_stats, fiber_ref = bench.render(scene, folder, "fiber-ref", "fiber", seed, spp=ref_spp)
     _, neural_ref = bench.render(scene, folder, "neural-ref", "neural", seed, spp=ref_spp)

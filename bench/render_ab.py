@@ -16,7 +16,12 @@ images, to bench/results/render-ab.md and .json.
     bench/render_ab.py --before ../baseline/build/weft --after build/weft
                        [--runs 3] [--size 128] [--spp-neural 64] [--spp-fiber 8]
                        [--threads 1] [--seed 1] [--model tests/data/fleece-small.json]
+                       [--scene closeup|weave|knit] [--patch 3]
                        [--out bench/results/render-ab.md]
+
+--scene weave or knit renders, instead of the close-up, the cloth that `weft scene`
+makes (the Table 2 scenes of bench/table2.py: a patch x patch swatch, sky and two
+sphere lights), made once by the `after` binary.
 """
 import argparse
 import filecmp
@@ -56,6 +61,8 @@ def main():
     p.add_argument("--spp-fiber", type=int, default=8)
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--scene", choices=("closeup", "weave", "knit"), default="closeup")
+    p.add_argument("--patch", type=int, default=3, help="weave / knit: swatch size (weft scene --size)")
     p.add_argument("--title", default="before / after")
     p.add_argument("--out", default=os.path.join(ROOT, "bench", "results", "render-ab.md"))
     a = p.parse_args()
@@ -64,7 +71,14 @@ def main():
 
     results = {"settings": vars(a), "load_average_start": os.getloadavg(), "modes": {}}
     with tempfile.TemporaryDirectory(prefix="weft-bench-ab-") as tmp:
-        scene = closeup_scene(tmp, a.model, a.size)
+        if a.scene == "closeup":
+            scene = closeup_scene(tmp, a.model, a.size)
+        else:
+            subprocess.run([binaries["after"], "scene", a.scene, "--model", os.path.abspath(a.model),
+                            "--width", str(a.size), "--height", str(a.size), "--spp", "1",
+                            "--size", str(a.patch), "--out", os.path.join(tmp, "s")],
+                           check=True, stdout=subprocess.DEVNULL)
+            scene = os.path.join(tmp, "s", "scene.json")
         for mode in ("neural", "fiber"):
             seconds = {"before": [], "after": []}
             cpu = {"before": [], "after": []}
@@ -89,11 +103,13 @@ def main():
     lines = [
         "# Render time, %s (bench/render_ab.py)" % a.title,
         "",
-        "The close-up of bench/render.py, %dx%d, model `%s`, seed %d, %d thread(s); %d runs per "
+        "%s, %dx%d, model `%s`, seed %d, %d thread(s); %d runs per "
         "binary and mode, alternating; medians of the render's wall-clock seconds (scene build "
         "excluded) and of the process's CPU seconds (scene build included). Load average %.1f "
         "at the start, %.1f at the end (%d cores)."
-        % (a.size, a.size, os.path.relpath(os.path.abspath(a.model), ROOT), a.seed, a.threads,
+        % ("The close-up of bench/render.py" if a.scene == "closeup"
+           else "The %s of `weft scene %s --size %d`" % (a.scene, a.scene, a.patch),
+           a.size, a.size, os.path.relpath(os.path.abspath(a.model), ROOT), a.seed, a.threads,
            a.runs, results["load_average_start"][0], results["load_average_end"][0],
            os.cpu_count()),
         "",

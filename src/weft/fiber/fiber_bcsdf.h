@@ -51,6 +51,8 @@ class FiberBcsdf final : public Bsdf {
     Rgb albedo(const Vec3& wi) const;
     // Schlick term F(theta) per channel (paper eq. 4).
     Rgb fresnel(double cosTheta) const;
+    // The R lobe's longitudinal Gaussian g(theta; mu, beta_R) (the yarn's q_R draws from it).
+    const LongitudinalGaussian& longitudinalR() const { return gR_; }
 
     // Longitudinal angle of a direction and its projection on the normal
     // plane (y, z); azimuth differences come from dot products of the

@@ -10,21 +10,21 @@ namespace weft::render {
 namespace {
 
 // RTCIntersectContext extended with the tube the ray leaves (Embree's
-// documented way to pass data to filter functions: the context comes first).
+// documented way to pass data to filter functions: the context comes first):
+// its geometry and its segments [firstSegment, endSegment), so that the filter,
+// called for every candidate hit, needs no search.
 struct OriginContext {
     RTCIntersectContext context;
-    TubeId origin;
+    unsigned geometry;
+    unsigned firstSegment, endSegment;
     float selfHitDistance;
-    const std::vector<TubeAccel::GeometryInfo>* geometries;
 };
 
 void dropOriginTubeHits(const RTCFilterFunctionNArguments* args) {
     const auto* ctx = reinterpret_cast<const OriginContext*>(args->context);
-    const unsigned geometry = RTCHitN_geomID(args->hit, args->N, 0);
-    if (geometry != ctx->origin.geometry) return;
-    const unsigned tube =
-        (*ctx->geometries)[geometry].tubeOf(RTCHitN_primID(args->hit, args->N, 0));
-    if (tube != ctx->origin.tube) return;
+    if (RTCHitN_geomID(args->hit, args->N, 0) != ctx->geometry) return;
+    const unsigned segment = RTCHitN_primID(args->hit, args->N, 0);
+    if (segment < ctx->firstSegment || segment >= ctx->endSegment) return;
     const float t = RTCRayN_tfar(args->ray, args->N, 0);
     const float leaving =
         RTCRayN_dir_x(args->ray, args->N, 0) * RTCHitN_Ng_x(args->hit, args->N, 0) +
@@ -37,13 +37,19 @@ OriginContext makeContext(const TubeId& origin,
                           const std::vector<TubeAccel::GeometryInfo>& geometries) {
     OriginContext ctx;
     rtcInitIntersectContext(&ctx.context);
-    ctx.origin = origin;
-    ctx.geometries = &geometries;
+    ctx.geometry = RTC_INVALID_GEOMETRY_ID;
+    ctx.firstSegment = ctx.endSegment = 0;
     ctx.selfHitDistance = 0.0f;
     if (origin.valid()) {
+        const TubeAccel::GeometryInfo& info = geometries[origin.geometry];
         ctx.context.filter = &dropOriginTubeHits;
-        ctx.selfHitDistance = static_cast<float>(
-            TubeAccel::kSelfHitDistance * geometries[origin.geometry].tubeRadius[origin.tube]);
+        ctx.geometry = origin.geometry;
+        ctx.firstSegment = info.tubeFirstSegment[origin.tube];
+        ctx.endSegment = origin.tube + 1 < info.tubeFirstSegment.size()
+                             ? info.tubeFirstSegment[origin.tube + 1]
+                             : info.segmentCount;
+        ctx.selfHitDistance = static_cast<float>(TubeAccel::kSelfHitDistance *
+                                                 info.tubeRadius[origin.tube]);
     } else {
         ctx.context.filter = nullptr;
     }
@@ -130,6 +136,7 @@ uint32_t TubeAccel::addGeometry(const std::vector<Tube>& tubes, int material,
                                                   (right ? RTC_CURVE_FLAG_NEIGHBOR_RIGHT : 0));
         }
     }
+    info.segmentCount = static_cast<uint32_t>(segmentCount);
     info.vertices = vertices;
     info.indices = indices;
     rtcCommitGeometry(geom);

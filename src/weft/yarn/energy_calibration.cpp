@@ -30,11 +30,22 @@ EnergyCalibration::Scales EnergyCalibration::scales(const Vec3& wi) const {
     double f[termCount(kMaxDegree)];
     basis(wi, degree, f);
     const int n = termCount(degree);
-    for (int ch = 0; ch < 3; ++ch) {
-        double lr = 0, lm = 0;
-        for (int k = 0; k < n; ++k) lr += r[ch][k] * f[k], lm += m[ch][k] * f[k];
-        s.r[ch] = std::exp(std::clamp(lr, -kMaxLogScale, kMaxLogScale));
-        s.m[ch] = std::exp(std::clamp(lm, -kMaxLogScale, kMaxLogScale));
+    // Six dot products (R and M per channel), each in four interleaved partial
+    // sums: independent chains of multiply-adds, where one running sum made a
+    // chain of n dependent additions (most of the yarn BSDF's prepare).
+    for (int j = 0; j < 6; ++j) {
+        const double* c = (j < 3 ? r[j] : m[j - 3]).data();
+        double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+        int k = 0;
+        for (; k + 4 <= n; k += 4) {
+            s0 += c[k] * f[k];
+            s1 += c[k + 1] * f[k + 1];
+            s2 += c[k + 2] * f[k + 2];
+            s3 += c[k + 3] * f[k + 3];
+        }
+        for (; k < n; ++k) s0 += c[k] * f[k];
+        const double logScale = (s0 + s2) + (s1 + s3);
+        (j < 3 ? s.r : s.m)[j % 3] = std::exp(std::clamp(logScale, -kMaxLogScale, kMaxLogScale));
     }
     return s;
 }

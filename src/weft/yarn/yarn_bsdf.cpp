@@ -60,8 +60,7 @@ YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
       hasReflection_(model.hasReflectionLobe()),
       sampling_(options.sampling),
       kappaR_(hasReflection_ ? model.sampling.kappaR : 0.0),
-      calibration_(model.calibration),
-      peakLongitudinal_(radians(model.fiber.betaRDeg)) {
+      calibration_(model.calibration) {
     if (options.energyGuard) buildEnergyGuard();
     if (sampling_ == YarnSampling::Tabulated) buildSamplingTable();
 }
@@ -88,8 +87,7 @@ const char* yarnSamplingName(YarnSampling sampling) {
 
 size_t YarnBsdf::memoryBytes() const {
     auto bytes = [](const auto& v) { return v.size() * sizeof(v[0]); };
-    return sizeof(*this) - sizeof(LongitudinalGaussian) + peakLongitudinal_.memoryBytes() +
-           rLobe_.fiber().memoryBytes() - sizeof(FiberBcsdf) + bytes(guardReflectance_) +
+    return sizeof(*this) + rLobe_.fiber().memoryBytes() - sizeof(FiberBcsdf) + bytes(guardReflectance_) +
            bytes(guardEnergyM_) + bytes(guardCell_) + table_.bytes() + bytes(peakMasking_) +
            bytes(tableEnergyM_) + bytes(tableEnergyR_);
 }
@@ -283,12 +281,13 @@ YarnBsdf::Incident YarnBsdf::incident(const Vec3& wi, double pT) const {
     // Tabulated sampling (yarn_bsdf.h): the mixture's weights from the
     // energies of its parts.
     in.table = table_.incident(wi);
-    const double cosThetaI = std::sqrt(local.y * local.y + local.z * local.z);
-    in.thetaI = std::atan2(local.x, cosThetaI);
     double peak = 0;
-    if (hasReflection_)
-        peak = 0.5 * (1.0 - pT) * luminance(rLobe_.fiber().fresnel(cosThetaI) * in.rScale) *
+    if (hasReflection_) {
+        // theta_i and F(theta_i) of q_R: the R lobe's fiber state has both.
+        in.thetaI = in.fiber.angles.theta;
+        peak = 0.5 * (1.0 - pT) * luminance(in.fiber.fresnel * in.rScale) *
                table_.blend(in.table, peakMasking_);
+    }
     // The table's M term, and its R term (the fiber's TT lobe inside S_R) per unit 1 - P(T).
     const double rest =
         table_.blend(in.table, tableEnergyM_) + (1.0 - pT) * table_.blend(in.table, tableEnergyR_);
@@ -310,7 +309,7 @@ Rgb YarnBsdf::reflectionPeak(const Vec3& wi, const Vec3& wo, const Incident& in)
     const double cosThetaI = std::sqrt(li.y * li.y + li.z * li.z);
     const double cosThetaO = std::sqrt(lo.y * lo.y + lo.z * lo.z);
     const double g =
-        peakLongitudinal_.eval(std::atan2(lo.x, cosThetaO), -std::atan2(li.x, cosThetaI));
+        peakLongitudinal().eval(std::atan2(lo.x, cosThetaO), -std::atan2(li.x, cosThetaI));
     return rLobe_.fiber().fresnel(cosThetaI) * in.rScale *
            ((1.0 - in.pT) * g * cosThetaO / kTwoPi * rLobe_.masking(wi, wo));
 }
@@ -347,7 +346,7 @@ void YarnBsdf::buildSamplingTable() {
     peakMasking_.assign(SamplingTable::kNodes, 1.0);
     if (!hasReflection_ || rLobe_.params().masking.empty()) return;
     const SurfaceFiberFrame& frame = lobes_.frame();
-    const double beta = peakLongitudinal_.beta();
+    const double beta = peakLongitudinal().beta();
     tbb::parallel_for(0, SamplingTable::kNodes, [&](int node) {
         const Vec3 wi = SamplingTable::nodeDirection(frame, node / SamplingTable::kIncidentPhi,
                                                      node % SamplingTable::kIncidentPhi);
@@ -360,7 +359,7 @@ void YarnBsdf::buildSamplingTable() {
         quadrature::panelRule(phiEdges, &phi, &phiWeight);
         double sum = 0, weightSum = 0;
         for (size_t a = 0; a < theta.size(); ++a) {
-            const double w = thetaWeight[a] * peakLongitudinal_.eval(theta[a], -thetaI) *
+            const double w = thetaWeight[a] * peakLongitudinal().eval(theta[a], -thetaI) *
                              sqr(std::cos(theta[a]));
             for (size_t b = 0; b < phi.size(); ++b) {
                 sum += w * phiWeight[b] * rLobe_.masking(wi, frame.direction(theta[a], phi[b]));
@@ -375,7 +374,7 @@ double YarnBsdf::continuousPdf(const Vec3& wo, const FiberBcsdf::Angles& out,
                                const Incident& in) const {
     double d = 0;
     if (in.pickR > 0 && wo.z > 0)
-        d += in.pickR * peakLongitudinal_.eval(out.theta, -in.thetaI) * out.cosTheta * kInvPi;
+        d += in.pickR * peakLongitudinal().eval(out.theta, -in.thetaI) * out.cosTheta * kInvPi;
     if (in.pickR < 1) d += (1.0 - in.pickR) * table_.pdf(in.table, wo);
     return (1.0 - in.pickT) * d;
 }
@@ -507,7 +506,7 @@ BsdfSample YarnBsdf::sample(const BsdfIncident& in, const BsdfSampleInput& u, Rn
         const double uPart = std::clamp((u[0] - pickT) / (1.0 - pickT), 0.0, kOneMinusEpsilon);
         if (uPart < p.in.pickR) {
             s.lobe = kLobeR;
-            const double thetaO = peakLongitudinal_.sample(-p.in.thetaI, u[1], rng);
+            const double thetaO = peakLongitudinal().sample(-p.in.thetaI, u[1], rng);
             o = lobes_.frame().direction(thetaO, kPi * (u[2] - 0.5));
         } else {
             s.lobe = kLobeM;

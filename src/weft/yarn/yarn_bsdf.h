@@ -253,6 +253,7 @@ class YarnBsdf final : public Bsdf {
                            const EnergyCalibration::Scales& calibration) const;
     void buildEnergyGuard();
     void buildSamplingTable();
+    const LongitudinalGaussian& peakLongitudinal() const { return rLobe_.fiber().longitudinalR(); }
     // The fiber's R lobe inside S_R (tabulated sampling, above), calibration applied.
     Rgb reflectionPeak(const Vec3& wi, const Vec3& wo, const Incident& in) const;
     // Density of the continuous part of sample() (1 - P_T included).
@@ -274,9 +275,8 @@ class YarnBsdf final : public Bsdf {
     std::vector<Rgb> guardReflectance_, guardEnergyM_;
     // 1 where a cell of the M table (rows a, a + 1; columns b, b + 1) may need the guard.
     std::vector<uint8_t> guardCell_;
-    // Tabulated sampling: the fiber's R longitudinal lobe, the table and the
-    // mean masking over q_R at the table's nodes.
-    LongitudinalGaussian peakLongitudinal_{1.0};
+    // Tabulated sampling: the table and the mean masking over q_R at the
+    // table's nodes; q_R's longitudinal lobe is the fiber's (peakLongitudinal).
     SamplingTable table_;
     std::vector<double> peakMasking_, tableEnergyM_, tableEnergyR_;
     // Lookups in the two tables.

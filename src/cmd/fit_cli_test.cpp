@@ -48,14 +48,37 @@ TEST_F(FitCliTest, ColourRangeFitsAModelForAnyColour) {
     ASSERT_TRUE(model.colour.has_value());
     EXPECT_EQ(model.colour->functions(), 3);
     EXPECT_EQ(model.mNet.widths(), (std::vector<int>{6, 8, 8, 9}));
+    // Its energy calibration is by colour (version 3): none of one colour.
     EXPECT_TRUE(model.calibration.empty());
-    EXPECT_EQ(nlohmann::json::parse(readFile(path("any.json"))).at("version"), 2);
+    ASSERT_EQ(model.colourCalibration.nodes.size(), 7u);
+    EXPECT_EQ(model.colourCalibration.cTT.front(), 0.3);
+    EXPECT_EQ(model.colourCalibration.cTT.back(), 0.999);
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("any.json"))).at("version"), 3);
+    EXPECT_EQ(summary.at("colour").at("energy_calibration").at("nodes").size(), 7u);
     // It renders, checks and makes scenes like any model (at its gathered colour).
     ASSERT_EQ(run("yarn check --model any.json --rdm ac --out check").status, 0);
     // At another colour, against the RDM of that colour from the same walks.
     ASSERT_EQ(run("gather recolour ac --c-tt 0.5,0.6,0.7 --out grey").status, 0);
     ASSERT_EQ(run("yarn check --model any.json --rdm grey --c-tt 0.5,0.6,0.7 --out check2").status,
               0);
+    // The calibration by colour brings the directional albedo at that colour
+    // (between the nodes) closer to the recoloured gather's than the same
+    // model without it.
+    YarnModel uncalibrated = model;
+    uncalibrated.colourCalibration = {};
+    saveYarnModel(uncalibrated, path("raw.json"));
+    for (const char* m : {"any", "raw"})
+        ASSERT_EQ(run(std::string("yarn check --model ") + m +
+                      ".json --rdm grey --c-tt 0.5,0.6,0.7 --min-paths 100 --out check-" + m)
+                      .status,
+                  0);
+    auto albedoError = [&](const char* dir) {
+        const nlohmann::json e = nlohmann::json::parse(readFile(path(dir) + "/check.json"))
+                                     .at("albedo")
+                                     .at("relative_error_mean_abs");
+        return (e[0].get<double>() + e[1].get<double>() + e[2].get<double>()) / 3;
+    };
+    EXPECT_LT(albedoError("check-any"), albedoError("check-raw"));
     expectUserError(run("yarn check --model any.json --rdm grey --c-tt 0.5 --out check3"),
                     {"--c-tt", "R,G,B"});
     ASSERT_EQ(run("scene closeup --model any.json --width 12 --height 8 --out sc").status, 0);

@@ -12,6 +12,7 @@
 
 #include "weft/core/json_message.h"
 #include "weft/core/math.h"
+#include "weft/fit/colour_targets.h"
 #include "weft/fit/metrics.h"
 #include "weft/fit/model_maps.h"
 #include "weft/yarn/yarn_bsdf.h"
@@ -175,6 +176,45 @@ EnergyCalibration fitEnergyCalibration(const YarnModel& model, const RdmData& rd
     }
     return cal;
 }
+ColourCalibration fitColourCalibration(const YarnModel& model, const RdmData& rdm,
+                                       const std::vector<ColourPath>& paths, int degree,
+                                       int threads, nlohmann::json* summary) {
+    if (!model.colour) throw std::logic_error("fitColourCalibration: the model is not conditioned");
+    const ColourRange& range = model.colour->range();
+    const ColourTargets targetR(paths, rdm.bins, rdm.count, ColourPath::R);
+    const ColourTargets targetM(paths, rdm.bins, rdm.count, ColourPath::M);
+    YarnModel conditioned = model;
+    conditioned.colourCalibration = {};
+    ColourCalibration result;
+    if (summary) *summary = nlohmann::json::array();
+    // Nodes from the dark end (u large) to the light one, so that C_TT increases.
+    const double uDark = ColourCalibration::variableOf(range.lo);
+    const double uLight = ColourCalibration::variableOf(range.hi);
+    for (int g = 0; g < kColourCalibrationNodes; ++g) {
+        const double u = uDark + (uLight - uDark) * g / (kColourCalibrationNodes - 1);
+        const double grey = g == 0 ? range.lo
+                           : g + 1 == kColourCalibrationNodes ? range.hi
+                                                              : std::exp(-u * u);
+        RdmData recoloured;
+        recoloured.dir = rdm.dir + " recoloured to C_TT " + formatNumber(grey);
+        recoloured.bins = rdm.bins;
+        recoloured.count = rdm.count;
+        recoloured.pT = rdm.pT;
+        recoloured.rdmR = targetR.map(Rgb(grey));
+        recoloured.rdmM = targetM.map(Rgb(grey));
+        nlohmann::json node;
+        result.cTT.push_back(grey);
+        result.nodes.push_back(fitEnergyCalibration(conditioned.forColour(Rgb(grey), "calibration"),
+                                                    recoloured, degree, threads,
+                                                    summary ? &node : nullptr));
+        if (summary) {
+            node["c_tt"] = grey;
+            summary->push_back(node);
+        }
+    }
+    return result;
+}
+
 std::vector<double> fitLogPolynomial(const std::vector<Vec3>& wi,
                                      const std::vector<double>& logRatio,
                                      const std::vector<double>& weight, int degree) {

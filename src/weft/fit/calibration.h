@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "weft/core/vec.h"
+#include "weft/gather/gather.h"
 #include "weft/gather/rdm_io.h"
 #include "weft/yarn/energy_calibration.h"
 #include "weft/yarn/yarn_model.h"
@@ -24,6 +25,19 @@ std::vector<double> fitLogPolynomial(const std::vector<Vec3>& wi,
 // gets the albedo errors before and after and the range of the scales.
 inline constexpr int64_t kCalibrationMinPaths = 100;
 EnergyCalibration fitEnergyCalibration(const YarnModel& model, const RdmData& rdm, int degree,
+                                       int threads, nlohmann::json* summary = nullptr);
+
+// The energy calibration by colour of a colour-conditioned model
+// (ColourCalibration, yarn/energy_calibration.h): kColourCalibrationNodes
+// grey node colours uniform in u = sqrt(-ln C_TT) over the model's colour
+// range, and at each, fitEnergyCalibration of the model of that grey
+// (model.forColour) against the RDM of that grey recoloured from the any-colour
+// gather's recorded `paths` (fit/colour_targets.h; P(T) and the counts are
+// `rdm`'s, which do not depend on the colour). `summary` (optional) gets each
+// node's colour and albedo errors before and after.
+inline constexpr int kColourCalibrationNodes = 7;
+ColourCalibration fitColourCalibration(const YarnModel& model, const RdmData& rdm,
+                                       const std::vector<ColourPath>& paths, int degree,
                                        int threads, nlohmann::json* summary = nullptr);
 
 }  // namespace weft

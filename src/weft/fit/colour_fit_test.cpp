@@ -34,18 +34,23 @@ TEST(ColourTargets, MapsEqualTheRecolouredGather) {
     const GatherOptions o = anyColourGather(testing::scaled(20000));
     const GatherSums sums = gatherSums(o);
     const ColourTargets targets(sums.colourPaths, o.bins, sums.count);
+    const ColourTargets targetsR(sums.colourPaths, o.bins, sums.count, ColourPath::R);
     for (const Rgb colour : {Rgb(0.3, 0.6, 0.9), Rgb(0.999, 0.33, 0.354), o.fiber.cTT}) {
         GatherSums recoloured = sums;
         std::fill(recoloured.sumM.begin(), recoloured.sumM.end(), 0);
+        std::fill(recoloured.sumR.begin(), recoloured.sumR.end(), 0);
+        std::fill(recoloured.sumTruncated.begin(), recoloured.sumTruncated.end(), 0);
         for (const ColourPath& p : sums.colourPaths)
             addColourPath(recoloured, p, colour, [](int64_t& cell, int64_t v) { cell += v; });
         GatherOptions plain = o;
         plain.fiber.cTT = colour;
-        const std::vector<float> expected = normaliseGather(recoloured, plain).rdmM;
-        const std::vector<float> map = targets.map(colour);
-        ASSERT_EQ(map.size(), expected.size());
-        for (size_t k = 0; k < map.size(); ++k)
-            ASSERT_NEAR(map[k], expected[k], 1e-5 * expected[k] + 1e-9) << k;
+        const GatherResult expected = normaliseGather(recoloured, plain);
+        for (const auto& [map, truth] : {std::pair{targets.map(colour), &expected.rdmM},
+                                         std::pair{targetsR.map(colour), &expected.rdmR}}) {
+            ASSERT_EQ(map.size(), truth->size());
+            for (size_t k = 0; k < map.size(); ++k)
+                ASSERT_NEAR(map[k], (*truth)[k], 1e-5 * (*truth)[k] + 1e-9) << k;
+        }
     }
 }
 

@@ -10,7 +10,7 @@
 namespace weft {
 
 ColourTargets::ColourTargets(const std::vector<ColourPath>& paths, const RdmBins& bins,
-                             const std::vector<int64_t>& count)
+                             const std::vector<int64_t>& count, ColourPath::Kind kind)
     : bins_(bins) {
     const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
     if (count.size() != nIn) throw std::logic_error("ColourTargets: count does not match the bins");
@@ -18,13 +18,13 @@ ColourTargets::ColourTargets(const std::vector<ColourPath>& paths, const RdmBins
     std::vector<uint32_t> perCell(nIn * nOut + 1, 0);
     size_t m = 0;
     for (const ColourPath& p : paths)
-        if (p.kind == ColourPath::M) ++perCell[p.incidentBin * nOut + p.outgoingBin + 1], ++m;
-    if (m > UINT32_MAX) throw InputError("more than 2^32 recorded M paths");
+        if (p.kind == kind) ++perCell[p.incidentBin * nOut + p.outgoingBin + 1], ++m;
+    if (m > UINT32_MAX) throw InputError("more than 2^32 recorded paths of one kind");
     for (size_t k = 1; k < perCell.size(); ++k) perCell[k] += perCell[k - 1];
     cellStart_ = perCell;
     entries_.resize(m);
     for (const ColourPath& p : paths) {
-        if (p.kind != ColourPath::M) continue;
+        if (p.kind != kind) continue;
         const size_t cell = p.incidentBin * nOut + p.outgoingBin;
         const double norm = 1.0 / (static_cast<double>(count[p.incidentBin]) *
                                    bins.outgoingSolidAngle(p.outgoingBin));

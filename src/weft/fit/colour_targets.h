@@ -1,5 +1,5 @@
-// weft/fit/colour_targets.h — RDM_M of any fiber colour, cell by cell, from an
-// any-colour gather's recorded paths (gather/colour_paths.h).
+// weft/fit/colour_targets.h — RDM_M (or RDM_R) of any fiber colour, cell by
+// cell, from an any-colour gather's recorded paths (gather/colour_paths.h).
 //
 // The M paths sorted by cell (incident bin, outgoing bin): the value of a
 // cell for C_TT is sum over its paths of W0_c C_TT,c^k / count(i) /
@@ -21,17 +21,17 @@ namespace weft {
 
 class ColourTargets {
   public:
-    // The M paths of `paths` (others are skipped) for a gather with `bins` and
-    // per-incident-bin path counts `count`.
+    // The M paths of `paths` (others are skipped; with kind = R, the R paths
+    // and so RDM_R) for a gather with `bins` and per-incident-bin path counts `count`.
     ColourTargets(const std::vector<ColourPath>& paths, const RdmBins& bins,
-                  const std::vector<int64_t>& count);
+                  const std::vector<int64_t>& count, ColourPath::Kind kind = ColourPath::M);
 
     const RdmBins& bins() const { return bins_; }
     size_t paths() const { return entries_.size(); }
 
-    // RDM_M of cell (i, o) for the colour C_TT.
+    // RDM_M (RDM_R) of cell (i, o) for the colour C_TT.
     Rgb value(size_t incidentBin, size_t outgoingBin, const Rgb& cTT) const;
-    // The whole map (TI, PI, TO, PO, 3) for C_TT, as rdm_m.npy holds it.
+    // The whole map (TI, PI, TO, PO, 3) for C_TT, as rdm_m.npy (rdm_r.npy) holds it.
     std::vector<float> map(const Rgb& cTT) const;
 
   private:

@@ -251,8 +251,22 @@ FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_
                 {{"c_tt", {c.r, c.g, c.b}}, {"m_rel_l2", coarseRelativeL2(fitted, target, bins)}});
         }
         report.colour["m_rel_l2_by_colour"] = byColour;
-        // 4-5. No calibration (it would hold for one colour); the sampling
-        // lobe of the gathered colour.
+        // 4. The energy calibration by colour: one per node colour, from the
+        // records recoloured to it (fitColourCalibration).
+        if (config.calibrationDegree >= 0) {
+            nlohmann::json nodes;
+            model.colourCalibration = fitColourCalibration(
+                model, rdm, *colour->paths, config.calibrationDegree, threads, &nodes);
+            report.colour["energy_calibration"] = {
+                {"form", "by colour"}, {"degree", model.colourCalibration.nodes[0].degree},
+                {"nodes", nodes}};
+            if (!quiet)
+                std::fprintf(stderr, "fit: energy calibration at %zu colours in %.1fs\n",
+                             model.colourCalibration.nodes.size(), secondsSince(phase));
+            phase = Clock::now();
+        }
+        // 5. The sampling lobe of the gathered colour (fitted on the maps of
+        // the uncalibrated model, as a one-colour fit's is).
         FitConfig oneColour = config;
         oneColour.calibrationDegree = -1;
         YarnModel own = model.forColour(model.fiber.cTT, "fit");
@@ -287,8 +301,8 @@ std::vector<Rgb> colourFitTestColours(const ColourRange& range) {
 FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& gathered,
                                const FitConfig& config, bool quiet) {
     if (fitted.colour)
-        throw InputError("--recalibrate: a colour-conditioned model has no energy calibration "
-                         "(it would hold for one colour only)");
+        throw InputError("--recalibrate: a colour-conditioned model's energy calibration is by "
+                         "colour, from the recorded paths; refit it with weft fit --colour-range");
     const auto t0 = Clock::now();
     RdmData ablated;
     if (fitted.ablation != YarnAblation::None) ablated = ablationTarget(gathered, fitted.ablation);

@@ -74,8 +74,9 @@ struct FitReport {
 
 // A colour-conditioned fit (docs/colour.md): T and R as usual, the M network
 // for every C_TT in `range` from the recorded paths of an any-colour gather
-// (gather/colour_paths.h), no energy calibration, the sampling lobe fitted at
-// the gathered colour.
+// (gather/colour_paths.h), an energy calibration by colour (fitColourCalibration,
+// calibration.h; none when config.calibrationDegree < 0), the sampling lobe
+// fitted at the gathered colour.
 struct ColourFitOptions {
     ColourRange range;
     int functions = 6;                                // K colour functions, 2..12

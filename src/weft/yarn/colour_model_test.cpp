@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "weft/core/error.h"
+#include "weft/core/math.h"
 #include "weft/core/rng.h"
 #include "weft/core/test_util.h"
 #include "weft/yarn/colour_basis.h"
@@ -96,12 +97,63 @@ TEST(ColourModel, FileFormIsVersionTwoAndOldFilesStillLoad) {
     wrong["colour"]["functions"].erase(2);
     testing::expectInputError([&] { yarnModelFromJson(wrong, "model.json"); }, {"m_net"});
     nlohmann::json future = j;
-    future["version"] = 3;
+    future["version"] = 4;
     testing::expectInputError([&] { yarnModelFromJson(future, "model.json"); },
-                              {"unsupported version 3", "1 to 2"});
+                              {"unsupported version 4", "1 to 3"});
     testing::expectInputError([&] { plain.forColour(Rgb(0.5), "scene.json: yarns[0]"); },
                               {"scene.json: yarns[0]", "fitted for one colour", "--colour-range"});
     testing::expectInputError([&] { model.forColour(Rgb(0.5, 1.5, 0.5), "x"); }, {"1.5", "[0, 1]"});
+}
+
+// A calibration by colour of two nodes for the conditioned model: node g
+// scales R by e^(0.1 (g + 1)) and M by e^(-0.1 (g + 1)) everywhere (constant term).
+ColourCalibration twoNodeCalibration() {
+    ColourCalibration byColour;
+    byColour.cTT = {0.3, 0.9};
+    for (int g = 0; g < 2; ++g) {
+        EnergyCalibration node;
+        node.degree = 1;
+        for (int c = 0; c < 3; ++c) {
+            node.r[c] = {0.1 * (g + 1), 0, 0, 0};
+            node.m[c] = {-0.1 * (g + 1), 0, 0, 0};
+        }
+        byColour.nodes.push_back(node);
+    }
+    return byColour;
+}
+
+TEST(ColourModel, CalibrationByColourIsVersionThreeAndFollowsTheColour) {
+    YarnModel model = conditionedModel();
+    model.colourCalibration = twoNodeCalibration();
+    ASSERT_NO_THROW(model.validate());
+    const nlohmann::json j = yarnModelToJson(model);
+    EXPECT_EQ(j.at("version"), 3);
+    EXPECT_EQ(j.at("energy_calibration").at("form"), "log-polynomial-sphere-by-c-tt");
+    const YarnModel back = yarnModelFromJson(j, "model.json");
+    ASSERT_EQ(back.colourCalibration.cTT, model.colourCalibration.cTT);
+    EXPECT_EQ(back.colourCalibration.nodes[1].m[2], model.colourCalibration.nodes[1].m[2]);
+    // forColour: the red channel at the first node, green at the second, blue between.
+    const double u0 = std::sqrt(-std::log(0.3)), u1 = std::sqrt(-std::log(0.9));
+    const double blue = std::exp(-sqr(0.25 * u0 + 0.75 * u1));  // 3/4 of the way to node 1
+    const YarnModel one = model.forColour(Rgb(0.3, 0.9, blue), "test");
+    EXPECT_TRUE(one.colourCalibration.empty());
+    const EnergyCalibration::Scales s = one.calibration.scales(Vec3{0, 0, 1});
+    EXPECT_NEAR(s.r.r, std::exp(0.1), 1e-12);
+    EXPECT_NEAR(s.m.g, std::exp(-0.2), 1e-12);
+    EXPECT_NEAR(s.r.b, std::exp(0.175), 1e-12);
+    // What a file may not say: the by-colour form before version 3 or for a
+    // model of one colour; node colours out of order.
+    nlohmann::json two = j;
+    two["version"] = 2;
+    testing::expectInputError([&] { yarnModelFromJson(two, "model.json"); },
+                              {"model.json", "energy_calibration", "c_tt"});
+    nlohmann::json unordered = j;
+    unordered["energy_calibration"]["c_tt"] = {0.9, 0.3};
+    testing::expectInputError([&] { yarnModelFromJson(unordered, "model.json"); },
+                              {"model.json", "c_tt[1]", "increase strictly"});
+    YarnModel plain = loadYarnModel(testing::testModelPath("fleece-small"));
+    plain.colourCalibration = twoNodeCalibration();
+    testing::expectInputError([&] { plain.validate(); }, {"only a conditioned model"});
 }
 
 TEST(ColourModel, BsdfOfAConditionedModelIsThatOfItsOwnColour) {

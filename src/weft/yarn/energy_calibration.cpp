@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "weft/core/error.h"
+
 namespace weft {
 
 void EnergyCalibration::basis(const Vec3& w, int degree, double* out) {
@@ -48,6 +50,58 @@ EnergyCalibration::Scales EnergyCalibration::scales(const Vec3& wi) const {
         (j < 3 ? s.r : s.m)[j % 3] = std::exp(std::clamp(logScale, -kMaxLogScale, kMaxLogScale));
     }
     return s;
+}
+
+double ColourCalibration::variableOf(double c) { return std::sqrt(-std::log(c)); }
+
+void ColourCalibration::validate(const std::string& what) const {
+    if (nodes.empty() || nodes.size() != cTT.size())
+        throw InputError(what + ": expected one calibration per node colour and at least one, got " +
+                         std::to_string(nodes.size()) + " for " + std::to_string(cTT.size()) +
+                         " colours");
+    for (size_t g = 0; g < cTT.size(); ++g) {
+        if (!(cTT[g] > 0 && cTT[g] <= 1) || (g > 0 && !(cTT[g] > cTT[g - 1])))
+            throw InputError(what + ".c_tt[" + std::to_string(g) +
+                             "]: node colours must increase strictly within (0, 1]");
+        const EnergyCalibration& n = nodes[g];
+        const size_t terms = static_cast<size_t>(EnergyCalibration::termCount(n.degree));
+        if (n.degree != nodes[0].degree || n.degree < 0 ||
+            n.degree > EnergyCalibration::kMaxDegree)
+            throw InputError(what + ": node " + std::to_string(g) + " has degree " +
+                             std::to_string(n.degree) + "; every node needs the same degree in [0, " +
+                             std::to_string(EnergyCalibration::kMaxDegree) + "]");
+        for (int c = 0; c < 3; ++c)
+            if (n.r[c].size() != terms || n.m[c].size() != terms)
+                throw InputError(what + ": node " + std::to_string(g) + " needs " +
+                                 std::to_string(terms) + " coefficients per channel for R and M");
+    }
+}
+
+EnergyCalibration ColourCalibration::at(const Rgb& colour) const {
+    EnergyCalibration cal;
+    if (empty()) return cal;
+    cal.degree = nodes[0].degree;
+    const size_t last = cTT.size() - 1;
+    for (int c = 0; c < 3; ++c) {
+        // The interval [g, g + 1] around the channel's colour and the weight of g + 1.
+        const double x = std::clamp(colour[c], cTT.front(), cTT.back());
+        size_t g = 0;
+        while (g + 1 < last && x > cTT[g + 1]) ++g;
+        double t = 0;
+        if (last > 0) {
+            const double u0 = variableOf(cTT[g]), u1 = variableOf(cTT[g + 1]);
+            t = std::clamp((variableOf(x) - u0) / (u1 - u0), 0.0, 1.0);
+        }
+        const EnergyCalibration& a = nodes[g];
+        const EnergyCalibration& b = nodes[std::min(g + 1, last)];
+        cal.r[c].resize(a.r[c].size());
+        cal.m[c].resize(a.m[c].size());
+        for (size_t k = 0; k < a.r[c].size(); ++k) {
+            cal.r[c][k] = (1 - t) * a.r[c][k] + t * b.r[c][k];
+            cal.m[c][k] = (1 - t) * a.m[c][k] + t * b.m[c][k];
+        }
+    }
+    return cal;
 }
 
 }  // namespace weft

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <array>
+#include <string>
 #include <vector>
 
 #include "weft/core/rgb.h"
@@ -46,6 +47,28 @@ struct EnergyCalibration {
     };
     // Scales at an upper-hemisphere wi (all 1 when empty()).
     Scales scales(const Vec3& wi) const;
+};
+
+// The energy calibration of a colour-conditioned model (docs/colour.md): one
+// EnergyCalibration per node colour, fitted at the grey C_TT = node, and for
+// any C_TT, per channel c, the coefficients of channel c interpolated
+// linearly in u = sqrt(-ln C_TT,c) between the two nodes around C_TT,c
+// (clamped to the first and last node). A channel's RDM depends on its own
+// C_TT only (gather/colour_paths.h), so a grey node calibrates every channel
+// at that value.
+struct ColourCalibration {
+    std::vector<double> cTT;               // node colours, strictly increasing, in (0, 1]
+    std::vector<EnergyCalibration> nodes;  // one per node, all of one degree
+
+    bool empty() const { return nodes.empty(); }
+    // The interpolation variable u = sqrt(-ln c).
+    static double variableOf(double c);
+    // InputError naming `what` unless there is at least one node, the node
+    // colours are strictly increasing in (0, 1], and every node has the same
+    // degree and 3 rows of (degree + 1)^2 coefficients for R and M.
+    void validate(const std::string& what) const;
+    // The calibration of the model of colour cTT (each channel in [0, 1]).
+    EnergyCalibration at(const Rgb& cTT) const;
 };
 
 }  // namespace weft

@@ -32,6 +32,7 @@ const NumberRange kBetaMRange = NumberRange::openClosed(0, 90).with("degrees");
 const NumberRange kGammaMRange = NumberRange::openClosed(0, 180).with("degrees");
 constexpr const char* kMaskingForm = "symmetric-quadratic";
 constexpr const char* kCalibrationForm = "log-polynomial-sphere";
+constexpr const char* kColourCalibrationForm = "log-polynomial-sphere-by-c-tt";
 
 // "1 output", "3 outputs".
 std::string plural(int n, const std::string& noun) {
@@ -182,30 +183,67 @@ SamplingParams readSampling(const JsonObjectReader& model) {
     return p;
 }
 
-// null or absent (files written before it existed): none.
-EnergyCalibration readCalibration(const JsonObjectReader& model) {
+// Rows "r" and "m" of one calibration (3 channels of (degree + 1)^2 numbers)
+// from `rows` at JSON path `path`.
+void readCalibrationRows(const json& rows, const std::string& source, const std::string& path,
+                         int degree, std::array<std::vector<double>, 3>* target) {
+    const size_t terms = static_cast<size_t>(EnergyCalibration::termCount(degree));
+    if (!rows.is_array() || rows.size() != 3)
+        throwJsonError(source, path,
+                       "expected 3 rows (R, G, B) of " + std::to_string(terms) + " numbers, got " +
+                           describeJson(rows));
+    for (size_t c = 0; c < 3; ++c) {
+        const std::string rowPath = jsonIndexPath(path, c);
+        if (!rows[c].is_array() || rows[c].size() != terms)
+            throwJsonError(source, rowPath,
+                           "expected an array of " + std::to_string(terms) +
+                               " numbers ((degree + 1)^2), got " + describeJson(rows[c]));
+        for (size_t k = 0; k < terms; ++k)
+            (*target)[c].push_back(readJsonNumber(rows[c][k], source, jsonIndexPath(rowPath, k)));
+    }
+}
+
+// null or absent (files written before it existed): none. The by-colour form
+// (a conditioned model's, version 3) goes to *byColour.
+EnergyCalibration readCalibration(const JsonObjectReader& model, bool conditioned, int64_t version,
+                                  ColourCalibration* byColour) {
     EnergyCalibration cal;
     if (!model.has("energy_calibration") || model.isNull("energy_calibration")) return cal;
-    const JsonObjectReader r = model.object("energy_calibration", {"form", "degree", "r", "m"});
-    r.oneOf("form", {kCalibrationForm});
-    cal.degree = static_cast<int>(r.integer("degree", {0, EnergyCalibration::kMaxDegree}));
-    const size_t terms = static_cast<size_t>(EnergyCalibration::termCount(cal.degree));
-    for (const auto& [key, target] : {std::pair{"r", &cal.r}, std::pair{"m", &cal.m}}) {
-        const std::string path = r.pathOf(key);
-        const json& rows = r.value(key);
-        if (!rows.is_array() || rows.size() != 3)
-            r.fail(key, "expected 3 rows (R, G, B) of " + std::to_string(terms) + " numbers, got " +
-                            describeJson(rows));
-        for (size_t c = 0; c < 3; ++c) {
-            const std::string rowPath = jsonIndexPath(path, c);
-            if (!rows[c].is_array() || rows[c].size() != terms)
-                throwJsonError(r.source(), rowPath,
-                               "expected an array of " + std::to_string(terms) +
-                                   " numbers ((degree + 1)^2), got " + describeJson(rows[c]));
-            for (size_t k = 0; k < terms; ++k)
-                (*target)[c].push_back(
-                    readJsonNumber(rows[c][k], r.source(), jsonIndexPath(rowPath, k)));
+    const bool colourForm = conditioned && version >= 3;
+    const JsonObjectReader r =
+        colourForm ? model.object("energy_calibration", {"form", "degree", "c_tt", "r", "m"})
+                   : model.object("energy_calibration", {"form", "degree", "r", "m"});
+    r.oneOf("form", {colourForm ? kColourCalibrationForm : kCalibrationForm});
+    const int degree = static_cast<int>(r.integer("degree", {0, EnergyCalibration::kMaxDegree}));
+    if (!colourForm) {
+        cal.degree = degree;
+        readCalibrationRows(r.value("r"), r.source(), r.pathOf("r"), degree, &cal.r);
+        readCalibrationRows(r.value("m"), r.source(), r.pathOf("m"), degree, &cal.m);
+        return cal;
+    }
+    const json& colours = r.value("c_tt");
+    if (!colours.is_array() || colours.empty())
+        r.fail("c_tt", "expected an array of node colours, got " + describeJson(colours));
+    for (size_t g = 0; g < colours.size(); ++g)
+        byColour->cTT.push_back(
+            readJsonNumber(colours[g], r.source(), jsonIndexPath(r.pathOf("c_tt"), g)));
+    byColour->nodes.resize(colours.size());
+    for (const char* key : {"r", "m"}) {
+        const json& perNode = r.value(key);
+        if (!perNode.is_array() || perNode.size() != colours.size())
+            r.fail(key, "expected one block of rows per node colour (" +
+                            std::to_string(colours.size()) + "), got " + describeJson(perNode));
+        for (size_t g = 0; g < colours.size(); ++g) {
+            EnergyCalibration& node = byColour->nodes[g];
+            node.degree = degree;
+            readCalibrationRows(perNode[g], r.source(), jsonIndexPath(r.pathOf(key), g), degree,
+                                key[0] == 'r' ? &node.r : &node.m);
         }
+    }
+    try {
+        byColour->validate("energy_calibration");
+    } catch (const InputError& e) {
+        throw InputError(r.source() + ": " + e.what());
     }
     return cal;
 }
@@ -315,9 +353,12 @@ void YarnModel::validate() const {
                       "a conditioned model's colour functions combine its outputs before exp");
         if (ablation != YarnAblation::None || !calibration.empty())
             throw InputError("colour: a conditioned model has no ablation and no "
-                             "energy_calibration");
+                             "energy_calibration of one colour");
+        if (!colourCalibration.empty()) colourCalibration.validate("energy_calibration");
     } else {
         mNet.validate("m_net", 6, 3, OutputFunction::Exp, "S_M must be non-negative");
+        if (!colourCalibration.empty())
+            throw InputError("energy_calibration: only a conditioned model has one by colour");
     }
     rLobe.validate();
     sampling.validate();
@@ -336,7 +377,9 @@ YarnModel YarnModel::forColour(const Rgb& cTT, const std::string& what) const {
     YarnModel m = *this;
     m.fiber.cTT = cTT;
     m.mNet = foldColourIntoNetwork(mNet, *colour, cTT);
+    m.calibration = colourCalibration.at(cTT);
     m.colour.reset();
+    m.colourCalibration = {};
     return m;
 }
 
@@ -365,13 +408,27 @@ nlohmann::json yarnModelToJson(const YarnModel& model) {
     if (!model.rLobe.masking.empty())
         masking = {{"form", kMaskingForm}, {"coefficients", model.rLobe.masking}};
     json calibration = nullptr;
-    if (!model.calibration.empty())
+    const ColourCalibration& byColour = model.colourCalibration;
+    if (!model.calibration.empty()) {
         calibration = {{"form", kCalibrationForm},
                        {"degree", model.calibration.degree},
                        {"r", model.calibration.r},
                        {"m", model.calibration.m}};
+    } else if (!byColour.empty()) {
+        json r = json::array(), m = json::array();
+        for (const EnergyCalibration& node : byColour.nodes) r.push_back(node.r), m.push_back(node.m);
+        calibration = {{"form", kColourCalibrationForm},
+                       {"degree", byColour.nodes[0].degree},
+                       {"c_tt", byColour.cTT},
+                       {"r", r},
+                       {"m", m}};
+    }
+    // Version 1 for a model of one colour, 2 for a conditioned one, 3 when it
+    // has an energy calibration by colour: older readers refuse what they
+    // cannot read.
+    const int version = model.colour ? (byColour.empty() ? 2 : 3) : 1;
     json document = {{"format", kYarnModelFormat},
-                     {"version", model.colour ? 2 : 1},
+                     {"version", version},
                      {"fiber", model.fiber.toJson()},
                      {"ply",
                       {{"fibers", model.ply.fibers},
@@ -428,7 +485,8 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     model.mNet = readNetwork(r, "m_net", 6, model.colour ? 3 * model.colour->functions() : 3);
     model.rLobe = readRLobe(r);
     model.sampling = readSampling(r);
-    model.calibration = readCalibration(r);
+    model.calibration =
+        readCalibration(r, model.colour.has_value(), version, &model.colourCalibration);
     r.object("fit");  // an object, written back as is
     model.fit = r.value("fit");
     if (r.has("ablation")) model.ablation = readAblation(r);

@@ -13,13 +13,17 @@
 //   fit       errors and provenance of the fit (free-form numbers and strings)
 //   ablation  optional: "naive" or "no_r_lobe" for the ablations of paper
 //             Fig. 5 (YarnAblation below); absent for the full model
-//   colour    version 2 only, optional: a colour-conditioned model (fitted
+//   colour    version 2 and 3, optional: a colour-conditioned model (fitted
 //             from one any-colour gather, docs/colour.md) for any C_TT in
 //             "c_tt_range": m_net then has 3K outputs and an identity output,
 //             and "functions" holds the K colour functions (yarn/colour_basis.h).
 //             forColour(C_TT) gives the ordinary model of one colour.
-// Version 1 files (no "colour") still load; the writer writes version 1
-// unless the model is conditioned.
+//             Version 3: its energy_calibration may be the by-colour form
+//             (ColourCalibration: "c_tt" node colours and per node the rows
+//             of r and m).
+// Version 1 and 2 files still load; the writer writes version 1 unless the
+// model is conditioned, 2 for a conditioned model without a calibration, 3
+// with one.
 // Networks: {"layers": [{"weight": [[in numbers] x out rows], "bias": [out],
 // "prelu": [out] or null}, ...], "output": "sigmoid" | "exp" | "identity"};
 // layer l computes y = W x + b, then the PReLU when present. Network inputs
@@ -41,7 +45,7 @@
 namespace weft {
 
 inline constexpr const char* kYarnModelFormat = "weft-yarn-model";
-inline constexpr int kYarnModelVersion = 2;  // the newest; 1 is read too
+inline constexpr int kYarnModelVersion = 3;  // the newest; 1 and 2 are read too
 
 // The R lobe (paper eq. 8): (1 - P(T|wi)) S_f(wi~, wo~) in the surface fiber
 // frame (tangent tilted by tiltDeg = atan(pi alpha) about n), zero unless both
@@ -92,8 +96,11 @@ struct YarnModel {
     EnergyCalibration calibration;  // empty: none
     nlohmann::json fit = nlohmann::json::object();  // errors and provenance, written as is
     YarnAblation ablation = YarnAblation::None;
-    // A colour-conditioned model: the colour functions of its M network.
+    // A colour-conditioned model: the colour functions of its M network, and
+    // (version 3, optional) its energy calibration by colour; such a model's
+    // `calibration` is empty, forColour() makes it from colourCalibration.
     std::optional<ColourBasis> colour;
+    ColourCalibration colourCalibration;
 
     // What the renderer needs beyond the file's syntax (InputError naming the
     // key): the networks' shapes (t_net 3 -> 1, m_net 6 -> 3) and output

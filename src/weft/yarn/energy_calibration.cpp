@@ -55,8 +55,9 @@ EnergyCalibration::Scales EnergyCalibration::scales(const Vec3& wi) const {
 double ColourCalibration::variableOf(double c) { return std::sqrt(-std::log(c)); }
 
 void ColourCalibration::validate(const std::string& what) const {
-    if (nodes.empty() || nodes.size() != cTT.size())
-        throw InputError(what + ": expected one calibration per node colour and at least one, got " +
+    if (nodes.empty() || nodes.size() != cTT.size() || nodes.size() > kMaxNodes)
+        throw InputError(what + ": expected one calibration per node colour, 1 to " +
+                         std::to_string(kMaxNodes) + " of them, got " +
                          std::to_string(nodes.size()) + " for " + std::to_string(cTT.size()) +
                          " colours");
     for (size_t g = 0; g < cTT.size(); ++g) {

@@ -57,13 +57,14 @@ struct EnergyCalibration {
 // C_TT only (gather/colour_paths.h), so a grey node calibrates every channel
 // at that value.
 struct ColourCalibration {
+    static constexpr int kMaxNodes = 64;
     std::vector<double> cTT;               // node colours, strictly increasing, in (0, 1]
     std::vector<EnergyCalibration> nodes;  // one per node, all of one degree
 
     bool empty() const { return nodes.empty(); }
     // The interpolation variable u = sqrt(-ln c).
     static double variableOf(double c);
-    // InputError naming `what` unless there is at least one node, the node
+    // InputError naming `what` unless there are 1 to kMaxNodes nodes, the node
     // colours are strictly increasing in (0, 1], and every node has the same
     // degree and 3 rows of (degree + 1)^2 coefficients for R and M.
     void validate(const std::string& what) const;

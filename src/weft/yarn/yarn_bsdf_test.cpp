@@ -521,7 +521,7 @@ TEST_F(YarnBsdfFile, LoadNamesTheFile) {
         writeFileAtomic(path("bad.json"), bad);
         testing::expectInputError([&] { YarnBsdf::load(path("bad.json")); }, parts);
     };
-    expectLoadError("\"version\": 1", "\"version\": 3", {"bad.json", "version"});
+    expectLoadError("\"version\": 1", "\"version\": 4", {"bad.json", "version"});
     expectLoadError("\"kappa_m\"", "\"kappa_mm\"", {"bad.json", "sampling", "kappa_mm"});
     expectLoadError("\"output\": \"sigmoid\"", "\"output\": \"exp\"", {"bad.json", "t_net.output"});
     expectLoadError("\"bias\": [", "\"bias\": [NaN, ", {"bad.json"});

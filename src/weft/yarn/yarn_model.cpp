@@ -222,8 +222,10 @@ EnergyCalibration readCalibration(const JsonObjectReader& model, bool conditione
         return cal;
     }
     const json& colours = r.value("c_tt");
-    if (!colours.is_array() || colours.empty())
-        r.fail("c_tt", "expected an array of node colours, got " + describeJson(colours));
+    if (!colours.is_array() || colours.empty() ||
+        colours.size() > static_cast<size_t>(ColourCalibration::kMaxNodes))
+        r.fail("c_tt", "expected an array of 1 to " + std::to_string(ColourCalibration::kMaxNodes) +
+                           " node colours, got " + describeJson(colours));
     for (size_t g = 0; g < colours.size(); ++g)
         byColour->cTT.push_back(
             readJsonNumber(colours[g], r.source(), jsonIndexPath(r.pathOf("c_tt"), g)));

@@ -102,8 +102,20 @@ TEST_F(FitCliTest, ColourRangeFitsAModelForAnyColour) {
                     {"--colour-functions needs --colour-range"});
     expectUserError(run("fit --rdm ac --out x.json --colour-range 0.3,0.9 --ablation naive"),
                     {"--colour-range", "--ablation"});
-    expectUserError(run("fit --rdm ac --out x.json --recalibrate any.json"),
-                    {"colour-conditioned", "energy calibration"});
+    // --recalibrate refits the calibration by colour from the recorded paths,
+    // keeping the networks; an ordinary gather has none.
+    const RunResult re = run("fit --recalibrate any.json --rdm ac --out re.json --config short.json "
+                             "--no-report --quiet");
+    ASSERT_EQ(re.status, 0) << re.err;
+    const YarnModel again = loadYarnModel(path("re.json"));
+    EXPECT_TRUE(again.mNet == model.mNet);
+    ASSERT_EQ(again.colourCalibration.nodes.size(), 7u);
+    EXPECT_EQ(again.colourCalibration.nodes[3].m, model.colourCalibration.nodes[3].m);
+    EXPECT_TRUE(again.fit.contains("recalibrated"));
+    EXPECT_EQ(nlohmann::json::parse(re.out).at("colour").at("energy_calibration").at("nodes").size(),
+              7u);
+    expectUserError(run("fit --rdm rdm --out x.json --recalibrate any.json"),
+                    {"rdm/meta.json", "--any-colour"});
     EXPECT_FALSE(std::filesystem::exists(path("x.json")));
 }
 

@@ -90,10 +90,17 @@ void runFit(const FitCliOptions& c) {
     }
     std::unique_ptr<RdmData> reference;
     if (!c.reference.empty()) reference = std::make_unique<RdmData>(loadRdm(c.reference));
+    std::unique_ptr<YarnModel> recalibrated;
+    if (!c.recalibrate.empty()) {
+        recalibrated = std::make_unique<YarnModel>(loadYarnModel(c.recalibrate));
+        // A conditioned model is recalibrated from the gather's recorded paths.
+        if (recalibrated->colour) colourPaths = loadColourPaths(c.rdm);
+    }
     const FitResult fit =
         c.recalibrate.empty()
             ? fitYarnModel(rdm, config, c.seed, c.quiet, ablation, colour.get())
-            : recalibrateYarnModel(loadYarnModel(c.recalibrate), rdm, config, c.quiet);
+            : recalibrateYarnModel(*recalibrated, rdm, config, c.quiet,
+                                   recalibrated->colour ? &colourPaths : nullptr);
     saveYarnModel(fit.model, c.out);
     if (!c.noReport) {
         // An ablated model is measured against what it was fitted to (fit.h, ablationTarget).
@@ -118,7 +125,7 @@ void runFit(const FitCliOptions& c) {
         {"r_rel_l2_eq8", finiteOrNull(r.rRelL2Eq8)},
         {"seconds", r.seconds},
         {"m_samples_per_second", r.mSamplesPerSecond}};
-    if (colour) summary["colour"] = r.colour;
+    if (colour || fit.model.colour) summary["colour"] = r.colour;
     std::printf("%s\n", summary.dump().c_str());
 }
 

@@ -298,11 +298,67 @@ std::vector<Rgb> colourFitTestColours(const ColourRange& range) {
     return colours;
 }
 
+namespace {
+
+// recalibrateYarnModel for a colour-conditioned model (fit.h).
+FitResult recalibrateConditioned(const YarnModel& fitted, const RdmData& rdm,
+                                 const FitConfig& config, bool quiet,
+                                 const std::vector<ColourPath>* paths) {
+    if (!paths)
+        throw InputError("--recalibrate: " + rdm.dir +
+                         " has no recorded paths; a colour-conditioned model is recalibrated "
+                         "from a gather made with --any-colour");
+    const auto t0 = Clock::now();
+    const int threads = config.threads > 0 ? config.threads : tbb::this_task_arena::max_concurrency();
+    FitResult result;
+    result.model = fitted;
+    YarnModel& model = result.model;
+    FitReport& report = result.report;
+    nlohmann::json nodes = nullptr;
+    model.colourCalibration = {};
+    if (config.calibrationDegree >= 0)
+        model.colourCalibration =
+            fitColourCalibration(model, rdm, *paths, config.calibrationDegree, threads, &nodes);
+    // The errors and the sampling lobe at the gathered colour, as a conditioned fit has them.
+    YarnModel own = model.forColour(model.fiber.cTT, "--recalibrate");
+    std::vector<float> rFit, mFit;
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+        rFit = modelReflectionMap(own, rdm.bins);
+        mFit = modelMultipleScatteringMap(own, rdm.bins);
+    });
+    report.rRelL2 = coarseRelativeL2(rFit, rdm.rdmR, rdm.bins);
+    report.mRelL2 = coarseRelativeL2(mFit, rdm.rdmM, rdm.bins);
+    report.tRmse = transmissionError(modelTransmissionMap(own, rdm.bins), rdm).weighted;
+    report.rRelL2Eq8 = fitted.fit.value("r_rel_l2_eq8", 0.0);
+    FitConfig oneColour = config;
+    oneColour.calibrationDegree = -1;
+    finishFit(own, rdm, oneColour, threads, quiet, rFit, mFit, report);
+    model.sampling = own.sampling;
+    report.seconds = secondsSince(t0);
+    report.colour = fitted.fit.value("colour", nlohmann::json::object());
+    report.colour["energy_calibration"] =
+        model.colourCalibration.empty()
+            ? nlohmann::json(nullptr)
+            : nlohmann::json{{"form", "by colour"},
+                             {"degree", model.colourCalibration.nodes[0].degree},
+                             {"nodes", nodes}};
+    nlohmann::json record = fitted.fit;
+    record["colour"] = report.colour;
+    record["m_second_moment"] = report.mSecondMoment;
+    record["recalibrated"] = {{"rdm", rdm.dir},
+                              {"energy_calibration_degree", config.calibrationDegree},
+                              {"seconds", report.seconds}};
+    model.fit = record;
+    return result;
+}
+
+}  // namespace
+
 FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& gathered,
-                               const FitConfig& config, bool quiet) {
-    if (fitted.colour)
-        throw InputError("--recalibrate: a colour-conditioned model's energy calibration is by "
-                         "colour, from the recorded paths; refit it with weft fit --colour-range");
+                               const FitConfig& config, bool quiet,
+                               const std::vector<ColourPath>* paths) {
+    if (fitted.colour) return recalibrateConditioned(fitted, gathered, config, quiet, paths);
     const auto t0 = Clock::now();
     RdmData ablated;
     if (fitted.ablation != YarnAblation::None) ablated = ablationTarget(gathered, fitted.ablation);

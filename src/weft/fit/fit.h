@@ -113,9 +113,12 @@ size_t transmissionOutgoingBin(const RdmBins& bins, size_t incidentBin);
 // calibration replaced): for models fitted before the calibration existed or
 // with another configuration. The fit record keeps the original entries and
 // gets the new errors and a "recalibrated" entry. An ablated model is
-// recalibrated against its ablationTarget(rdm).
+// recalibrated against its ablationTarget(rdm). A colour-conditioned model
+// gets its calibration by colour again (fitColourCalibration) from `paths`,
+// the recorded paths of the any-colour gather `rdm` (InputError without
+// them), and the sampling lobe of its gathered colour.
 FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& rdm, const FitConfig& config,
-                               bool quiet);
+                               bool quiet, const std::vector<ColourPath>* paths = nullptr);
 
 // The report next to a model: errors.json, loss.png, and RDM-vs-fit slice
 // PNGs for a few incident directions; `reference` (an independent gather of

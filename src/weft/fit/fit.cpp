@@ -300,6 +300,32 @@ std::vector<Rgb> colourFitTestColours(const ColourRange& range) {
 
 namespace {
 
+// What a recalibration keeps, measured before steps 4-5: the R and M maps of
+// `model` on the RDM's bins (for finishFit) and the errors of R, M and T, with
+// eq. 8's R error from the original record of `fitted`.
+void measureKeptParts(const YarnModel& model, const YarnModel& fitted, const RdmData& rdm,
+                      int threads, std::vector<float>* rFit, std::vector<float>* mFit,
+                      FitReport& report) {
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+        *rFit = modelReflectionMap(model, rdm.bins);
+        *mFit = modelMultipleScatteringMap(model, rdm.bins);
+    });
+    report.rRelL2 = coarseRelativeL2(*rFit, rdm.rdmR, rdm.bins);
+    report.mRelL2 = coarseRelativeL2(*mFit, rdm.rdmM, rdm.bins);
+    report.tRmse = model.hasTransmissionLobe()
+                       ? transmissionError(modelTransmissionMap(model, rdm.bins), rdm).weighted
+                       : 0.0;
+    report.rRelL2Eq8 = fitted.fit.value("r_rel_l2_eq8", 0.0);
+}
+
+// The fit record's "recalibrated" entry.
+nlohmann::json recalibratedEntry(const RdmData& rdm, const FitConfig& config, double seconds) {
+    return {{"rdm", rdm.dir},
+            {"energy_calibration_degree", config.calibrationDegree},
+            {"seconds", seconds}};
+}
+
 // recalibrateYarnModel for a colour-conditioned model (fit.h).
 FitResult recalibrateConditioned(const YarnModel& fitted, const RdmData& rdm,
                                  const FitConfig& config, bool quiet,
@@ -322,15 +348,7 @@ FitResult recalibrateConditioned(const YarnModel& fitted, const RdmData& rdm,
     // The errors and the sampling lobe at the gathered colour, as a conditioned fit has them.
     YarnModel own = model.forColour(model.fiber.cTT, "--recalibrate");
     std::vector<float> rFit, mFit;
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-        rFit = modelReflectionMap(own, rdm.bins);
-        mFit = modelMultipleScatteringMap(own, rdm.bins);
-    });
-    report.rRelL2 = coarseRelativeL2(rFit, rdm.rdmR, rdm.bins);
-    report.mRelL2 = coarseRelativeL2(mFit, rdm.rdmM, rdm.bins);
-    report.tRmse = transmissionError(modelTransmissionMap(own, rdm.bins), rdm).weighted;
-    report.rRelL2Eq8 = fitted.fit.value("r_rel_l2_eq8", 0.0);
+    measureKeptParts(own, fitted, rdm, threads, &rFit, &mFit, report);
     FitConfig oneColour = config;
     oneColour.calibrationDegree = -1;
     finishFit(own, rdm, oneColour, threads, quiet, rFit, mFit, report);
@@ -346,9 +364,7 @@ FitResult recalibrateConditioned(const YarnModel& fitted, const RdmData& rdm,
     nlohmann::json record = fitted.fit;
     record["colour"] = report.colour;
     record["m_second_moment"] = report.mSecondMoment;
-    record["recalibrated"] = {{"rdm", rdm.dir},
-                              {"energy_calibration_degree", config.calibrationDegree},
-                              {"seconds", report.seconds}};
+    record["recalibrated"] = recalibratedEntry(rdm, config, report.seconds);
     model.fit = record;
     return result;
 }
@@ -370,17 +386,7 @@ FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& gathered,
     FitReport& report = result.report;
     model.calibration = EnergyCalibration{};
     std::vector<float> rFit, mFit;
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-        rFit = modelReflectionMap(model, rdm.bins);
-        mFit = modelMultipleScatteringMap(model, rdm.bins);
-    });
-    report.rRelL2 = coarseRelativeL2(rFit, rdm.rdmR, rdm.bins);
-    report.mRelL2 = coarseRelativeL2(mFit, rdm.rdmM, rdm.bins);
-    report.tRmse = model.hasTransmissionLobe()
-                      ? transmissionError(modelTransmissionMap(model, rdm.bins), rdm).weighted
-                      : 0.0;
-    report.rRelL2Eq8 = fitted.fit.value("r_rel_l2_eq8", 0.0);
+    measureKeptParts(model, fitted, rdm, threads, &rFit, &mFit, report);
     finishFit(model, rdm, config, threads, quiet, rFit, mFit, report);
     report.seconds = secondsSince(t0);
     // Keep the original record (training errors, timings, seed); update what moved.
@@ -397,9 +403,7 @@ FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& gathered,
     }
     record["m_second_moment"] = report.mSecondMoment;
     record["energy_calibration"] = report.calibration;
-    record["recalibrated"] = {{"rdm", rdm.dir},
-                              {"energy_calibration_degree", config.calibrationDegree},
-                              {"seconds", report.seconds}};
+    record["recalibrated"] = recalibratedEntry(rdm, config, report.seconds);
     model.fit = record;
     return result;
 }

@@ -48,8 +48,8 @@ OriginContext makeContext(const TubeId& origin,
         ctx.endSegment = origin.tube + 1 < info.tubeFirstSegment.size()
                              ? info.tubeFirstSegment[origin.tube + 1]
                              : info.segmentCount;
-        ctx.selfHitDistance = static_cast<float>(TubeAccel::kSelfHitDistance *
-                                                 info.tubeRadius[origin.tube]);
+        ctx.selfHitDistance =
+            static_cast<float>(TubeAccel::kSelfHitDistance * info.tubeRadius[origin.tube]);
     } else {
         ctx.context.filter = nullptr;
     }

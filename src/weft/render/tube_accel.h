@@ -90,7 +90,7 @@ class TubeAccel {
         std::vector<int> materialAlong;          // empty, or per segment index along a tube
         std::vector<uint32_t> tubeFirstSegment;  // ascending; segment -> tube by binary search
         uint32_t segmentCount = 0;
-        std::vector<float> tubeRadius;           // largest radius of each tube
+        std::vector<float> tubeRadius;  // largest radius of each tube
         // Embree's buffers (owned by the geometry the scene holds), for the hit tangent.
         const float* vertices = nullptr;    // x, y, z, r per vertex
         const unsigned* indices = nullptr;  // first vertex of each segment

@@ -66,10 +66,10 @@ void ColourCalibration::validate(const std::string& what) const {
                              "]: node colours must increase strictly within (0, 1]");
         const EnergyCalibration& n = nodes[g];
         const size_t terms = static_cast<size_t>(EnergyCalibration::termCount(n.degree));
-        if (n.degree != nodes[0].degree || n.degree < 0 ||
-            n.degree > EnergyCalibration::kMaxDegree)
+        if (n.degree != nodes[0].degree || n.degree < 0 || n.degree > EnergyCalibration::kMaxDegree)
             throw InputError(what + ": node " + std::to_string(g) + " has degree " +
-                             std::to_string(n.degree) + "; every node needs the same degree in [0, " +
+                             std::to_string(n.degree) +
+                             "; every node needs the same degree in [0, " +
                              std::to_string(EnergyCalibration::kMaxDegree) + "]");
         for (int c = 0; c < 3; ++c)
             if (n.r[c].size() != terms || n.m[c].size() != terms)

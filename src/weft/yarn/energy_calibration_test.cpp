@@ -94,8 +94,11 @@ TEST(ColourCalibration, ValidateNamesWhatIsWrong) {
     c.nodes[1] = testNode(1);
     c.nodes[1].m[2].pop_back();
     testing::expectInputError([&] { c.validate("x"); }, {"node 1", "4 coefficients"});
-    testing::expectInputError([&] { ColourCalibration{{0.5}, {}}.validate("x"); },
-                              {"x", "one calibration per node colour", "1 to 64"});
+    testing::expectInputError(
+        [&] {
+            ColourCalibration{{0.5}, {}}.validate("x");
+        },
+        {"x", "one calibration per node colour", "1 to 64"});
 }
 
 }  // namespace

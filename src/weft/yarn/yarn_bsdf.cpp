@@ -87,9 +87,9 @@ const char* yarnSamplingName(YarnSampling sampling) {
 
 size_t YarnBsdf::memoryBytes() const {
     auto bytes = [](const auto& v) { return v.size() * sizeof(v[0]); };
-    return sizeof(*this) + rLobe_.fiber().memoryBytes() - sizeof(FiberBcsdf) + bytes(guardReflectance_) +
-           bytes(guardEnergyM_) + bytes(guardCell_) + table_.bytes() + bytes(peakMasking_) +
-           bytes(tableEnergyM_) + bytes(tableEnergyR_);
+    return sizeof(*this) + rLobe_.fiber().memoryBytes() - sizeof(FiberBcsdf) +
+           bytes(guardReflectance_) + bytes(guardEnergyM_) + bytes(guardCell_) + table_.bytes() +
+           bytes(peakMasking_) + bytes(tableEnergyM_) + bytes(tableEnergyR_);
 }
 
 YarnBsdf YarnBsdf::load(const std::string& path, const YarnBsdfOptions& options) {

@@ -176,6 +176,7 @@ EnergyCalibration fitEnergyCalibration(const YarnModel& model, const RdmData& rd
     }
     return cal;
 }
+
 ColourCalibration fitColourCalibration(const YarnModel& model, const RdmData& rdm,
                                        const std::vector<ColourPath>& paths, int degree,
                                        int threads, nlohmann::json* summary) {

@@ -26,6 +26,14 @@ double secondsSince(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+// The fit record's entry for a calibration by colour: its degree and the
+// nodes' summaries (fitColourCalibration); null without one.
+nlohmann::json colourCalibrationRecord(const ColourCalibration& byColour,
+                                       const nlohmann::json& nodes) {
+    if (byColour.empty()) return nullptr;
+    return {{"form", "by colour"}, {"degree", byColour.nodes[0].degree}, {"nodes", nodes}};
+}
+
 // Steps 4 and 5 of the fit on a model whose networks and R lobe are in place;
 // rFit and mFit are its R and M maps on the RDM's bins (updated).
 void finishFit(YarnModel& model, const RdmData& rdm, const FitConfig& config, int threads,
@@ -257,9 +265,8 @@ FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_
             nlohmann::json nodes;
             model.colourCalibration = fitColourCalibration(
                 model, rdm, *colour->paths, config.calibrationDegree, threads, &nodes);
-            report.colour["energy_calibration"] = {
-                {"form", "by colour"}, {"degree", model.colourCalibration.nodes[0].degree},
-                {"nodes", nodes}};
+            report.colour["energy_calibration"] =
+                colourCalibrationRecord(model.colourCalibration, nodes);
             if (!quiet)
                 std::fprintf(stderr, "fit: energy calibration at %zu colours in %.1fs\n",
                              model.colourCalibration.nodes.size(), secondsSince(phase));
@@ -345,8 +352,11 @@ FitResult recalibrateConditioned(const YarnModel& fitted, const RdmData& rdm,
     if (config.calibrationDegree >= 0)
         model.colourCalibration =
             fitColourCalibration(model, rdm, *paths, config.calibrationDegree, threads, &nodes);
-    // The errors and the sampling lobe at the gathered colour, as a conditioned fit has them.
-    YarnModel own = model.forColour(model.fiber.cTT, "--recalibrate");
+    // The errors and the sampling lobe at the gathered colour, on the model
+    // without its calibration, as a conditioned fit has them.
+    YarnModel uncalibrated = model;
+    uncalibrated.colourCalibration = {};
+    YarnModel own = uncalibrated.forColour(model.fiber.cTT, "--recalibrate");
     std::vector<float> rFit, mFit;
     measureKeptParts(own, fitted, rdm, threads, &rFit, &mFit, report);
     FitConfig oneColour = config;
@@ -355,12 +365,7 @@ FitResult recalibrateConditioned(const YarnModel& fitted, const RdmData& rdm,
     model.sampling = own.sampling;
     report.seconds = secondsSince(t0);
     report.colour = fitted.fit.value("colour", nlohmann::json::object());
-    report.colour["energy_calibration"] =
-        model.colourCalibration.empty()
-            ? nlohmann::json(nullptr)
-            : nlohmann::json{{"form", "by colour"},
-                             {"degree", model.colourCalibration.nodes[0].degree},
-                             {"nodes", nodes}};
+    report.colour["energy_calibration"] = colourCalibrationRecord(model.colourCalibration, nodes);
     nlohmann::json record = fitted.fit;
     record["colour"] = report.colour;
     record["m_second_moment"] = report.mSecondMoment;

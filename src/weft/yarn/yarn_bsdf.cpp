@@ -304,14 +304,11 @@ Rgb YarnBsdf::reflectionPeak(const Vec3& wi, const Vec3& wo, const Incident& in)
     if (!hasReflection_ || wi.z <= 0 || wo.z <= 0) return Rgb();
     // FiberBcsdf's R term, F(theta_i) g_R(theta_o; -theta_i) / (2 pi) cos theta_o, in
     // the surface fiber frame, times (1 - P(T)) m and the calibration: S_R's sharp part.
-    const SurfaceFiberFrame& frame = lobes_.frame();
-    const Vec3 li = frame.toLocal(wi), lo = frame.toLocal(wo);
-    const double cosThetaI = std::sqrt(li.y * li.y + li.z * li.z);
-    const double cosThetaO = std::sqrt(lo.y * lo.y + lo.z * lo.z);
-    const double g =
-        peakLongitudinal().eval(std::atan2(lo.x, cosThetaO), -std::atan2(li.x, cosThetaI));
-    return rLobe_.fiber().fresnel(cosThetaI) * in.rScale *
-           ((1.0 - in.pT) * g * cosThetaO / kTwoPi * rLobe_.masking(wi, wo));
+    // theta_i and F(theta_i) come from the R lobe's fiber state, as in incident().
+    const FiberBcsdf::Angles out = outAngles(wo);
+    const double g = peakLongitudinal().eval(out.theta, -in.fiber.angles.theta);
+    return in.fiber.fresnel * in.rScale *
+           ((1.0 - in.pT) * g * out.cosTheta / kTwoPi * rLobe_.masking(wi, wo));
 }
 
 void YarnBsdf::buildSamplingTable() {

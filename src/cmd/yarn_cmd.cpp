@@ -76,6 +76,9 @@ void runCheck(const CheckOptions& o) {
         {"sampling_weights_worst_bin", s.at("sampling_weights").is_null()
                                            ? nlohmann::json(nullptr)
                                            : s.at("sampling_weights").at("worst_bin")},
+        {"sampling_weights_worst_channel_bin",
+         s.at("sampling_weights").is_null() ? nlohmann::json(nullptr)
+                                            : s.at("sampling_weights").at("worst_channel_bin")},
         {"seconds", s.at("seconds")}};
     if (o.dual) {
         const nlohmann::json& d = s.at("dual_baseline");

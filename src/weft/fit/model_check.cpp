@@ -28,6 +28,7 @@ namespace weft {
 namespace {
 
 constexpr double kAlbedoTolerance = 0.03;  // the target, reported as a fraction
+constexpr double kBrightChannel = 0.5;  // channels reported in sampling_weights' per-channel numbers
 
 // Polar and azimuthal angle (degrees) of an incident bin's centre.
 std::pair<double, double> binAngles(const RdmBins& bins, size_t i) {
@@ -141,6 +142,14 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
     std::vector<double> weights(nIn * 3);
     size_t worstWeightBin = 0;
     double worstWeightRatio = -1, largestWeight = 0, smallestMean = 1e300;
+    // And per colour channel, over the bright channels of each bin (albedo at
+    // least half the brightest's: a dark channel's paths end after a bounce
+    // or two, so its weights' spread hardly reaches the image): the bin and
+    // channel of the largest E[w_c^2] / E[w_c]^2, and the largest w_c over
+    // that channel's albedo.
+    size_t worstChannelBin = 0;
+    int worstChannel = 0;
+    double worstChannelRatio = -1, largestChannelWeight = 0;
     std::vector<double> componentsModel(nIn * 9), componentsRdm(nIn * 9);
     Rgb sumAbs, worst, modelMax, rdmMax, sumModel, sumRdm;
     Rgb guardedMax, sumAbsGuarded, worstGuarded;
@@ -178,6 +187,16 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
             if (ratio > worstWeightRatio) worstWeightRatio = ratio, worstWeightBin = i;
             largestWeight = std::max(largestWeight, weights[3 * i + 2]);
             smallestMean = std::min(smallestMean, weights[3 * i]);
+            for (int c = 0; c < 3; ++c) {
+                if (!(d.channelAlbedo[c] > 0) ||
+                    d.channelAlbedo[c] < kBrightChannel * d.channelAlbedo.maxComponent())
+                    continue;
+                const double channelRatio = d.channelSecondMomentRatio(c);
+                if (channelRatio > worstChannelRatio)
+                    worstChannelRatio = channelRatio, worstChannelBin = i, worstChannel = c;
+                largestChannelWeight =
+                    std::max(largestChannelWeight, d.channelWeightMax[c] / d.channelAlbedo[c]);
+            }
         }
         moments[3 * i] = d.secondMomentYarn;
         moments[3 * i + 1] = d.secondMomentUniform;
@@ -330,6 +349,19 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
                                  {"second_moment_ratio", w[1]},
                                  {"max_weight_over_albedo", w[2]},
                                  {"albedo_luminance", integrals[worstWeightBin].albedoLuminance}};
+        sampling["channel_second_moment_ratio_max"] = worstChannelRatio;
+        sampling["channel_max_weight_over_albedo_max"] = largestChannelWeight;
+        const DirectionalIntegrals& d = integrals[worstChannelBin];
+        const auto [channelTheta, channelPhi] = binAngles(bins, worstChannelBin);
+        const int c = worstChannel;
+        sampling["worst_channel_bin"] = {
+            {"theta_deg", channelTheta},
+            {"phi_deg", channelPhi},
+            {"channel", c},
+            {"mean_over_albedo", d.channelWeightMean[c] / d.channelAlbedo[c]},
+            {"second_moment_ratio", worstChannelRatio},
+            {"max_weight_over_albedo", d.channelWeightMax[c] / d.channelAlbedo[c]},
+            {"albedo", d.channelAlbedo[c]}};
     } else {
         sampling = nullptr;  // a black model: no weights to report
     }

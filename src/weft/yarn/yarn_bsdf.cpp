@@ -285,7 +285,7 @@ YarnBsdf::Incident YarnBsdf::incident(const Vec3& wi, double pT) const {
     if (hasReflection_) {
         // theta_i and F(theta_i) of q_R: the R lobe's fiber state has both.
         in.thetaI = in.fiber.angles.theta;
-        peak = 0.5 * (1.0 - pT) * luminance(in.fiber.fresnel * in.rScale) *
+        peak = 0.5 * (1.0 - pT) * (in.fiber.fresnel * in.rScale).average() *
                table_.blend(in.table, peakMasking_);
     }
     // The table's M term, and its R term (the fiber's TT lobe inside S_R) per unit 1 - P(T).
@@ -312,17 +312,23 @@ Rgb YarnBsdf::reflectionPeak(const Vec3& wi, const Vec3& wo, const Incident& in)
 }
 
 void YarnBsdf::buildSamplingTable() {
-    // The table follows the luminance of everything but the R peak, in two
-    // terms: S_M and the rest of S_R.
+    // The table follows the channel mean of everything but the R peak, in two
+    // terms: S_M and the rest of S_R. The mean, not the luminance: one
+    // direction serves three channels whose S can differ in shape (cotton's
+    // red reflects at the fibers, its blue scatters through them: blue / red
+    // reaches 30 away from the specular cone), and a channel's weight S_c /
+    // pdf stays below 3 E_mean where the table follows the mean, while
+    // luminance (blue 0.07) let blue weights reach 8 times the albedo, which
+    // over a near-white yarn's long paths made blue fireflies (docs/yarn.md).
     table_ = SamplingTable(
         lobes_.frame(), 2,
         [this](const Vec3& wi, const std::vector<Vec3>& wo, std::vector<double>& values) {
             const Incident in = incident(wi, transmissionUpper(wi));
             for (size_t k = 0; k < wo.size(); ++k) {
                 const Components c = componentsUpper(wi, wo[k], in);
-                values[2 * k] = std::max(0.0, luminance(c.m));
+                values[2 * k] = std::max(0.0, c.m.average());
                 values[2 * k + 1] =
-                    hasReflection_ ? std::max(0.0, luminance(c.r - reflectionPeak(wi, wo[k], in)))
+                    hasReflection_ ? std::max(0.0, (c.r - reflectionPeak(wi, wo[k], in)).average())
                                    : 0.0;
             }
         });

@@ -21,6 +21,7 @@ DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, i
     const double continuousShare = 1.0 - out.pT;
     double integral = 0, yarn = 0, uniform = 0, cosine = 0;
     double lumIntegral = 0, lumCovered = 0, lumSecond = 0, weightMax = 0;
+    Rgb channelIntegral, channelCovered, channelSecond, channelMax;
     for (size_t k = 0; k < rule.directions.size(); ++k) {
         const Vec3& wo = rule.directions[k];
         const double w = rule.weights[k];
@@ -33,12 +34,18 @@ DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, i
         integral += f * w;
         const double pdf = bsdf.pdf(wi, wo);
         const double pYarn = continuousShare > 0 ? pdf / continuousShare : 0.0;
-        const double lum = luminance(c.r + c.m);
+        const Rgb value = c.r + c.m;
+        const double lum = luminance(value);
         lumIntegral += lum * w;
+        channelIntegral += value * w;
         if (pdf > 0) {
             lumCovered += lum * w;
             lumSecond += lum * lum / pdf * w;
             weightMax = std::max(weightMax, lum / pdf);
+            channelCovered += value * w;
+            channelSecond += value * value * (w / pdf);
+            for (int ch = 0; ch < 3; ++ch)
+                channelMax[ch] = std::max(channelMax[ch], value[ch] / pdf);
         }
         yarn += pYarn > 0 ? f * f / pYarn * w : std::numeric_limits<double>::infinity();
         uniform += f * f * (4 * kPi) * w;
@@ -53,6 +60,11 @@ DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, i
         out.weightMean = out.pT + lumCovered;
         out.weightSecondMoment = out.pT * weightT + lumSecond;
         out.weightMax = std::max(weightT, weightMax);
+        out.channelAlbedo = Rgb(out.pT) + channelIntegral;
+        out.channelWeightMean = Rgb(out.pT) + channelCovered;
+        out.channelWeightSecond = Rgb(out.pT * weightT) + channelSecond;
+        for (int ch = 0; ch < 3; ++ch)
+            out.channelWeightMax[ch] = std::max(weightT, channelMax[ch]);
     }
     const double squared = integral * integral;
     if (squared > 0) {
@@ -61,6 +73,13 @@ DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, i
         out.secondMomentCosine = cosine / squared;
     }
     return out;
+}
+
+int DirectionalIntegrals::worstChannel() const {
+    int worst = 0;
+    for (int c = 1; c < 3; ++c)
+        if (channelSecondMomentRatio(c) > channelSecondMomentRatio(worst)) worst = c;
+    return worst;
 }
 
 }  // namespace weft

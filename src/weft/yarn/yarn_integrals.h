@@ -8,6 +8,7 @@
 
 #include <vector>
 
+#include "weft/core/math.h"
 #include "weft/core/rgb.h"
 #include "weft/core/vec.h"
 #include "weft/yarn/sphere_rule.h"
@@ -36,6 +37,19 @@ struct DirectionalIntegrals {
     double weightMean = 0;          // E[w] = P(T) + that integral where pdf > 0
     double weightSecondMoment = 0;  // E[w^2] = P(T)^2 / P_T + integral of luminance^2 / pdf
     double weightMax = 0;           // the largest w at the quadrature nodes and P(T) / P_T
+
+    // The same per colour channel (w_c = eval_c / pdf): a sampler that follows
+    // luminance can leave one channel's weight heavy-tailed (blue counts 0.07).
+    Rgb channelAlbedo;        // P(T) + integral of (R + M)_c
+    Rgb channelWeightMean;    // E[w_c]
+    Rgb channelWeightSecond;  // E[w_c^2]
+    Rgb channelWeightMax;     // the largest w_c
+
+    // The channel with the largest E[w_c^2] / E[w_c]^2, and that ratio.
+    int worstChannel() const;
+    double channelSecondMomentRatio(int c) const {
+        return channelWeightMean[c] > 0 ? channelWeightSecond[c] / sqr(channelWeightMean[c]) : 0.0;
+    }
 };
 
 // `secondMoments` false leaves the variance proxies and weights at 0 (and skips the pdf):

@@ -28,7 +28,6 @@ namespace weft {
 namespace {
 
 constexpr double kAlbedoTolerance = 0.03;  // the target, reported as a fraction
-constexpr double kBrightChannel = 0.5;  // channels reported in sampling_weights' per-channel numbers
 
 // Polar and azimuthal angle (degrees) of an incident bin's centre.
 std::pair<double, double> binAngles(const RdmBins& bins, size_t i) {
@@ -142,11 +141,9 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
     std::vector<double> weights(nIn * 3);
     size_t worstWeightBin = 0;
     double worstWeightRatio = -1, largestWeight = 0, smallestMean = 1e300;
-    // And per colour channel, over the bright channels of each bin (albedo at
-    // least half the brightest's: a dark channel's paths end after a bounce
-    // or two, so its weights' spread hardly reaches the image): the bin and
-    // channel of the largest E[w_c^2] / E[w_c]^2, and the largest w_c over
-    // that channel's albedo.
+    // And per colour channel, over the bright channels of each bin
+    // (DirectionalIntegrals::brightChannel): the bin and channel of the
+    // largest E[w_c^2] / E[w_c]^2, and the largest w_c over that channel's albedo.
     size_t worstChannelBin = 0;
     int worstChannel = 0;
     double worstChannelRatio = -1, largestChannelWeight = 0;
@@ -188,9 +185,7 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
             largestWeight = std::max(largestWeight, weights[3 * i + 2]);
             smallestMean = std::min(smallestMean, weights[3 * i]);
             for (int c = 0; c < 3; ++c) {
-                if (!(d.channelAlbedo[c] > 0) ||
-                    d.channelAlbedo[c] < kBrightChannel * d.channelAlbedo.maxComponent())
-                    continue;
+                if (!d.brightChannel(c)) continue;
                 const double channelRatio = d.channelSecondMomentRatio(c);
                 if (channelRatio > worstChannelRatio)
                     worstChannelRatio = channelRatio, worstChannelBin = i, worstChannel = c;

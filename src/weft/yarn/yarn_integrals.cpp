@@ -63,8 +63,7 @@ DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, i
         out.channelAlbedo = Rgb(out.pT) + channelIntegral;
         out.channelWeightMean = Rgb(out.pT) + channelCovered;
         out.channelWeightSecond = Rgb(out.pT * weightT) + channelSecond;
-        for (int ch = 0; ch < 3; ++ch)
-            out.channelWeightMax[ch] = std::max(weightT, channelMax[ch]);
+        for (int ch = 0; ch < 3; ++ch) out.channelWeightMax[ch] = std::max(weightT, channelMax[ch]);
     }
     const double squared = integral * integral;
     if (squared > 0) {
@@ -73,13 +72,6 @@ DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, i
         out.secondMomentCosine = cosine / squared;
     }
     return out;
-}
-
-int DirectionalIntegrals::worstChannel() const {
-    int worst = 0;
-    for (int c = 1; c < 3; ++c)
-        if (channelSecondMomentRatio(c) > channelSecondMomentRatio(worst)) worst = c;
-    return worst;
 }
 
 }  // namespace weft

@@ -45,8 +45,14 @@ struct DirectionalIntegrals {
     Rgb channelWeightSecond;  // E[w_c^2]
     Rgb channelWeightMax;     // the largest w_c
 
-    // The channel with the largest E[w_c^2] / E[w_c]^2, and that ratio.
-    int worstChannel() const;
+    // A channel whose albedo is at least half the brightest's: a dark
+    // channel's paths end within a bounce or two, so the spread of its
+    // weights hardly reaches an image (`weft yarn check` reports the others).
+    static constexpr double kBrightChannel = 0.5;
+    bool brightChannel(int c) const {
+        return channelAlbedo[c] > 0 &&
+               channelAlbedo[c] >= kBrightChannel * channelAlbedo.maxComponent();
+    }
     double channelSecondMomentRatio(int c) const {
         return channelWeightMean[c] > 0 ? channelWeightSecond[c] / sqr(channelWeightMean[c]) : 0.0;
     }

@@ -630,6 +630,10 @@ def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
             c["rel_mse"],
             f["reference_noise"], n["reference_noise"], c["rel_mse_minus_noise"], targets(c)))
     lines += ["", "## Time at equal quality (relative MSE %.2f) and memory" % TARGET_REL_MSE, "",
+              "Memory of these 3 x 3 patches; the neural material (about 1 MB per yarn model) "
+              "does not grow with the cloth, the geometry does: bench/memory_scale.py gives the "
+              "same ratio at `weft scene --size` 6 and 12 ([memory-scale.md](memory-scale.md)).",
+              "",
               "| material | scene | fiber s (EQ) | neural s (EQ) | speed-up | fiber s/spp "
               "| neural s/spp | fiber build s | fiber MB | neural MB | memory ratio | RSS ratio |",
               "|---|---|---|---|---|---|---|---|---|---|---|---|"]

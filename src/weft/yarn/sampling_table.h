@@ -2,8 +2,8 @@
 // directions that follows a given function of (wi, wo) (the yarn BSDF's
 // smooth part, yarn_bsdf.h), for every incident direction.
 //
-// Built once from a non-negative function f(wi, wo) (luminance, yarn frame,
-// wi in the upper hemisphere); sampled and evaluated exactly: pdf() is the
+// Built once from a non-negative function f(wi, wo) (the yarn's channel mean;
+// yarn frame, wi in the upper hemisphere); sampled and evaluated exactly: pdf() is the
 // density sample() draws from, a piecewise-constant function of wo that is
 // positive everywhere and integrates to 1 over the sphere.
 //

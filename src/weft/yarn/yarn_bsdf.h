@@ -69,7 +69,7 @@
 // proportion to the model itself, so that the weight eval / pdf stays close
 // to the albedo for every wi (docs/yarn.md gives the measured bounds):
 //   the T lobe is picked with probability P_T = P(T) / (P(T) + E), E the
-//     estimated luminance albedo of R + M below, so that its weight P(T) / P_T
+//     estimated albedo of R + M below (channel mean), so that its weight P(T) / P_T
 //     matches the continuous part's (grey; paper eq. 11 uses P_T = P(T));
 //   the continuous part, density (1 - P_T) (a_R q_R + (1 - a_R) q_table):
 //     q_R draws the fiber's R lobe inside S_R (its sharp, analytic part:
@@ -78,10 +78,12 @@
 //       (fiber/longitudinal.h) and phi_o uniform on the half cone, so
 //       q_R = g(theta_o; -theta_i, beta_R) cos theta_o / pi and that part's
 //       weight varies only with the masking m;
-//     q_table follows the luminance of the rest (S_M and the fiber's TT lobe
+//     q_table follows the channel mean of the rest (S_M and the fiber's TT lobe
 //       inside S_R, calibration and energy guard applied) through a
-//       SamplingTable (sampling_table.h) built when the model loads;
-//     a_R = E_peak / E with E_peak = (1 - P(T)) lum(s_R F(theta_i)) mbar / 2,
+//       SamplingTable (sampling_table.h) built when the model loads (the
+//       mean, not the luminance: channels whose S differ in shape all keep
+//       their weights below 3 times the mean albedo);
+//     a_R = E_peak / E with E_peak = (1 - P(T)) mean(s_R F(theta_i)) mbar / 2,
 //       mbar the mean masking over q_R (tabulated at the table's nodes), and
 //       E = E_peak + the table's energy.
 //   Samples report kLobeR (q_R) or kLobeM (the table); the density is the

@@ -98,6 +98,29 @@ TEST_F(RenderCliTest, CosineYarnSampling) {
                     {"--yarn-sampling", "\"x\"", "tabulated, fitted, cosine"});
 }
 
+// --sampler sobol: recorded in the statistics, deterministic, another estimator
+// of the same image (the sampler tests are in core/sample_stream_test.cpp).
+TEST_F(RenderCliTest, SobolSampler) {
+    ASSERT_EQ(
+        run("render scene.json --spp 4 --sampler sobol --threads 1 --quiet --out s1.exr").status,
+        0);
+    ASSERT_EQ(
+        run("render scene.json --spp 4 --sampler sobol --threads 2 --quiet --out s2.exr").status,
+        0);
+    ASSERT_EQ(run("render scene.json --spp 4 --quiet --out ind.exr").status, 0);
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("s1.json"))).at("sampler"), "sobol");
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("ind.json"))).at("sampler"), "independent");
+    const Image sobol = readImage(path("s1.exr")), independent = readImage(path("ind.exr"));
+    EXPECT_EQ(readImage(path("s2.exr")).pixels, sobol.pixels);
+    EXPECT_NE(independent.pixels, sobol.pixels);
+    double a = 0, b = 0;
+    for (size_t i = 0; i < sobol.pixels.size(); ++i)
+        a += sobol.pixels[i], b += independent.pixels[i];
+    EXPECT_NEAR(a / b, 1.0, 0.1);
+    expectUserError(run("render scene.json --spp 1 --sampler halton --out x.exr"),
+                    {"--sampler", "\"halton\"", "independent, sobol"});
+}
+
 // `weft render --shard K/N` and `weft render merge`: the merge of the parts is
 // the unsharded image up to float rounding, and bad sets of parts are refused
 // without writing anything.

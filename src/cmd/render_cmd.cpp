@@ -20,11 +20,12 @@ namespace weft::cmd {
 namespace {
 
 struct RenderCmdOptions {
-    std::string scene, mode = "neural", out, yarnSampling = "tabulated", shard;
+    std::string scene, mode = "neural", out, yarnSampling = "tabulated", shard, sampler;
     int spp = 0, threads = 0;
     double seconds = 0, exposure = 0;
     uint64_t seed = 0;
-    CLI::Option *sppOpt = nullptr, *timeOpt = nullptr, *seedOpt = nullptr, *shardOpt = nullptr;
+    CLI::Option *sppOpt = nullptr, *timeOpt = nullptr, *seedOpt = nullptr, *shardOpt = nullptr,
+                *samplerOpt = nullptr;
     bool noNee = false, quiet = false;
 };
 
@@ -83,6 +84,8 @@ void runRender(const RenderCmdOptions& o) {
     options.threads = o.threads;
     options.seed = o.seedOpt->count() ? o.seed : desc.render.seed;
     options.maxDepth = desc.render.maxDepth;
+    options.sampler = desc.render.sampler;
+    if (o.samplerOpt->count()) options.sampler = render::parseSampler(o.sampler);
     options.nextEventEstimation = !o.noNee;
     options.quiet = o.quiet;
     if (o.shardOpt->count()) options.shard = Shard::parse(o.shard, "--shard");
@@ -160,6 +163,11 @@ void addRenderCommand(CLI::App& app) {
         cmd->add_option("--seed", o->seed,
                         "Random seed, integer >= 0 (default: the scene's render.seed)")
             ->check(seedValidator());
+    o->samplerOpt = cmd->add_option(
+        "--sampler", o->sampler,
+        "independent (random numbers) or sobol (Owen-scrambled Sobol' points: each pixel's "
+        "samples stratified, less noise at the same spp; docs/render.md). Default: the scene's "
+        "render.sampler, else independent");
     cmd->add_option("--exposure", o->exposure, "PNG exposure in stops (the EXR stays linear)")
         ->capture_default_str();
     cmd->add_flag("--no-nee", o->noNee,

@@ -49,9 +49,32 @@ int nearestFiniteLight(const Scene& scene, const Vec3& org, const Vec3& dir, dou
     return found;
 }
 
+// Next-event estimation from light `pick` (chosen with probability
+// `pickPdf`): one light sample, its shadow ray (blocked by tubes and the other
+// finite lights), weighted against BSDF sampling by the power heuristic.
+Rgb directLight(const Scene& scene, const ShadingPoint& bsdf, const TubeHit& hit, int pick,
+                double pickPdf, SampleStream& stream, PathCounters& counters) {
+    const auto& lights = scene.lights();
+    const Light& l = *lights[pick];
+    const LightSample ls = l.sample(hit.point, stream.get2D());
+    if (!ls.valid() || ls.radiance.isBlack()) return Rgb(0.0);
+    const BsdfEval e = bsdf.evalPdf(ls.wi);
+    if (e.value.isBlack()) return Rgb(0.0);
+    // Shadow ray up to just before the light's surface.
+    const double tMax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1 - 1e-6);
+    ++counters.rays;
+    if (scene.accel().occluded(hit.point, ls.wi, tMax, hit.id)) return Rgb(0.0);
+    for (size_t i = 0; i < lights.size(); ++i)
+        if (static_cast<int>(i) != pick && !lights[i]->isInfinite() &&
+            lights[i]->intersect(hit.point, ls.wi, tMax) > 0)
+            return Rgb(0.0);
+    const double lightPdf = pickPdf * ls.pdf;
+    return e.value * ls.radiance * (powerHeuristic(lightPdf, e.pdf) / lightPdf);
+}
+
 }  // namespace
 
-Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Rng& rng,
+Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, SampleStream& stream,
                  const PathTracerOptions& options, PathCounters& counters) {
     const auto& lights = scene.lights();
     const double lightPick = lights.empty() ? 0.0 : 1.0 / static_cast<double>(lights.size());
@@ -95,33 +118,16 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Rng& 
         const ShadingPoint bsdf(scene, hit, -dir);
 
         if (nee) {
-            const int pick = std::min(static_cast<int>(rng.uniform() * lights.size()),
+            const int pick = std::min(static_cast<int>(stream.get1D() * lights.size()),
                                       static_cast<int>(lights.size()) - 1);
-            const Light& l = *lights[pick];
-            const LightSample ls = l.sample(hit.point, {rng.uniform(), rng.uniform()});
-            if (ls.valid() && !ls.radiance.isBlack()) {
-                const BsdfEval e = bsdf.evalPdf(ls.wi);
-                const Rgb& f = e.value;
-                if (!f.isBlack()) {
-                    // Shadow ray up to just before the light's surface.
-                    const double tMax =
-                        std::isinf(ls.distance) ? kInfinity : ls.distance * (1 - 1e-6);
-                    ++counters.rays;
-                    bool blocked = scene.accel().occluded(hit.point, ls.wi, tMax, hit.id);
-                    for (size_t i = 0; !blocked && i < lights.size(); ++i)
-                        if (static_cast<int>(i) != pick && !lights[i]->isInfinite())
-                            blocked = lights[i]->intersect(hit.point, ls.wi, tMax) > 0;
-                    if (!blocked) {
-                        const double lightPdf = lightPick * ls.pdf;
-                        const double weight = powerHeuristic(lightPdf, e.pdf);
-                        radiance += throughput * f * ls.radiance * (weight / lightPdf);
-                    }
-                }
-            }
+            radiance +=
+                throughput * directLight(scene, bsdf, hit, pick, lightPick, stream, counters);
         }
 
-        const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
-        const BsdfSample s = bsdf.sample(u, rng);
+        const double lobeU = stream.get1D();
+        const std::array<double, 2> dirU = stream.get2D();
+        const BsdfSampleInput u = {lobeU, dirU[0], dirU[1]};
+        const BsdfSample s = bsdf.sample(u, stream.rng());
         if (!s.valid() || s.weight.isBlack()) break;
         throughput *= s.weight;
         if (!throughput.isFinite()) break;
@@ -133,7 +139,7 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Rng& 
 
         if (depth + 1 >= options.rouletteDepth) {
             const double survive = std::min(1.0, throughput.maxComponent());
-            if (rng.uniform() >= survive) break;
+            if (stream.get1D() >= survive) break;
             throughput = throughput / survive;
         }
     }

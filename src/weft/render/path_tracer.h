@@ -21,14 +21,17 @@
 // Shading frames: neural mode, the yarn frame of DESIGN.md 2 (t = segment
 // tangent, n = outward tube normal, b = t x n); fiber mode, the fiber frame
 // with the tangent as +x (FiberBcsdf); both from Scene::shadingFrame.
-// All random numbers come from the caller's Rng, so a path is a function of
-// (scene, ray, generator state).
+// All random numbers come from the caller's SampleStream (core/sample_stream.h):
+// per path vertex a 1D light pick, a 2D light sample, a 1D lobe choice and a
+// 2D BSDF direction, then a 1D roulette draw; a BSDF's own further numbers
+// come from the stream's Rng. A path is a function of (scene, ray, stream).
 #pragma once
 
 #include <cstdint>
 
 #include "weft/core/rgb.h"
 #include "weft/core/rng.h"
+#include "weft/core/sample_stream.h"
 #include "weft/core/vec.h"
 #include "weft/render/scene.h"
 
@@ -45,7 +48,7 @@ struct PathCounters {
     uint64_t paths = 0;
 };
 
-Rgb pathRadiance(const Scene& scene, const Vec3& org, const Vec3& dir, Rng& rng,
+Rgb pathRadiance(const Scene& scene, const Vec3& org, const Vec3& dir, SampleStream& stream,
                  const PathTracerOptions& options, PathCounters& counters);
 
 }  // namespace weft::render

@@ -51,7 +51,7 @@ Part readPart(const std::string& exr) {
 constexpr const char* kSharedKeys[] = {"scene_hash", "mode",          "width",
                                        "height",     "seed",          "max_depth",
                                        "next_event_estimation",       "yarn_sampling",
-                                       "version"};
+                                       "sampler",     "version"};
 
 nlohmann::json sharedValue(const Part& p, const std::string& key) {
     if (key == "shard.count") return p.shard.count;

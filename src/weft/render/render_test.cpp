@@ -80,8 +80,9 @@ struct Estimate {
 };
 
 // Mean and standard error of the channel-averaged radiance along one ray.
+// Path i draws from a SampleStream of `sampler` (for sobol: sample i of the pixel `stream`).
 Estimate estimate(const Scene& scene, const Vec3& org, const Vec3& dir, int samples, bool nee,
-                  uint64_t stream) {
+                  uint64_t stream, SamplerKind sampler = SamplerKind::Independent) {
     PathTracerOptions options;
     options.maxDepth = 1000;
     options.nextEventEstimation = nee;
@@ -89,7 +90,8 @@ Estimate estimate(const Scene& scene, const Vec3& org, const Vec3& dir, int samp
     double sum = 0, sum2 = 0;
     for (int i = 0; i < samples; ++i) {
         Rng rng(stream * 1000003 + i, nee ? 11 : 12);
-        const double v = pathRadiance(scene, org, dir, rng, options, counters).average();
+        SampleStream paths(sampler, rng, mixBits(stream * 2 + nee), static_cast<uint32_t>(i));
+        const double v = pathRadiance(scene, org, dir, paths, options, counters).average();
         sum += v, sum2 += v * v;
     }
     Estimate e;
@@ -121,12 +123,15 @@ TEST_F(RenderTest, WhiteFurnaceOfLosslessFibers) {
     const Scene s(desc, RenderMode::Fiber);
     const auto rays = raysOnYarn(s, 6);
     ASSERT_EQ(rays.size(), 6u);
-    for (const bool nee : {true, false}) {
-        for (size_t r = 0; r < rays.size(); ++r) {
-            const Estimate e =
-                estimate(s, rays[r].first, rays[r].second, static_cast<int>(scaled(4000)), nee, r);
-            EXPECT_NEAR(e.mean, 1.0, 5 * e.standardError + 1e-3)
-                << "ray " << r << (nee ? " with" : " without") << " NEE, se " << e.standardError;
+    for (const SamplerKind sampler : {SamplerKind::Independent, SamplerKind::Sobol}) {
+        for (const bool nee : {true, false}) {
+            for (size_t r = 0; r < rays.size(); ++r) {
+                const Estimate e = estimate(s, rays[r].first, rays[r].second,
+                                            static_cast<int>(scaled(4000)), nee, r, sampler);
+                EXPECT_NEAR(e.mean, 1.0, 5 * e.standardError + 1e-3)
+                    << samplerKindName(sampler) << " ray " << r << (nee ? " with" : " without")
+                    << " NEE, se " << e.standardError;
+            }
         }
     }
     // The whole image through the image loop: every pixel near 1.
@@ -154,19 +159,28 @@ TEST_F(RenderTest, NextEventEstimationAgreesWithBsdfSamplingOnly) {
     const std::string lights = R"([{"type": "sphere", "center": [0.3, 0.4, 0.5], "radius": 0.25,
                                      "radiance": [4, 3, 2]},
                                     {"type": "constant", "radiance": [0.2, 0.25, 0.3]}])";
-    for (const RenderMode mode : {RenderMode::Neural, RenderMode::Fiber, RenderMode::Dual}) {
+    // The sobol sampler (sample_stream.h) in neural mode as well.
+    const std::pair<RenderMode, SamplerKind> cases[] = {
+        {RenderMode::Neural, SamplerKind::Independent},
+        {RenderMode::Fiber, SamplerKind::Independent},
+        {RenderMode::Dual, SamplerKind::Independent},
+        {RenderMode::Neural, SamplerKind::Sobol}};
+    for (const auto& [mode, sampler] : cases) {
         const Scene s(scene(kFleece, lights), mode);
         const auto rays = raysOnYarn(s, 5);
         ASSERT_EQ(rays.size(), 5u);
         const int samples = static_cast<int>(scaled(mode == RenderMode::Fiber ? 6000 : 20000));
         for (size_t r = 0; r < rays.size(); ++r) {
-            const Estimate a = estimate(s, rays[r].first, rays[r].second, samples, true, r);
-            const Estimate b = estimate(s, rays[r].first, rays[r].second, samples, false, r);
+            const Estimate a =
+                estimate(s, rays[r].first, rays[r].second, samples, true, r, sampler);
+            const Estimate b =
+                estimate(s, rays[r].first, rays[r].second, samples, false, r, sampler);
             const double se =
                 std::sqrt(a.standardError * a.standardError + b.standardError * b.standardError);
             EXPECT_NEAR(a.mean, b.mean, 4.5 * se + 1e-4)
-                << renderModeName(mode) << " ray " << r << ": NEE " << a.mean << " +- "
-                << a.standardError << ", BSDF only " << b.mean << " +- " << b.standardError;
+                << renderModeName(mode) << " " << samplerKindName(sampler) << " ray " << r
+                << ": NEE " << a.mean << " +- " << a.standardError << ", BSDF only " << b.mean
+                << " +- " << b.standardError;
             // NEE + MIS should not be noisier than BSDF sampling alone here,
             // unless its own per-sample relative deviation is already below
             // 0.3 (where the yarn's sampler alone does even better, e.g. on
@@ -285,11 +299,18 @@ TEST_F(RenderTest, ImagesAreFiniteAndDoNotDependOnTheThreadCount) {
         options.spp = 3;
         options.seed = 5;
         options.quiet = true;
+        options.sampler = SamplerKind::Sobol;
+        options.threads = 1;
+        const RenderResult oneSobol = render(s, options);
+        options.threads = 2;
+        EXPECT_EQ(render(s, options).image.pixels, oneSobol.image.pixels) << renderModeName(mode);
+        options.sampler = SamplerKind::Independent;
         options.threads = 1;
         const RenderResult one = render(s, options);
         options.threads = 2;
         const RenderResult two = render(s, options);
         EXPECT_EQ(one.image.pixels, two.image.pixels) << renderModeName(mode);
+        EXPECT_NE(one.image.pixels, oneSobol.image.pixels) << renderModeName(mode);
         EXPECT_EQ(one.stats.nonFiniteSamples, 0);
         double total = 0;
         for (float v : one.image.pixels) {
@@ -340,11 +361,14 @@ TEST_F(RenderTest, TimeBudgetRendersAtLeastOnePass) {
 // to the unsharded render (the same samples, summed in another order).
 TEST_F(RenderTest, ShardsAreTheUnshardedRenderSplitBySample) {
     const std::string lights = R"([{"type": "sky"}])";
-    for (const RenderMode mode : {RenderMode::Neural, RenderMode::Fiber}) {
+    for (const auto& [mode, sampler] : {std::pair{RenderMode::Neural, SamplerKind::Independent},
+                                        std::pair{RenderMode::Fiber, SamplerKind::Independent},
+                                        std::pair{RenderMode::Neural, SamplerKind::Sobol}}) {
         const Scene s(scene(kFleece, lights, 10, 8), mode);
         RenderOptions options;
         options.spp = 7;
         options.seed = 3;
+        options.sampler = sampler;
         options.quiet = true;
         const RenderResult whole = render(s, options);
         std::vector<double> sum(whole.image.pixels.size(), 0.0);

@@ -46,6 +46,11 @@ void RenderOptions::validate() const {
     }
 }
 
+SamplerKind parseSampler(const std::string& name, const std::string& field) {
+    if (const std::optional<SamplerKind> kind = samplerKindFromName(name)) return *kind;
+    throw InputError(field + " \"" + name + "\" is not a sampler: allowed independent, sobol");
+}
+
 int64_t peakResidentBytes() {
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
@@ -90,9 +95,15 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                                 for (int64_t s = first; s < last; ++s) {
                                     Rng rng = sampleRng(pixel, s, options.seed);
                                     Vec3 org, dir;
-                                    camera.ray(x + rng.uniform(), y + rng.uniform(), &org, &dir);
+                                    SampleStream stream(options.sampler, rng,
+                                                        mixBits(options.seed ^ mixBits(pixel)),
+                                                        static_cast<uint32_t>(s));
+                                    // y first: the order in which the renderer drew
+                                    // them before the stream (same images).
+                                    const std::array<double, 2> film = stream.get2D();
+                                    camera.ray(x + film[1], y + film[0], &org, &dir);
                                     const Rgb L =
-                                        pathRadiance(scene, org, dir, rng, tracer, counters);
+                                        pathRadiance(scene, org, dir, stream, tracer, counters);
                                     if (!L.isFinite()) {
                                         ++dropped;
                                         continue;
@@ -149,6 +160,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     st.raysPerSecond = seconds > 0 ? static_cast<double>(st.rays) / seconds : 0;
     st.threads = threads;
     st.seed = options.seed;
+    st.sampler = options.sampler;
     st.peakResidentBytes = peakResidentBytes();
     st.scene = scene.stats();
     st.nonFiniteSamples = static_cast<int64_t>(nonFinite.load());
@@ -171,6 +183,7 @@ nlohmann::json toJson(const RenderStats& s) {
         {"rays_per_second", s.raysPerSecond},
         {"threads", s.threads},
         {"seed", s.seed},
+        {"sampler", samplerKindName(s.sampler)},
         {"peak_resident_bytes", s.peakResidentBytes},
         {"non_finite_samples", s.nonFiniteSamples},
         {"scene",

@@ -2,19 +2,22 @@
 //
 // render() traces `spp` paths per pixel (pathRadiance, path_tracer.h) at
 // uniformly random film positions inside the pixel (a box filter) and
-// averages them. Budgets: a fixed number of samples per pixel, or a time
-// budget: progressive passes (1 sample per pixel, then as many as the
-// measured time per sample says fit in what is left, at most doubling) until
-// the time is spent; at least one pass.
+// averages them. Their numbers come from the sampler of RenderOptions
+// (core/sample_stream.h): independent, or Owen-scrambled Sobol' points that
+// stratify each pixel's samples. Budgets: a fixed number of samples per
+// pixel, or a time budget: progressive passes (1 sample per pixel, then as
+// many as the measured time per sample says fit in what is left, at most
+// doubling) until the time is spent; at least one pass.
 //
 // Determinism: sample s of pixel p draws from Rng(stream p, seed mixed with
-// s), so the image depends only on (scene, mode, seed, spp), not on the
-// number of threads or on how samples were split into passes, or into
-// shards: shard K of N (RenderOptions::shard, core/shard.h) traces samples
+// s) and, with the sobol sampler, from Sobol' point s of that pixel, so the
+// image depends only on (scene, mode, seed, sampler, spp), not on the number
+// of threads or on how samples were split into passes, or into shards: shard
+// K of N (RenderOptions::shard, core/shard.h) traces samples
 // [floor(K spp / N), floor((K + 1) spp / N)) of every pixel, and the
 // sample-weighted mean of the N images (render_merge.h) is the unsharded
-// image up to float rounding. Tiles of 16 x
-// 16 pixels are scheduled with TBB (an arena of `threads` workers).
+// image up to float rounding. Tiles of 16 x 16 pixels are scheduled with TBB
+// (an arena of `threads` workers).
 #pragma once
 
 #include <cstdint>
@@ -34,6 +37,7 @@ struct RenderOptions {
     double seconds = 0;  // > 0 (and spp == 0): progressive passes for this long
     int threads = 0;     // 0: all cores
     uint64_t seed = 0;
+    SamplerKind sampler = SamplerKind::Independent;  // core/sample_stream.h
     int maxDepth = 100;
     bool nextEventEstimation = true;
     bool quiet = false;  // no progress output
@@ -56,6 +60,7 @@ struct RenderStats {
     double raysPerSecond = 0;
     int threads = 0;
     uint64_t seed = 0;
+    SamplerKind sampler = SamplerKind::Independent;
     int64_t peakResidentBytes = 0;  // of the whole process (getrusage)
     SceneBuildStats scene;
     int64_t nonFiniteSamples = 0;  // samples dropped as NaN/Inf (reported; should stay 0)
@@ -70,6 +75,9 @@ struct RenderResult {
 };
 
 RenderResult render(const Scene& scene, const RenderOptions& options);
+
+// "independent" or "sobol"; InputError naming `field` and the allowed names otherwise.
+SamplerKind parseSampler(const std::string& name, const std::string& field = "--sampler");
 
 // Peak resident set size of this process in bytes.
 int64_t peakResidentBytes();

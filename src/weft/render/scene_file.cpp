@@ -117,11 +117,14 @@ FilmDesc readFilm(const JsonObjectReader& scene) {
 }
 
 RenderDesc readRender(const JsonObjectReader& scene) {
-    const JsonObjectReader r = scene.object("render", {"spp", "max_depth", "seed"});
+    const JsonObjectReader r = scene.object("render", {"spp", "max_depth", "seed", "sampler"});
     RenderDesc d;
     if (r.has("spp")) d.spp = static_cast<int>(r.integer("spp", {1, kMaxSpp}));
     if (r.has("max_depth")) d.maxDepth = static_cast<int>(r.integer("max_depth", {1, kMaxDepth}));
     if (r.has("seed")) d.seed = r.unsignedInteger("seed");
+    if (r.has("sampler"))
+        d.sampler = r.oneOf("sampler", {"independent", "sobol"}) == 0 ? SamplerKind::Independent
+                                                                      : SamplerKind::Sobol;
     return d;
 }
 
@@ -263,7 +266,8 @@ json toJson(const SceneDesc& scene) {
     j["film"] = {{"width", scene.film.width}, {"height", scene.film.height}};
     j["render"] = {{"spp", scene.render.spp},
                    {"max_depth", scene.render.maxDepth},
-                   {"seed", scene.render.seed}};
+                   {"seed", scene.render.seed},
+                   {"sampler", samplerKindName(scene.render.sampler)}};
     json lights = json::array();
     for (const LightDesc& l : scene.lights) {
         json lj = {{"type", typeName(l.type)}};

@@ -33,7 +33,7 @@ using SceneFileTest = testing::TempDirTest;
 const std::string kFullScene = R"({
   "camera": {"from": [0, 1.5, 4], "to": [0, 0.5, 0], "up": [0, 1, 0.25], "fov_deg": 35},
   "film": {"width": 640, "height": 480},
-  "render": {"spp": 256, "max_depth": 50, "seed": 7},
+  "render": {"spp": 256, "max_depth": 50, "seed": 7, "sampler": "sobol"},
   "lights": [
     {"type": "sky", "scale": 0.5},
     {"type": "envmap", "file": "maps/studio.exr", "scale": 2, "rotate_deg": -90},
@@ -66,6 +66,7 @@ std::vector<std::string> differences(const SceneDesc& a, const SceneDesc& b) {
     check(a.render.spp == b.render.spp, "render.spp");
     check(a.render.maxDepth == b.render.maxDepth, "render.max_depth");
     check(a.render.seed == b.render.seed, "render.seed");
+    check(a.render.sampler == b.render.sampler, "render.sampler");
     check(a.lights.size() == b.lights.size(), "lights.size");
     for (size_t i = 0; i < std::min(a.lights.size(), b.lights.size()); ++i) {
         const LightDesc &x = a.lights[i], &y = b.lights[i];
@@ -140,6 +141,7 @@ TEST(SceneFile, FullSceneParsesEveryKey) {
     EXPECT_EQ(s.render.spp, 256);
     EXPECT_EQ(s.render.maxDepth, 50);
     EXPECT_EQ(s.render.seed, 7u);
+    EXPECT_EQ(s.render.sampler, SamplerKind::Sobol);
 
     ASSERT_EQ(s.lights.size(), 4u);
     EXPECT_EQ(s.lights[0].type, LightDesc::Type::Sky);
@@ -181,6 +183,7 @@ TEST(SceneFile, DefaultsFillEveryOptionalKey) {
     EXPECT_EQ(s.render.spp, 64);
     EXPECT_EQ(s.render.maxDepth, 100);
     EXPECT_EQ(s.render.seed, 0u);
+    EXPECT_EQ(s.render.sampler, SamplerKind::Independent);
     EXPECT_TRUE(s.lights.empty());  // the procedural sky
     EXPECT_TRUE(s.yarns.empty());
 
@@ -236,7 +239,7 @@ TEST(SceneFile, UnknownKeysAreNamedWithTheirPath) {
     expectInputError([] { parseJson(fullWith("/film/depth", 8)); },
                      {"film: unknown key \"depth\" (allowed: width, height)"});
     expectInputError([] { parseJson(fullWith("/render/samples", 8)); },
-                     {"render: unknown key \"samples\" (allowed: spp, max_depth, seed)"});
+                     {"render: unknown key \"samples\" (allowed: spp, max_depth, seed, sampler)"});
     // Keys of another light type are unknown for this one.
     expectInputError([] { parseJson(fullWith("/lights/0/radius", 1)); },
                      {"lights[0]: unknown key \"radius\" (allowed: type, scale)"});
@@ -312,6 +315,10 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
           "18446744073709551615]"},
          std::numeric_limits<uint64_t>::max()},
         {"/render/seed", 0x1p64, {"render.seed = 18446744073709551616 is out of range"}, 0},
+        {"/render/sampler",
+         "halton",
+         {"render.sampler: expected one of \"independent\", \"sobol\", got the string \"halton\""},
+         "independent"},
         {"/render/seed",
          0.5,
          {"render.seed: expected an integer in [0, 18446744073709551615], got 0.5"},

@@ -435,6 +435,7 @@ py::dict gatherPartDict(const GatherSums& s, const GatherOptions& o, const std::
     d["sum_r"] = ndarray(s.sumR, {ti, pi, to, po, 3});
     d["sum_m"] = ndarray(s.sumM, {ti, pi, to, po, 3});
     d["sum_truncated"] = ndarray(s.sumTruncated, {ti, pi, 3});
+    d["sum_exit_distance"] = ndarray(s.sumExitDistance, {kExitDistanceBins + 1, 3});
     d["depth"] = ndarray(s.depth, {static_cast<py::ssize_t>(s.depth.size())});
     json stats = gatherInputs(o, s.fiberRadius, s.period, s.segments);
     stats["shard"] = {{"index", o.shard.index},
@@ -580,6 +581,10 @@ py::dict gatherDict(const GatherResult& r, const GatherOptions& o, const std::st
     d["rdm_m"] = ndarray(r.rdmM, {ti, pi, to, po, 3});
     d["truncated"] = ndarray(r.truncated, {ti, pi, 3});
     d["depth"] = ndarray(r.depth, {static_cast<py::ssize_t>(r.depth.size())});
+    // None for a recoloured gather (its records do not keep exit points).
+    d["exit_distance"] = r.exitDistance.empty()
+                             ? py::object(py::none())
+                             : py::object(ndarray(r.exitDistance, {kExitDistanceBins + 1, 3}));
     if (o.anyColour) {
         const ColourPathColumns c = colourPathColumns(r.colourPaths);
         const auto n = static_cast<py::ssize_t>(r.colourPaths.size());
@@ -712,8 +717,8 @@ py::array_t<float> imageArray(const Image& image) {
 
 py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, const py::object& spp,
                    const py::object& seconds, int threads, const py::object& seed, bool nee,
-                   const std::string& yarnSampling, const py::object& baseDir,
-                   const py::object& shard, bool quiet) {
+                   const std::string& yarnSampling, const py::object& sampler,
+                   const py::object& baseDir, const py::object& shard, bool quiet) {
     const render::RenderMode mode = render::parseRenderMode(modeName, "mode");
     YarnBsdfOptions yarnOptions;
     yarnOptions.sampling = parseYarnSampling(yarnSampling, "yarn_sampling");
@@ -742,6 +747,9 @@ py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, cons
     options.threads = threads;
     options.seed = seed.is_none() ? desc.render.seed : seed.cast<uint64_t>();
     options.maxDepth = desc.render.maxDepth;
+    options.sampler = sampler.is_none()
+                          ? desc.render.sampler
+                          : render::parseSampler(sampler.cast<std::string>(), "sampler");
     options.nextEventEstimation = nee;
     options.quiet = quiet;
     if (!shard.is_none()) options.shard = shardOf(shard);
@@ -1021,9 +1029,10 @@ PYBIND11_MODULE(weft, m) {
           py::arg("shard") = py::none(), py::arg("any_colour") = false,
           py::arg("out") = py::none(), py::arg("quiet") = true,
           "`weft gather`: the RDM of a ply as a dict of arrays (count, count_t, p_t, rdm_r, "
-          "rdm_m, truncated, depth) and stats; out=DIR also writes the gather folder. "
+          "rdm_m, truncated, depth, exit_distance) and stats; out=DIR also writes the gather folder. "
           "shard=(k, n): only shard k of n of the paths, as integer sums (count, count_t, "
-          "sum_r, sum_m, sum_truncated, depth) for gather_merge; out=DIR writes the part. "
+          "sum_r, sum_m, sum_truncated, sum_exit_distance, depth) for gather_merge; out=DIR "
+          "writes the part. "
           "any_colour=True: colour-blind lobe choice and the recorded paths (paths_bins, "
           "paths_kind, paths_weight) for gather_recolour.");
 
@@ -1067,7 +1076,8 @@ PYBIND11_MODULE(weft, m) {
     m.def("render", &pyRender, py::arg("scene"), py::kw_only(), py::arg("mode") = "neural",
           py::arg("spp") = py::none(), py::arg("seconds") = py::none(), py::arg("threads") = 0,
           py::arg("seed") = py::none(), py::arg("nee") = true, py::arg("yarn_sampling") = "tabulated",
-          py::arg("base_dir") = py::none(), py::arg("shard") = py::none(),
+          py::arg("sampler") = py::none(), py::arg("base_dir") = py::none(),
+          py::arg("shard") = py::none(),
           py::arg("quiet") = true,
           "`weft render`: a scene file or dict to an (H,W,3) float32 linear RGB image and the "
           "statistics dict; shard=(k, n) traces only shard k of n of the spp samples.");

@@ -8,6 +8,8 @@ import pytest
 import weft
 
 GATHER_ARRAYS = ["count", "count_t", "p_t", "rdm_r", "rdm_m", "truncated", "depth"]
+# Not in a recoloured gather.
+WALK_ARRAYS = GATHER_ARRAYS + ["exit_distance"]
 # A fit that trains for a few hundred steps (as src/cmd/fit_cli_test.cpp).
 SHORT_FIT = {"t_net": {"steps": 200, "restarts": 2, "batch": 64},
              "m_net": {"hidden": [8, 8], "steps": 200, "batch": 64}}
@@ -18,7 +20,7 @@ def test_gather_matches_cli_and_fit_runs(cli, tmp_path):
     g = weft.gather(**args, out=tmp_path / "py-rdm")
     cli("gather", "--preset", "fleece", "--paths", 4000, "--bins", "4,8,6,12", "--seed", 1,
         "--quiet", "--out", tmp_path / "cli-rdm")
-    for name in GATHER_ARRAYS:
+    for name in WALK_ARRAYS:
         from_cli = np.load(tmp_path / "cli-rdm" / f"{name}.npy")
         written = np.load(tmp_path / "py-rdm" / f"{name}.npy")
         assert g[name].dtype == from_cli.dtype and g[name].shape == from_cli.shape, name
@@ -79,6 +81,16 @@ def test_tiny_render(cli, tmp_path, root):
     fiber, fstats = weft.render(scene, mode="fiber", spp=1)
     assert fiber.shape == (16, 16, 3) and fstats["mode"] == "fiber"
 
+    # The sobol sampler: by keyword or by the scene's render.sampler, the same image.
+    sobol, sstats = weft.render(scene, spp=2, seed=1, sampler="sobol")
+    assert sstats["sampler"] == "sobol" and stats["sampler"] == "independent"
+    assert np.all(np.isfinite(sobol)) and not np.array_equal(sobol, image)
+    doc["render"]["sampler"] = "sobol"
+    np.testing.assert_array_equal(weft.render(doc, spp=2, seed=1, base_dir=tmp_path / "closeup")[0],
+                                  sobol)
+    with pytest.raises(ValueError, match='sampler "halton" is not a sampler: allowed independent'):
+        weft.render(scene, spp=1, sampler="halton")
+
 
 def test_sharded_gather_and_render_merge(cli, tmp_path, root):
     args = dict(preset="fleece", paths=3000, bins=[4, 8, 6, 12], seed=2)
@@ -91,7 +103,7 @@ def test_sharded_gather_and_render_merge(cli, tmp_path, root):
     # The shards' counts add up to the whole gather's.
     assert sum(weft.gather(**args, shard=(k, 3))["count"].sum() for k in range(3)) == 3000
     merged = weft.gather_merge(parts[::-1], out=tmp_path / "merged")
-    for name in GATHER_ARRAYS:
+    for name in WALK_ARRAYS:
         np.testing.assert_array_equal(merged[name], whole[name], err_msg=name)
         np.testing.assert_array_equal(np.load(tmp_path / "merged" / f"{name}.npy"), whole[name])
     assert merged["stats"]["shards"] == 3

@@ -21,6 +21,7 @@
 #include "weft/core/file.h"
 #include "weft/core/npy.h"
 #include "weft/core/test_util.h"
+#include "weft/gather/gather.h"
 #include "cli_test_util.h"
 
 namespace weft {
@@ -135,17 +136,19 @@ TEST_F(GatherCliTest, WritesArraysOfTheDocumentedTypesAndShapes) {
     const nlohmann::json summary = nlohmann::json::parse(out);
     EXPECT_EQ(summary.at("out"), "out");
     EXPECT_EQ(summary.at("paths"), 3000);
-    for (const char* key :
-         {"seconds", "paths_per_second", "rays_per_second", "mean_depth", "truncated_fraction"})
+    for (const char* key : {"seconds", "paths_per_second", "rays_per_second", "mean_depth",
+                            "truncated_fraction", "m_exit_distance_median"})
         EXPECT_TRUE(summary.contains(key)) << key << " missing from " << out;
+    EXPECT_EQ(summary.at("m_exit_distance_median").size(), 3u);
 
     // Nothing else was left in the test directory (no DIR.tmp.<pid>).
     EXPECT_EQ(listing(), std::vector<std::string>{"out"});
     std::vector<std::string> files;
     for (const auto& e : fs::directory_iterator(dir)) files.push_back(e.path().filename());
     std::sort(files.begin(), files.end());
-    EXPECT_EQ(files, (std::vector<std::string>{"count.npy", "count_t.npy", "depth.npy", "meta.json",
-                                               "p_t.npy", "ply.txt", "rdm_m.npy", "rdm_r.npy",
+    EXPECT_EQ(files, (std::vector<std::string>{"count.npy", "count_t.npy", "depth.npy",
+                                               "exit_distance.npy", "meta.json", "p_t.npy",
+                                               "ply.txt", "rdm_m.npy", "rdm_r.npy",
                                                "truncated.npy"}));
 }
 
@@ -172,6 +175,18 @@ TEST_F(GatherCliTest, MetaJsonAndPly) {
     ASSERT_TRUE(m.at("truncated_energy").is_array());
     EXPECT_EQ(m.at("truncated_energy").size(), 3u);
     EXPECT_TRUE(m.at("end_exit_fraction").is_number());
+    // exit_distance: the M weight per channel is the histogram's, and the
+    // quantiles are ordered.
+    const auto exitHistogram = values<double>(readNpy(path("out/exit_distance.npy")));
+    ASSERT_EQ(exitHistogram.size(), static_cast<size_t>(kExitDistanceBins + 1) * 3);
+    const nlohmann::json& exit = m.at("exit_distance");
+    for (int c = 0; c < 3; ++c) {
+        double total = 0;
+        for (int b = 0; b <= kExitDistanceBins; ++b) total += exitHistogram[b * 3 + c];
+        EXPECT_NEAR(exit.at("m_weight")[c].get<double>(), total, 1e-12);
+        EXPECT_GT(total, 0.0);
+        EXPECT_LE(exit.at("median")[c].get<double>(), exit.at("p90")[c].get<double>());
+    }
     EXPECT_TRUE(m.at("versions").at("weft").is_string());
     EXPECT_EQ(m.at("versions").at("weft"), WEFT_VERSION);
     EXPECT_TRUE(m.at("versions").at("embree").is_string());
@@ -212,6 +227,7 @@ TEST_F(GatherCliTest, BitIdenticalForAnyThreadCount) {
         EXPECT_TRUE(readFile(path("one") + "/" + name) == readFile(path("two") + "/" + name))
             << name << " differs between --threads 1 and --threads 2";
     EXPECT_TRUE(readFile(path("one/ply.txt")) == readFile(path("two/ply.txt")));
+    EXPECT_TRUE(readFile(path("one/exit_distance.npy")) == readFile(path("two/exit_distance.npy")));
     EXPECT_EQ(meta("one").at("threads"), 1);
     EXPECT_EQ(meta("two").at("threads"), 2);
 }
@@ -234,6 +250,8 @@ TEST_F(GatherCliTest, ShardsMergeToTheUnshardedGather) {
         EXPECT_TRUE(readFile(path("whole") + "/" + name) == readFile(path("merged") + "/" + name))
             << name << " differs between the merged shards and the unsharded gather";
     EXPECT_TRUE(readFile(path("whole/ply.txt")) == readFile(path("merged/ply.txt")));
+    EXPECT_TRUE(readFile(path("whole/exit_distance.npy")) ==
+                readFile(path("merged/exit_distance.npy")));
     EXPECT_EQ(meta("merged").at("format"), "weft-gather");
     EXPECT_EQ(meta("merged").at("shards"), 4);
     EXPECT_EQ(meta("merged").at("paths"), 3000);
@@ -277,6 +295,9 @@ TEST_F(GatherCliTest, AnyColourGatherRecoloursToAnyCTT) {
         EXPECT_TRUE(readFile(path("ac") + "/" + name) == readFile(path("same") + "/" + name))
             << name;
     EXPECT_FALSE(std::filesystem::exists(path("same/paths_bins.npy")));
+    // The records do not keep exit points: no exit distances after a recolouring.
+    EXPECT_FALSE(std::filesystem::exists(path("same/exit_distance.npy")));
+    EXPECT_FALSE(meta("same").contains("exit_distance"));
     // Another colour: a gather of that colour, which weft fit reads as any other.
     ASSERT_EQ(run("gather recolour ac --c-tt 0.2,0.4,1 --out blue").status, 0);
     const nlohmann::json blue = meta("blue");

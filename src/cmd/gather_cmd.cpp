@@ -30,14 +30,21 @@ struct GatherCliOptions {
 };
 
 // The one-line JSON summary of a gather or a merge.
-void printGatherSummary(const std::string& out, const GatherStats& s) {
-    std::printf(
-        "{\"out\": \"%s\", \"paths\": %lld, \"seconds\": %.3f, \"paths_per_second\": %.0f, "
-        "\"rays_per_second\": %.0f, \"mean_depth\": %.3f, \"truncated_fraction\": %.3g, "
-        "\"shards\": %lld}\n",
-        out.c_str(), static_cast<long long>(s.paths), s.seconds, s.paths / s.seconds,
-        s.rays / s.walkSeconds, s.meanDepth, static_cast<double>(s.truncatedPaths) / s.paths,
-        static_cast<long long>(s.shards));
+void printGatherSummary(const std::string& out, const GatherResult& r) {
+    const GatherStats& s = r.stats;
+    nlohmann::json line = {{"out", out},
+                           {"paths", s.paths},
+                           {"seconds", s.seconds},
+                           {"paths_per_second", std::round(s.paths / s.seconds)},
+                           {"rays_per_second", std::round(s.rays / s.walkSeconds)},
+                           {"mean_depth", s.meanDepth},
+                           {"truncated_fraction", static_cast<double>(s.truncatedPaths) / s.paths},
+                           {"shards", s.shards}};
+    // How far M light travels in the ply (gather.h; none after a recolouring).
+    if (!r.exitDistance.empty())
+        for (int c = 0; c < 3; ++c)
+            line["m_exit_distance_median"].push_back(summarizeExitDistance(r.exitDistance, c).median);
+    std::printf("%s\n", line.dump().c_str());
 }
 
 void runGather(const GatherCliOptions& c) {
@@ -90,7 +97,7 @@ void runGather(const GatherCliOptions& c) {
     }
     const GatherResult result = gatherRdm(o);
     writeGather(result, o, out);
-    printGatherSummary(c.out, result.stats);
+    printGatherSummary(c.out, result);
 }
 
 struct MergeCliOptions {
@@ -107,7 +114,7 @@ void runGatherMerge(const MergeCliOptions& c) {
     const GatherResult result =
         normaliseGather(std::move(merged.sums), merged.options, merged.shards);
     writeGather(result, merged.options, out);
-    printGatherSummary(c.out, result.stats);
+    printGatherSummary(c.out, result);
 }
 
 struct RecolourCliOptions {
@@ -124,7 +131,7 @@ void runGatherRecolour(const RecolourCliOptions& c) {
     writeGather(result, recoloured.options, out,
                 {{"recoloured_from",
                   {{"gather", c.gather}, {"c_tt", {gathered.r, gathered.g, gathered.b}}}}});
-    printGatherSummary(c.out, result.stats);
+    printGatherSummary(c.out, result);
 }
 
 }  // namespace

@@ -177,6 +177,8 @@ RecolouredGather recolourGather(const std::string& dir, const Rgb& cTT) {
     result.gatheredCTT = o.fiber.cTT;
     GatherSums& sums = result.sums;
     sums = emptyGatherSums(o);
+    // The records do not keep where paths left the ply: no exit distances.
+    sums.sumExitDistance.clear();
     const RdmBins& b = o.bins;
     const size_t ti = b.thetaI, pi = b.phiI;
     addInt64Npy(inDir(dir, "count.npy"), {ti, pi}, sums.count);

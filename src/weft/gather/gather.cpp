@@ -9,6 +9,7 @@
 #include <climits>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
@@ -55,6 +56,7 @@ GatherSums zeroSums(const GatherOptions& o, const PlyGeometry& ply,
     s.count.assign(nIn, 0);
     s.countT.assign(nIn, 0);
     s.sumTruncated.assign(nIn * 3, 0);
+    s.sumExitDistance.assign((kExitDistanceBins + 1) * 3, 0);
     s.sumR.assign(nIn * nOut * 3, 0);
     s.sumM.assign(nIn * nOut * 3, 0);
     s.depth.assign(static_cast<size_t>(o.maxDepth) + 2, 0);
@@ -138,6 +140,9 @@ GatherSums gatherSums(const GatherOptions& o) {
                     const Frame entry = yarnFrame(t, n);
                     Vec3 org = n * ply.radius;
                     org.z = period * rng.uniform();
+                    const double entryZ = org.z;
+                    int periodShift = 0;  // twist periods crossed, for the exit distance
+                    Vec3 exitPoint;
                     // wi uniform over the upper hemisphere: cos(theta) uniform.
                     const double uCosTheta = rng.uniform(), uPhi = rng.uniform();
                     const Vec3 wiLocal = sampleUniformHemisphere(uCosTheta, uPhi);
@@ -150,8 +155,12 @@ GatherSums gatherSums(const GatherOptions& o) {
                     for (;;) {
                         const PlyTraceHit hit = tracer.trace(org, dir, excluded);
                         chunkRays += hit.raysTraced;
+                        periodShift += hit.periodShift;
                         if (hit.kind != PlyTraceHit::Kind::Fiber) {
                             chunkAxial += hit.kind == PlyTraceHit::Kind::ExitAxial;
+                            exitPoint = hit.kind == PlyTraceHit::Kind::ExitSide
+                                            ? hit.point
+                                            : Vec3(0, 0, std::numeric_limits<double>::infinity());
                             break;
                         }
                         if (depth == o.maxDepth) {
@@ -204,6 +213,25 @@ GatherSums gatherSums(const GatherOptions& o) {
                         path.kind = depth == 1 && woLocal.z > 0 ? ColourPath::R : ColourPath::M;
                         path.outgoingBin = static_cast<int32_t>(bins.outgoingBin(woLocal));
                     }
+                    // The weight for the gather's own colour (any colour: W0 C_TT^k,
+                    // as the RDM gets it from addColourPath).
+                    for (int c = 0; c < 3; ++c) path.weight[c] = static_cast<float>(weight[c]);
+                    const Rgb ownWeight =
+                        o.anyColour ? Rgb(path.weightFor(o.fiber.cTT, 0),
+                                          path.weightFor(o.fiber.cTT, 1),
+                                          path.weightFor(o.fiber.cTT, 2))
+                                    : weight;
+                    if (path.kind == ColourPath::M) {
+                        // Along the cylinder's surface, z unwrapped (gather.h).
+                        const double dz = exitPoint.z + periodShift * period - entryZ;
+                        const double dpsi =
+                            std::remainder(std::atan2(exitPoint.y, exitPoint.x) - psi, kTwoPi);
+                        const size_t bin =
+                            static_cast<size_t>(exitDistanceBin(std::hypot(dz, dpsi))) * 3;
+                        for (int c = 0; c < 3; ++c)
+                            atomicAdd(sums.sumExitDistance[bin + c],
+                                      GatherSums::toFixed(ownWeight[c]));
+                    }
                     if (!o.anyColour) {
                         addPathWeight(sums, path.kind, binIn,
                                       static_cast<size_t>(std::max(path.outgoingBin, 0)), weight,
@@ -211,7 +239,6 @@ GatherSums gatherSums(const GatherOptions& o) {
                         continue;
                     }
                     if (weight.isBlack()) continue;
-                    for (int c = 0; c < 3; ++c) path.weight[c] = static_cast<float>(weight[c]);
                     addColourPath(sums, path, o.fiber.cTT, atomicAdd);
                     chunkColourPaths[chunk].push_back(path);
                 }
@@ -276,6 +303,9 @@ GatherResult normaliseGather(GatherSums sums, const GatherOptions& o, int64_t sh
     r.count = sums.count;
     r.countT = sums.countT;
     r.depth = sums.depth;
+    r.exitDistance.resize(sums.sumExitDistance.size());
+    for (size_t k = 0; k < r.exitDistance.size(); ++k)
+        r.exitDistance[k] = sums.sumExitDistance[k] / kFixedScale / o.paths;
     r.colourPaths = std::move(sums.colourPaths);
 
     GatherStats& st = r.stats;
@@ -317,6 +347,9 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
     writeNpy(file("rdm_m.npy"), r.rdmM.data(), {ti, pi, to, po, 3});
     writeNpy(file("truncated.npy"), r.truncated.data(), {ti, pi, 3});
     writeNpy(file("depth.npy"), r.depth.data(), {r.depth.size()});
+    if (!r.exitDistance.empty())
+        writeNpy(file("exit_distance.npy"), r.exitDistance.data(),
+                 {static_cast<size_t>(kExitDistanceBins) + 1, 3});
     writePlyLines(file("ply.txt"), r.plyLines, r.fiberRadius);
     if (o.anyColour) writeColourPaths(out.path(), r.colourPaths);
     nlohmann::json meta = gatherMetadata(r, o);
@@ -388,6 +421,37 @@ GatherOptions gatherOptionsFromJson(const nlohmann::json& meta, const std::strin
     return o;
 }
 
+ExitDistanceSummary summarizeExitDistance(const std::vector<double>& histogram, int channel) {
+    ExitDistanceSummary e;
+    if (histogram.size() != static_cast<size_t>(kExitDistanceBins + 1) * 3) return e;
+    const auto weight = [&](int bin) { return histogram[static_cast<size_t>(bin) * 3 + channel]; };
+    double inRange = 0, moment = 0;
+    for (int b = 0; b < kExitDistanceBins; ++b) {
+        inRange += weight(b);
+        moment += weight(b) * (b + 0.5) * kExitDistanceBinWidth;
+    }
+    e.weight = inRange + weight(kExitDistanceBins);
+    if (e.weight <= 0) return e;
+    e.mean = inRange > 0 ? moment / inRange : 0.0;
+    e.beyondFraction = weight(kExitDistanceBins) / e.weight;
+    // Quantiles linear within a bin; one in the last bin is its lower edge.
+    const auto quantile = [&](double q) {
+        double below = 0;
+        for (int b = 0; b <= kExitDistanceBins; ++b) {
+            const double w = weight(b);
+            if (below + w >= q * e.weight && w > 0) {
+                if (b == kExitDistanceBins) return b * kExitDistanceBinWidth;
+                return (b + (q * e.weight - below) / w) * kExitDistanceBinWidth;
+            }
+            below += w;
+        }
+        return kExitDistanceBins * kExitDistanceBinWidth;
+    };
+    e.median = quantile(0.5);
+    e.p90 = quantile(0.9);
+    return e;
+}
+
 nlohmann::json gatherMetadata(const GatherResult& r, const GatherOptions& o) {
     const GatherStats& s = r.stats;
     nlohmann::json meta = gatherInputs(o, s.fiberRadius, s.period, s.segments);
@@ -416,6 +480,24 @@ nlohmann::json gatherMetadata(const GatherResult& r, const GatherOptions& o) {
           {"truncated", "float64 (TI,PI,3): weight of paths cut at max_depth / count"},
           {"depth",
            "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}}});
+    if (!r.exitDistance.empty()) {
+        meta["arrays"]["exit_distance"] =
+            "float64 (" + std::to_string(kExitDistanceBins + 1) +
+            ",3): M weight per path by the distance from entry to exit along the cylinder, "
+            "bins of 0.125 ply radii; last: farther (gather.h)";
+        nlohmann::json exit = {{"unit", "ply radii, along the bounding cylinder"},
+                               {"bin_width", kExitDistanceBinWidth},
+                               {"bins", kExitDistanceBins}};
+        for (int c = 0; c < 3; ++c) {
+            const ExitDistanceSummary e = summarizeExitDistance(r.exitDistance, c);
+            exit["m_weight"].push_back(e.weight);
+            exit["mean"].push_back(e.mean);
+            exit["median"].push_back(e.median);
+            exit["p90"].push_back(e.p90);
+            exit["beyond_fraction"].push_back(e.beyondFraction);
+        }
+        meta["exit_distance"] = exit;
+    }
     if (o.anyColour) {
         meta["colour_paths"] = static_cast<int64_t>(r.colourPaths.size());
         meta["lobe_choice"] =

@@ -81,6 +81,31 @@ struct ColourPath {
     bool operator==(const ColourPath&) const = default;
 };
 
+// M paths by how far they travel in the ply: the distance between their
+// entry and exit points on the bounding cylinder, along its surface
+// (sqrt(dz^2 + (R dpsi)^2) with z unwrapped across twist periods and dpsi in
+// [-pi, pi]), in ply radii. Bins of kExitDistanceBinWidth up to
+// kExitDistanceBins of them, then one for everything farther (and for paths
+// that ran along the axis). The model assumes light leaves where it enters
+// (paper 8, "Limitations"); this measures how far from true that is.
+inline constexpr int kExitDistanceBins = 128;
+inline constexpr double kExitDistanceBinWidth = 0.125;
+
+// The bin of distance d (>= 0): [0, kExitDistanceBins].
+inline int exitDistanceBin(double d) {
+    return d < kExitDistanceBins * kExitDistanceBinWidth
+               ? static_cast<int>(d / kExitDistanceBinWidth)
+               : kExitDistanceBins;
+}
+
+// One channel of GatherResult::exitDistance: the M weight, the weighted
+// mean distance of the paths within the binned range, the median and 90th
+// percentile (linear within a bin), and the share of weight beyond it.
+struct ExitDistanceSummary {
+    double weight = 0, mean = 0, median = 0, p90 = 0, beyondFraction = 0;
+};
+ExitDistanceSummary summarizeExitDistance(const std::vector<double>& histogram, int channel);
+
 struct GatherStats {
     int64_t paths = 0, rays = 0;  // paths: of the whole gather
     int64_t truncatedPaths = 0;  // reached maxDepth
@@ -104,6 +129,9 @@ struct GatherResult {
     std::vector<float> rdmR, rdmM;         // (TI, PI, TO, PO, 3)
     std::vector<double> truncated;         // (TI, PI, 3): truncated weight / count
     std::vector<int64_t> depth;            // depth histogram, 0..maxDepth, then truncated
+    // (kExitDistanceBins + 1, 3): M weight per path exiting at each distance
+    // (their sum is the M albedo averaged over the gather's incident directions).
+    std::vector<double> exitDistance;
     std::vector<std::vector<Vec3>> plyLines;  // traced fiber centre lines
     double fiberRadius = 0;
     std::vector<ColourPath> colourPaths;   // any-colour gathers (colour_paths.h)
@@ -119,6 +147,7 @@ struct GatherSums {
     std::vector<int64_t> count, countT;   // (TI, PI)
     std::vector<int64_t> sumR, sumM;      // (TI, PI, TO, PO, 3): weights in 2^-32 units
     std::vector<int64_t> sumTruncated;    // (TI, PI, 3): weights in 2^-32 units
+    std::vector<int64_t> sumExitDistance;  // (kExitDistanceBins + 1, 3): M weights, 2^-32 units
     std::vector<int64_t> depth;           // depth histogram, 0..maxDepth, then truncated
     int64_t rays = 0, axialPaths = 0, depthSum = 0;
     double seconds = 0, walkSeconds = 0;  // of the walks and their set-up

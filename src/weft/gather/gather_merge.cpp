@@ -110,6 +110,9 @@ void addInt64Npy(const std::string& path, const std::vector<size_t>& shape,
     }
 }
 
+// Rows of sum_exit_distance.npy.
+constexpr size_t kExitDistance = static_cast<size_t>(kExitDistanceBins) + 1;
+
 void writeGatherPart(const GatherSums& s, const GatherOptions& o, TempDirCommit& out) {
     const auto file = [&](const char* name) { return inDir(out.path(), name); };
     const RdmBins& b = s.bins;
@@ -119,6 +122,7 @@ void writeGatherPart(const GatherSums& s, const GatherOptions& o, TempDirCommit&
     writeNpy(file("sum_r.npy"), s.sumR.data(), {ti, pi, to, po, 3});
     writeNpy(file("sum_m.npy"), s.sumM.data(), {ti, pi, to, po, 3});
     writeNpy(file("sum_truncated.npy"), s.sumTruncated.data(), {ti, pi, 3});
+    writeNpy(file("sum_exit_distance.npy"), s.sumExitDistance.data(), {kExitDistance, 3});
     writeNpy(file("depth.npy"), s.depth.data(), {s.depth.size()});
     writePlyLines(file("ply.txt"), s.plyLines, s.fiberRadius);
     if (o.anyColour) writeColourPaths(out.path(), s.colourPaths);
@@ -143,6 +147,9 @@ void writeGatherPart(const GatherSums& s, const GatherOptions& o, TempDirCommit&
           {"sum_r", "int64 (TI,PI,TO,PO,3): summed R path weights, in units of 2^-32"},
           {"sum_m", "int64 (TI,PI,TO,PO,3): summed M path weights, in units of 2^-32"},
           {"sum_truncated", "int64 (TI,PI,3): summed weight of paths cut at max_depth, 2^-32 units"},
+          {"sum_exit_distance",
+           "int64 (" + std::to_string(kExitDistance) +
+               ",3): summed M path weights by entry-to-exit distance (gather.h), 2^-32 units"},
           {"depth", "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}},
     });
     if (o.anyColour) meta["arrays"].update(colourPathArrayDescriptions());
@@ -205,6 +212,7 @@ MergedGather mergeGatherParts(const std::vector<std::string>& partDirs) {
         addInt64Npy(file("sum_r.npy"), {ti, pi, to, po, 3}, sums.sumR);
         addInt64Npy(file("sum_m.npy"), {ti, pi, to, po, 3}, sums.sumM);
         addInt64Npy(file("sum_truncated.npy"), {ti, pi, 3}, sums.sumTruncated);
+        addInt64Npy(file("sum_exit_distance.npy"), {kExitDistance, 3}, sums.sumExitDistance);
         if (m.options.anyColour) {
             const std::vector<ColourPath> recorded = readColourPaths(p.dir, m.options, paths);
             sums.colourPaths.insert(sums.colourPaths.end(), recorded.begin(), recorded.end());

@@ -112,9 +112,74 @@ TEST(PlyTracer, FindsFibersSkipsTheExcludedOneAndWrapsPeriodically) {
     // A steep ray crossing several periods keeps the same xy path: it exits
     // the side after travelling the 2D chord.
     const Vec3 steep = normalize(Vec3(0.01, 0.0, 1.0));
-    const PlyTraceHit out = empty.trace(awayFromFiber + Vec3(0, 0, 0.5), steep, 0, 10000);
+    const Vec3 start = awayFromFiber + Vec3(0, 0, 0.5);
+    const PlyTraceHit out = empty.trace(start, steep, 0, 10000);
     EXPECT_EQ(out.kind, PlyTraceHit::Kind::ExitSide);
     EXPECT_GT(out.raysTraced, 10);
+    // Its exit point, unwrapped, is where the straight line meets the cylinder:
+    // |start_xy + t steep_xy| = 1.
+    const double qa = steep.x * steep.x + steep.y * steep.y;
+    const double qb = start.x * steep.x + start.y * steep.y;
+    const double qc = start.x * start.x + start.y * start.y - 1.0;
+    const double t = (-qb + std::sqrt(qb * qb - qa * qc)) / qa;
+    const Vec3 expected = start + steep * t;
+    EXPECT_NEAR(out.point.x, expected.x, 1e-9);
+    EXPECT_NEAR(out.point.y, expected.y, 1e-9);
+    EXPECT_NEAR(out.point.z + out.periodShift * empty.period(), expected.z, 1e-6);
+    EXPECT_GT(out.periodShift, 5);
+    // Downwards, the same line backwards: the shift counts down.
+    const PlyTraceHit back = empty.trace(start, -steep, 0, 10000);
+    const double tBack = (qb + std::sqrt(qb * qb - qa * qc)) / qa;
+    EXPECT_NEAR(back.point.z + back.periodShift * empty.period(), start.z - steep.z * tBack,
+                1e-6);
+    EXPECT_LT(back.periodShift, -5);
+}
+
+TEST(Gather, ExitDistanceSummaryOfAKnownHistogram) {
+    // Weight 1 in bin 3, 3 in bin 5, 1 beyond: mean over the range (bin
+    // centres), quantiles linear within a bin.
+    std::vector<double> h((kExitDistanceBins + 1) * 3, 0.0);
+    h[3 * 3 + 1] = 1, h[5 * 3 + 1] = 3, h[kExitDistanceBins * 3 + 1] = 1;
+    const ExitDistanceSummary e = summarizeExitDistance(h, 1);
+    const double w = kExitDistanceBinWidth;
+    EXPECT_DOUBLE_EQ(e.weight, 5);
+    EXPECT_DOUBLE_EQ(e.mean, (1 * 3.5 + 3 * 5.5) / 4 * w);
+    EXPECT_DOUBLE_EQ(e.beyondFraction, 0.2);
+    EXPECT_DOUBLE_EQ(e.median, (5 + 1.5 / 3) * w);  // 2.5 of 5: 1.5 into bin 5's 3
+    EXPECT_DOUBLE_EQ(e.p90, kExitDistanceBins * w);  // 4.5 of 5: the last bin
+    EXPECT_EQ(summarizeExitDistance(h, 0).weight, 0);
+    EXPECT_EQ(exitDistanceBin(0.0), 0);
+    EXPECT_EQ(exitDistanceBin(0.99 * w), 0);
+    EXPECT_EQ(exitDistanceBin(1e9), kExitDistanceBins);
+}
+
+TEST(Gather, ExitDistancesHoldTheMWeightAndCrossTwistPeriods) {
+    // Lossless fibers, a sparse ply: the histogram of M exit distances holds
+    // exactly the M energy of the RDM (two accumulations of the same paths),
+    // and paths go farther than one twist period (z unwrapped).
+    GatherOptions o = smallGather(losslessFiber(), {40, 0.2, 0.5}, testing::scaled(20000));
+    const GatherResult r = gatherRdm(o);
+    ASSERT_EQ(r.exitDistance.size(), static_cast<size_t>(kExitDistanceBins + 1) * 3);
+    const size_t nOut = r.bins.outgoingCount();
+    for (int c = 0; c < 3; ++c) {
+        double fromRdm = 0, fromHistogram = 0, beyondPeriod = 0;
+        for (size_t i = 0; i < r.bins.incidentCount(); ++i)
+            for (size_t j = 0; j < nOut; ++j)
+                fromRdm += static_cast<double>(r.rdmM[(i * nOut + j) * 3 + c]) *
+                           r.bins.outgoingSolidAngle(j) * r.count[i] / o.paths;
+        for (int b = 0; b <= kExitDistanceBins; ++b) {
+            fromHistogram += r.exitDistance[b * 3 + c];
+            if (b * kExitDistanceBinWidth > r.stats.period) beyondPeriod += r.exitDistance[b * 3 + c];
+        }
+        EXPECT_NEAR(fromHistogram, fromRdm, 1e-5 * fromRdm) << "channel " << c;
+        EXPECT_GT(fromRdm, 0.1);
+        EXPECT_GT(beyondPeriod, 0.0) << "period " << r.stats.period;
+    }
+    // Absorbing fibers (C_TT = 0.3) end paths sooner: their M light leaves nearer.
+    o.fiber.cTT = Rgb(0.3);
+    const GatherResult dark = gatherRdm(o);
+    EXPECT_LT(summarizeExitDistance(dark.exitDistance, 0).mean,
+              0.8 * summarizeExitDistance(r.exitDistance, 0).mean);
 }
 
 TEST(Gather, LosslessFiberConservesEnergyInEveryIncidentBin) {

@@ -173,11 +173,14 @@ PlyTraceHit PeriodicPlyTracer::trace(const Vec3& orgIn, const Vec3& dir, int exc
         }
         if (toSide <= toFace) {
             result.kind = PlyTraceHit::Kind::ExitSide;
+            result.point = org + dir * toSide;
+            result.point.z = std::clamp(result.point.z, 0.0, period_);
             return result;
         }
         // Continue from the opposite slab face: the ply is periodic in z.
         org = org + dir * toFace;
         org.z = dir.z > 0 ? 0.0 : period_;
+        result.periodShift += dir.z > 0 ? 1 : -1;
         toSide -= toFace;
     }
     result.kind = PlyTraceHit::Kind::ExitAxial;

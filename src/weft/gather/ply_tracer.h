@@ -41,7 +41,11 @@ struct PlyTraceHit {
     enum class Kind { Fiber, ExitSide, ExitAxial };
     Kind kind = Kind::ExitSide;
     int fiber = -1;  // for Kind::Fiber
-    Vec3 point;      // hit point (slab coordinates, 0 <= z < period) for Kind::Fiber
+    // Kind::Fiber: the hit point; Kind::ExitSide: where the ray leaves the
+    // cylinder. Slab coordinates (0 <= z <= period): the unwrapped point is
+    // point + (0, 0, periodShift * period).
+    Vec3 point;
+    int periodShift = 0;  // slab faces crossed upwards minus downwards
     int raysTraced = 0;
 };
 

@@ -30,20 +30,17 @@ import argparse
 import datetime
 import json
 import os
-import subprocess
 import sys
 import tempfile
+
+import benchlib
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MB = 1e6
 
 
 def run(cmd):
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit("memory_scale: %s failed (exit %d):\n%s" % (" ".join(cmd), r.returncode,
-                                                              r.stderr.strip()))
-    return r.stdout
+    return benchlib.run(cmd, "memory_scale")
 
 
 def measure(weft, preset, kind, size, folder):

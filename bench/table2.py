@@ -16,7 +16,7 @@ heatmap), the equal-time renders vs the fiber reference. Memory: Embree
 geometry + BVH bytes and peak resident bytes of the reference renders. It
 writes RESULTS/table2/<preset>-<scene>.json (meant to be committed: every
 number of the row, the ladder, and the settings: size, spp, patch, seeds,
-threads, yarn sampling, machine, date, weft commit and binary hash) and the
+threads, yarn sampling, sampler, machine, date, weft commit and binary hash) and the
 row's figure RESULTS/table2/<preset>-<scene>.png (reference | neural |
 heatmap of 1 - SSIM | equal-time fiber), then assembles the table.
 
@@ -62,6 +62,13 @@ Cotton knit at 4096 spp does not fit at 128 x 128 with the full fiber ladder
 Fiber c of cotton was flat across the quick ladder (10.6, 12.6), so its top
 level loses little.
 
+--sampler sobol renders every image of a chunk with `weft render --sampler
+sobol` (Owen-scrambled Sobol' points, docs/render.md#samplers) instead of
+independent random numbers; the chunk records it. Use it with --name (for
+example table2-sobol) to keep such chunks in their own table: its c then
+falls with spp where the integrand is smooth (the ladder's max/min measures
+that, not a heavy tail), and the top level's c gives the time to 0.01.
+
 --baseline dual adds the dual-scattering baseline (after ZMA23; `weft render
 --mode dual`, docs/dual-scattering.md) to a chunk: its converged render and
 ladder (the neural ladder's levels), SSIM and relative MSE against the fiber
@@ -105,10 +112,11 @@ import glob
 import hashlib
 import json
 import os
-import shutil
 import subprocess
 import sys
 import time
+
+import benchlib
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PRESETS = ["fleece", "silk", "polyester", "cotton", "gabardine"]
@@ -178,18 +186,7 @@ class Bench:
 
     def cached(self, folder, params, make):
         """Runs make(folder) unless folder/params.json already records `params`."""
-        stamp = os.path.join(folder, "params.json")
-        if os.path.exists(stamp):
-            with open(stamp) as f:
-                if json.load(f) == params:
-                    return
-        if os.path.isdir(folder):
-            shutil.rmtree(folder)
-        os.makedirs(folder)
-        make(folder)
-        with open(stamp + ".tmp", "w") as f:
-            json.dump(params, f, indent=1)
-        os.replace(stamp + ".tmp", stamp)
+        benchlib.cached(folder, params, make)
 
     def render(self, scene, out_dir, name, mode, seed, spp=None, seconds=None, extra=()):
         """weft render -> (stats dict, exr path); cached by its command line."""
@@ -197,6 +194,8 @@ class Bench:
         budget = ["--spp", str(spp)] if spp is not None else ["--time", "%.3f" % seconds]
         cmd = [self.weft, "render", scene, "--mode", mode, "--seed", str(seed), "--quiet",
                "--threads", str(self.args.threads)] + budget + list(extra)
+        if self.args.sampler != "independent":
+            cmd += ["--sampler", self.args.sampler]
         exr = os.path.join(folder, "image.exr")
 
         def make(folder):
@@ -552,6 +551,52 @@ def c_levels(eq):
     return ", ".join("%d: %.3g" % (l["spp"], l["c"]) for l in eq["levels"])
 
 
+def model_fit(preset):
+    """The shipped model's fit errors against its gather (models/<preset>.json "fit")."""
+    try:
+        with open(os.path.join(ROOT, "models", preset + ".json")) as f:
+            fit = json.load(f).get("fit", {})
+    except (OSError, ValueError):
+        return None
+    return fit if "m_rel_l2" in fit else None
+
+
+def reason_lines(cells):
+    """For the weave and knit rows below SSIM 0.97 at 4x4 px: what was measured of their cause,
+    beside the same numbers for the rows that reach it (the shipped model's M and R fit errors,
+    bench/results/exit-distance.json's distance from entry to exit in the ply)."""
+    coarse = str(PLY_SCALES[-1])
+    rows = [c for c in cells if c["scene"] != "closeup" and coarse in c.get("ssim_scales", {})]
+    low = [c for c in rows if c["ssim_scales"][coarse] < 0.97]
+    if not low:
+        return []
+    exits = {}
+    path = os.path.join(ROOT, "bench", "results", "exit-distance.json")
+    if os.path.exists(path):
+        with open(path) as f:
+            exits = {r["preset"]: r for r in json.load(f)["rows"]}
+    lines = ["", "Rows below 0.97 at %sx%s px, with what was measured of their cause beside "
+             "the rows that reach it: the shipped model's error against its own gather (M and R "
+             "relative L2, models/README.md; M rel. L2 x the gather's M albedo weighs the M error "
+             "by how much of the light M carries), the relMSE minus noise above, and how far light "
+             "travels in the ply before it leaves (median and 90th percentile of the M exit "
+             "distance in ply radii, [exit-distance.md](exit-distance.md); the model assumes "
+             "0)." % (coarse, coarse), "",
+             "| material | scene | SSIM at %sx%s px | M rel. L2 | M albedo | M rel. L2 x albedo "
+             "| R rel. L2 | relMSE minus noise | exit distance median / 90th pct |"
+             % (coarse, coarse), "|---|---|---|---|---|---|---|---|---|"]
+    for c in low + [c for c in rows if c not in low]:
+        fit, e = model_fit(c["preset"]), exits.get(c["preset"])
+        lines.append("| %s | %s | %.3f%s | %s | %s | %s | %s | %.4f | %s |" % (
+            c["preset"], c["scene"], c["ssim_scales"][coarse], "" if c in low else " (reaches)",
+            "-" if fit is None else "%.3f" % fit["m_rel_l2"],
+            "-" if e is None else "%.3f" % e["m_albedo"],
+            "-" if fit is None or e is None else "%.3f" % (fit["m_rel_l2"] * e["m_albedo"]),
+            "-" if fit is None else "%.3f" % fit["r_rel_l2"], c["rel_mse_minus_noise"],
+            "-" if e is None else "%.2f / %.2f" % (e["median"], e["p90"])))
+    return lines
+
+
 def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
                  ablation_paths=0, figure_note=""):
     """table2*.md and .json from result cells (chunk files or one --quick run)."""
@@ -629,6 +674,7 @@ def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
             c["preset"], c["scene"], c["size"], c["ref_spp"], c["ssim"], ssim_scales_text(c),
             c["rel_mse"],
             f["reference_noise"], n["reference_noise"], c["rel_mse_minus_noise"], targets(c)))
+    lines += reason_lines(cells)
     lines += ["", "## Time at equal quality (relative MSE %.2f) and memory" % TARGET_REL_MSE, "",
               "Memory of these 3 x 3 patches; the neural material (about 1 MB per yarn model) "
               "does not grow with the cloth, the geometry does: bench/memory_scale.py gives the "
@@ -701,17 +747,18 @@ def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
     if chunks:
         lines += ["", "## Chunks: settings and provenance", "",
                   "| material | scene | pixels | patch | ref spp | ladder fiber / neural (spp) "
-                  "| threads | yarn sampling | weft commit | finished (UTC) | minutes "
-                  "(estimate) |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+                  "| threads | yarn sampling | sampler | weft commit | finished (UTC) | minutes "
+                  "(estimate) |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
         for c in chunks:
             s, p, r = c["settings"], c["provenance"], c["run"]
             est = r.get("estimated_minutes")
-            lines.append("| %s | %s | %d | %d | %d | %s / %s | %s | %s | %s%s | %s | %.0f (%s) |"
+            lines.append("| %s | %s | %d | %d | %d | %s / %s | %s | %s | %s | %s%s | %s | %.0f (%s) |"
                          % (c["preset"], c["scene"], s["size"], s["patch"], s["ref_spp"],
                             ",".join(str(l["spp"]) for l in c["fiber"]["equal_quality"]["levels"]),
                             ",".join(str(l["spp"]) for l in
                                      c["neural"]["equal_quality"]["levels"]),
-                            c["threads_used"], c["yarn_sampling"], (p["weft_commit"] or "?")[:10],
+                            c["threads_used"], c["yarn_sampling"],
+                            s.get("sampler", "independent"), (p["weft_commit"] or "?")[:10],
                             " (src dirty)" if p["weft_source_dirty"] else "",
                             r["finished"].replace("T", " ")[:16], r["wall_seconds"] / 60,
                             "-" if est is None else "%.0f" % est))
@@ -744,7 +791,8 @@ def chunk_path(folder, preset, kind):
 
 def matching_settings(a, b):
     keys = ("size", "ref_spp", "patch", "fiber_ladder", "neural_ladder", "seeds")
-    return all(a.get(k) == b.get(k) for k in keys)
+    return all(a.get(k) == b.get(k) for k in keys) and a.get(
+        "sampler", "independent") == b.get("sampler", "independent")
 
 
 def run_chunk(bench, args, folder, preset, kind, s, quick):
@@ -752,7 +800,7 @@ def run_chunk(bench, args, folder, preset, kind, s, quick):
     path = chunk_path(folder, preset, kind)
     settings = dict(s, seeds={"reference": SEEDS["reference"],
                               "ladder": SEEDS["ladder"], "equal_time": SEEDS["equal_time"]},
-                    threads=args.threads)
+                    threads=args.threads, sampler=args.sampler)
     if os.path.exists(path) and not args.redo:
         with open(path) as f:
             old = json.load(f)
@@ -1029,6 +1077,9 @@ def main():
     p.add_argument("--presets", default=",".join(PRESETS), help="without --chunk: materials")
     p.add_argument("--scenes", default=",".join(SCENES), help="without --chunk: scenes")
     p.add_argument("--threads", type=int, default=0, help="render threads (0: all cores)")
+    p.add_argument("--sampler", default="independent", choices=("independent", "sobol"),
+                   help="weft render --sampler of every render of a chunk (docs/render.md); "
+                        "recorded in the chunk's settings")
     p.add_argument("--baseline", default="", metavar="dual",
                    help="also render the dual-scattering baseline (after ZMA23) for each chunk "
                         "and add its columns (reuses the chunk's cached renders)")

@@ -1029,7 +1029,8 @@ PYBIND11_MODULE(weft, m) {
           py::arg("shard") = py::none(), py::arg("any_colour") = false,
           py::arg("out") = py::none(), py::arg("quiet") = true,
           "`weft gather`: the RDM of a ply as a dict of arrays (count, count_t, p_t, rdm_r, "
-          "rdm_m, truncated, depth, exit_distance) and stats; out=DIR also writes the gather folder. "
+          "rdm_m, truncated, depth, exit_distance) and stats; out=DIR also writes the gather "
+          "folder. "
           "shard=(k, n): only shard k of n of the paths, as integer sums (count, count_t, "
           "sum_r, sum_m, sum_truncated, sum_exit_distance, depth) for gather_merge; out=DIR "
           "writes the part. "

@@ -213,14 +213,8 @@ GatherSums gatherSums(const GatherOptions& o) {
                         path.kind = depth == 1 && woLocal.z > 0 ? ColourPath::R : ColourPath::M;
                         path.outgoingBin = static_cast<int32_t>(bins.outgoingBin(woLocal));
                     }
-                    // The weight for the gather's own colour (any colour: W0 C_TT^k,
-                    // as the RDM gets it from addColourPath).
-                    for (int c = 0; c < 3; ++c) path.weight[c] = static_cast<float>(weight[c]);
-                    const Rgb ownWeight =
-                        o.anyColour ? Rgb(path.weightFor(o.fiber.cTT, 0),
-                                          path.weightFor(o.fiber.cTT, 1),
-                                          path.weightFor(o.fiber.cTT, 2))
-                                    : weight;
+                    if (o.anyColour)
+                        for (int c = 0; c < 3; ++c) path.weight[c] = static_cast<float>(weight[c]);
                     if (path.kind == ColourPath::M) {
                         // Along the cylinder's surface, z unwrapped (gather.h).
                         const double dz = exitPoint.z + periodShift * period - entryZ;
@@ -228,9 +222,13 @@ GatherSums gatherSums(const GatherOptions& o) {
                             std::remainder(std::atan2(exitPoint.y, exitPoint.x) - psi, kTwoPi);
                         const size_t bin =
                             static_cast<size_t>(exitDistanceBin(std::hypot(dz, dpsi))) * 3;
+                        // The weight for the gather's own colour (any colour: W0 C_TT^k,
+                        // as addColourPath gives the RDM).
                         for (int c = 0; c < 3; ++c)
                             atomicAdd(sums.sumExitDistance[bin + c],
-                                      GatherSums::toFixed(ownWeight[c]));
+                                      GatherSums::toFixed(o.anyColour
+                                                              ? path.weightFor(o.fiber.cTT, c)
+                                                              : weight[c]));
                     }
                     if (!o.anyColour) {
                         addPathWeight(sums, path.kind, binIn,

@@ -32,7 +32,7 @@ def closeup_scene(folder, model, size):
     scene = {
         "camera": {"from": [0, 0.25, 1.6], "to": [0, 0, 0], "up": [0, 1, 0], "fov_deg": 12},
         "film": {"width": size, "height": size},
-        "render": {"spp": 16, "max_depth": 100, "seed": 0},
+        "render": {"spp": 16, "max_depth": 1000, "seed": 0},
         "lights": [
             {"type": "sky", "scale": 0.5},
             {"type": "sphere", "center": [1.5, 1.5, 1.5], "radius": 0.3, "radiance": [20, 20, 20]},
@@ -59,7 +59,7 @@ def knit_scene(folder, model, size):
         "camera": {"from": [centre[0], centre[1] + 0.3 * extent, centre[2] + 1.6 * extent],
                    "to": centre, "up": [0, 1, 0], "fov_deg": 40},
         "film": {"width": size, "height": size},
-        "render": {"spp": 16, "max_depth": 100, "seed": 0},
+        "render": {"spp": 16, "max_depth": 1000, "seed": 0},
         "lights": [
             {"type": "sky"},
             {"type": "sphere", "center": [centre[0] + extent, centre[1] + extent, extent],

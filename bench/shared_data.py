@@ -73,7 +73,7 @@ def swatch_scene(folder, name, bcc, model, size, spp, radius):
         "camera": {"from": [centre[0], centre[1] - 0.35 * extent, centre[2] + 1.5 * extent],
                    "to": centre, "up": [0, 1, 0], "fov_deg": 40},
         "film": {"width": size, "height": size},
-        "render": {"spp": spp, "max_depth": 100, "seed": 0},
+        "render": {"spp": spp, "max_depth": 1000, "seed": 0},
         "lights": [
             {"type": "sky"},
             {"type": "sphere", "center": [centre[0] + extent, centre[1] + extent, extent],

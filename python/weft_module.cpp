@@ -766,6 +766,9 @@ py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, cons
     for (const std::string& w :
          render::yarnOverlapWarnings(desc.path, result->stats.scene.yarnOverlap))
         if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw py::error_already_set();
+    if (const std::string w = render::truncationWarning(result->stats, options.maxDepth);
+        !w.empty())
+        if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw py::error_already_set();
     json stats = render::toJson(result->stats);
     stats["scene_hash"] = hash;
     stats["next_event_estimation"] = nee;

@@ -63,3 +63,18 @@ def test_render_warns_about_overlapping_yarns(tmp_path, root):
     overlap = stats["yarn_overlap"][0]
     assert overlap["overlap_fraction"] == 1.0 and overlap["radius"] == 0.25
     assert math.isclose(overlap["largest_radius_without_overlap"], 0.15, rel_tol=1e-7)
+
+
+def test_render_warns_about_paths_cut_at_max_depth(tmp_path, root):
+    write_pair(tmp_path)
+    scene = {
+        "camera": {"from": [5, 0.15, 20], "to": [5, 0.15, 0]},
+        "film": {"width": 8, "height": 8},
+        "render": {"max_depth": 1},
+        "yarns": [{"curves": "pair.txt", "radius": 0.1,
+                   "model": str(root / "models" / "fleece.json")}],
+    }
+    with pytest.warns(UserWarning, match=r"reached render.max_depth = 1 scattering events"):
+        _, stats = weft.render(scene, mode="fiber", spp=2, base_dir=tmp_path)
+    assert stats["truncated_paths"] > 0
+    assert math.isclose(stats["truncated_fraction"], stats["truncated_paths"] / (8 * 8 * 2))

@@ -221,6 +221,38 @@ TEST_F(RenderCliTest, WarnsWhenYarnsOverlap) {
     EXPECT_TRUE(alone[0].at("largest_radius_without_overlap").is_null());
 }
 
+// A shallow render.max_depth cuts fiber paths: counted in the statistics,
+// warned about (also with --quiet: the image is biased), summed by a merge.
+TEST_F(RenderCliTest, WarnsWhenPathsAreCutAtMaxDepth) {
+    std::string text = readFile(path("scene.json"));
+    text.replace(text.find("\"spp\": 2,"), 9, "\"spp\": 4, \"max_depth\": 2,");
+    writeFileAtomic(path("shallow-scene.json"), text);
+    RunResult r = run("render shallow-scene.json --mode fiber --quiet --out shallow.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(testing::contains(r.err, "weft: warning: "));
+    EXPECT_TRUE(testing::contains(r.err, "reached render.max_depth = 2 scattering events"))
+        << r.err;
+    const nlohmann::json stats = nlohmann::json::parse(readFile(path("shallow.json")));
+    const int64_t cut = stats.at("truncated_paths").get<int64_t>();
+    EXPECT_GT(cut, 0);
+    EXPECT_NEAR(stats.at("truncated_fraction").get<double>(), cut / (16.0 * 12.0 * 4.0), 1e-12);
+    // Shards trace the same paths: their merge counts the same cut paths.
+    for (int k = 0; k < 2; ++k)
+        ASSERT_EQ(run("render shallow-scene.json --mode fiber --quiet --shard " +
+                      std::to_string(k) + "/2 --out s" + std::to_string(k) + ".exr")
+                      .status,
+                  0);
+    ASSERT_EQ(run("render merge s0.exr s1.exr --out merged.exr").status, 0);
+    const nlohmann::json merged = nlohmann::json::parse(readFile(path("merged.json")));
+    EXPECT_EQ(merged.at("truncated_paths"), cut);
+    EXPECT_EQ(merged.at("truncated_fraction"), stats.at("truncated_fraction"));
+    // The default depth cuts nothing here: no warning.
+    r = run("render scene.json --mode fiber --quiet --out deep.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("deep.json"))).at("truncated_paths"), 0);
+}
+
 // The mean of each channel of an EXR.
 Rgb meanColour(const Image& image) {
     Rgb sum;

@@ -106,6 +106,8 @@ void runRender(const RenderCmdOptions& o) {
     stats["yarn_sampling"] = yarnSamplingName(yarnOptions.sampling);
     stats["max_depth"] = options.maxDepth;
     stats["version"] = WEFT_VERSION;
+    if (const std::string w = render::truncationWarning(result.stats, options.maxDepth); !w.empty())
+        std::fprintf(stderr, "weft: warning: %s\n", w.c_str());
     if (result.stats.nonFiniteSamples > 0)
         std::fprintf(stderr, "weft: warning: %lld samples were NaN or infinite and were dropped\n",
                      static_cast<long long>(result.stats.nonFiniteSamples));

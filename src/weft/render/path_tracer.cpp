@@ -113,7 +113,10 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Sampl
                 if (l->isInfinite()) addEmission(*l, l->radiance(dir));
             break;
         }
-        if (depth >= options.maxDepth) break;
+        if (depth >= options.maxDepth) {
+            ++counters.truncated;
+            break;
+        }
 
         const ShadingPoint bsdf(scene, hit, -dir);
 

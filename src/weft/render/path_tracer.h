@@ -17,7 +17,12 @@
 //   - Russian roulette from `rouletteDepth` scattering events on, with
 //     survival probability min(1, max channel of the path throughput) (an
 //     unbiased estimator: survivors are divided by it);
-//   - at most `maxDepth` scattering events (the scene's render.max_depth).
+//   - at most `maxDepth` scattering events (the scene's render.max_depth); a
+//     path still carrying light there is cut and counted (PathCounters::
+//     truncated): its further light is missing from the image. Near-white
+//     fibers need many events (cotton: about 13 fiber events per ply visit,
+//     so 100 cut 10 % of a cotton cloth's light in fiber mode); the default
+//     1000 is the gather's (gather.h), whose RDM the neural model learns.
 // Shading frames: neural mode, the yarn frame of DESIGN.md 2 (t = segment
 // tangent, n = outward tube normal, b = t x n); fiber mode, the fiber frame
 // with the tangent as +x (FiberBcsdf); both from Scene::shadingFrame.
@@ -38,7 +43,7 @@
 namespace weft::render {
 
 struct PathTracerOptions {
-    int maxDepth = 100;
+    int maxDepth = 1000;
     bool nextEventEstimation = true;
     int rouletteDepth = 3;
 };
@@ -46,6 +51,7 @@ struct PathTracerOptions {
 struct PathCounters {
     uint64_t rays = 0;  // closest-hit and shadow queries
     uint64_t paths = 0;
+    uint64_t truncated = 0;  // paths cut at maxDepth
 };
 
 Rgb pathRadiance(const Scene& scene, const Vec3& org, const Vec3& dir, SampleStream& stream,

@@ -93,7 +93,9 @@ MergedRender mergeRenderParts(const std::vector<std::string>& exrPaths) {
     const int height = static_cast<int>(first.integer("height", {1, 1 << 16}));
     std::vector<double> sum(static_cast<size_t>(width) * height * 3, 0.0);
     nlohmann::json stats = parts[0].stats;
-    int64_t passes = 0, rays = 0, nonFinite = 0, peak = 0, threads = 0;
+    int64_t passes = 0, rays = 0, nonFinite = 0, peak = 0, threads = 0, truncated = 0;
+    // Parts by an older weft carry no truncation count: the merge then reports none.
+    bool allCountTruncation = true;
     double seconds = 0, buildSeconds = 0;
     for (const Part& p : parts) {
         const Image image = readImage(p.exr);
@@ -111,6 +113,11 @@ MergedRender mergeRenderParts(const std::vector<std::string>& exrPaths) {
         passes += r.integer("passes", {0, 1 << 30});
         rays += r.integer("rays", {0, std::numeric_limits<int64_t>::max() / 65536});
         nonFinite += r.integer("non_finite_samples", {0, std::numeric_limits<int64_t>::max() / 65536});
+        if (r.has("truncated_paths"))
+            truncated +=
+                r.integer("truncated_paths", {0, std::numeric_limits<int64_t>::max() / 65536});
+        else
+            allCountTruncation = false;
         peak = std::max(peak, r.integer("peak_resident_bytes", {0, std::numeric_limits<int64_t>::max()}));
         threads = std::max(threads, r.integer("threads", {1, 1024}));
         seconds += r.number("seconds", NumberRange::atLeast(0));
@@ -132,6 +139,15 @@ MergedRender mergeRenderParts(const std::vector<std::string>& exrPaths) {
     stats["threads"] = threads;
     stats["peak_resident_bytes"] = peak;
     stats["non_finite_samples"] = nonFinite;
+    if (allCountTruncation) {
+        // One path per sample of every pixel.
+        stats["truncated_paths"] = truncated;
+        stats["truncated_fraction"] =
+            static_cast<double>(truncated) / (spp * static_cast<double>(width) * height);
+    } else {
+        stats.erase("truncated_paths");
+        stats.erase("truncated_fraction");
+    }
     stats["scene"]["build_seconds"] = buildSeconds;
     stats["shards"] = {{"count", parts[0].shard.count}, {"parts", exrPaths}};
     m.stats = std::move(stats);

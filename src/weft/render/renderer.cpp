@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 
 #include "weft/core/error.h"
@@ -66,7 +67,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     const int tilesX = (width + kTile - 1) / kTile, tilesY = (height + kTile - 1) / kTile;
     const int tiles = tilesX * tilesY;
     std::vector<double> sum(static_cast<size_t>(width) * height * 3, 0.0);
-    std::atomic<uint64_t> rays{0}, nonFinite{0};
+    std::atomic<uint64_t> rays{0}, nonFinite{0}, paths{0}, truncated{0};
 
     PathTracerOptions tracer;
     tracer.maxDepth = options.maxDepth;
@@ -115,6 +116,8 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                         progress.add();
                     }
                     rays.fetch_add(counters.rays, std::memory_order_relaxed);
+                    paths.fetch_add(counters.paths, std::memory_order_relaxed);
+                    truncated.fetch_add(counters.truncated, std::memory_order_relaxed);
                     nonFinite.fetch_add(dropped, std::memory_order_relaxed);
                 });
         });
@@ -164,10 +167,25 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     st.peakResidentBytes = peakResidentBytes();
     st.scene = scene.stats();
     st.nonFiniteSamples = static_cast<int64_t>(nonFinite.load());
+    st.truncatedPaths = static_cast<int64_t>(truncated.load());
+    st.truncatedFraction =
+        paths.load() > 0 ? static_cast<double>(truncated.load()) / static_cast<double>(paths.load())
+                         : 0.0;
     st.shard = options.shard;
     st.shardSpp = options.shard ? options.spp : 0;
     st.firstSample = first;
     return result;
+}
+
+std::string truncationWarning(const RenderStats& stats, int maxDepth) {
+    if (stats.truncatedFraction <= kTruncationWarningFraction) return "";
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "%.2f %% of the paths reached render.max_depth = %d scattering events while "
+                  "still carrying light and were cut: the image lacks their further light "
+                  "(darker, not noisier); raise render.max_depth (at most 10000)",
+                  100 * stats.truncatedFraction, maxDepth);
+    return text;
 }
 
 nlohmann::json toJson(const RenderStats& s) {
@@ -186,6 +204,8 @@ nlohmann::json toJson(const RenderStats& s) {
         {"sampler", samplerKindName(s.sampler)},
         {"peak_resident_bytes", s.peakResidentBytes},
         {"non_finite_samples", s.nonFiniteSamples},
+        {"truncated_paths", s.truncatedPaths},
+        {"truncated_fraction", s.truncatedFraction},
         {"scene",
          {{"curves", s.scene.curves},
           {"curve_points", s.scene.curvePoints},

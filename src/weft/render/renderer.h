@@ -38,7 +38,7 @@ struct RenderOptions {
     int threads = 0;     // 0: all cores
     uint64_t seed = 0;
     SamplerKind sampler = SamplerKind::Independent;  // core/sample_stream.h
-    int maxDepth = 100;
+    int maxDepth = 1000;  // path_tracer.h: fewer cuts near-white fiber paths
     bool nextEventEstimation = true;
     bool quiet = false;  // no progress output
     // A part of an spp render for `weft render merge`: only this shard's samples.
@@ -64,6 +64,10 @@ struct RenderStats {
     int64_t peakResidentBytes = 0;  // of the whole process (getrusage)
     SceneBuildStats scene;
     int64_t nonFiniteSamples = 0;  // samples dropped as NaN/Inf (reported; should stay 0)
+    // Paths cut at maxDepth while still carrying light, and their share of all
+    // paths: the image lacks their further light (a bias, not noise).
+    int64_t truncatedPaths = 0;
+    double truncatedFraction = 0;
     // A part: its shard of `shardSpp` samples per pixel, samples [firstSample, firstSample + spp).
     std::optional<Shard> shard;
     int64_t shardSpp = 0, firstSample = 0;
@@ -75,6 +79,13 @@ struct RenderResult {
 };
 
 RenderResult render(const Scene& scene, const RenderOptions& options);
+
+// Paths cut at max_depth above this share bias the image visibly (a darker
+// cloth): weft render warns.
+constexpr double kTruncationWarningFraction = 1e-3;
+// The warning for a render whose truncatedFraction exceeds kTruncationWarningFraction
+// (what was cut, and the fix), or "" below it.
+std::string truncationWarning(const RenderStats& stats, int maxDepth);
 
 // "independent" or "sobol"; InputError naming `field` and the allowed names otherwise.
 SamplerKind parseSampler(const std::string& name, const std::string& field = "--sampler");

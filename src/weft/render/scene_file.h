@@ -4,7 +4,7 @@
 //   {
 //     "camera": {"from": [x,y,z], "to": [x,y,z], "up": [0,1,0], "fov_deg": 30},
 //     "film":   {"width": 512, "height": 512},
-//     "render": {"spp": 64, "max_depth": 100, "seed": 0, "sampler": "independent"},
+//     "render": {"spp": 64, "max_depth": 1000, "seed": 0, "sampler": "independent"},
 //     "lights": [ {"type": "sky", "scale": 1},
 //                 {"type": "envmap", "file": "sky.exr", "scale": 1.0, "rotate_deg": 0},
 //                 {"type": "sphere", "center": [x,y,z], "radius": r, "radiance": [r,g,b]},
@@ -48,7 +48,7 @@ struct FilmDesc {
 
 struct RenderDesc {
     int spp = 64;                                    // [1, 1 << 20]
-    int maxDepth = 100;                              // scattering events per path, [1, 10000]
+    int maxDepth = 1000;                             // scattering events per path, [1, 10000]
     uint64_t seed = 0;                               // any non-negative integer
     SamplerKind sampler = SamplerKind::Independent;  // "independent" or "sobol"
 };

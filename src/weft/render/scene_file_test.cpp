@@ -181,7 +181,7 @@ TEST(SceneFile, DefaultsFillEveryOptionalKey) {
     EXPECT_EQ(s.film.width, 512);
     EXPECT_EQ(s.film.height, 512);
     EXPECT_EQ(s.render.spp, 64);
-    EXPECT_EQ(s.render.maxDepth, 100);
+    EXPECT_EQ(s.render.maxDepth, 1000);
     EXPECT_EQ(s.render.seed, 0u);
     EXPECT_EQ(s.render.sampler, SamplerKind::Independent);
     EXPECT_TRUE(s.lights.empty());  // the procedural sky

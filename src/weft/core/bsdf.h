@@ -25,9 +25,16 @@
 // density needs much less of wi than prepare() computes (the yarn's needs
 // P(T|wi) only, not the calibration and the energy guard: 2.6x faster); an
 // override must return exactly pdf(prepared incident, wo).
+//
+// A BsdfIncident also carries the importance of each colour channel to the
+// caller (the path tracer passes the path throughput; default 1, 1, 1). A BSDF
+// may pick among its lobes by it, so that a long path's weights stay bounded
+// in the channels that carry its light: sample and pdf then both follow that
+// choice, and eval does not depend on it. FiberBcsdf does (fiber_bcsdf.h).
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <new>
 #include <type_traits>
@@ -85,6 +92,15 @@ class BsdfIncident {
     static constexpr size_t kStateBytes = 384;
 
     const Vec3& wi() const { return wi_; }
+    // Set before prepare(). Channels that are negative or not finite count as 0;
+    // with no positive channel left, every channel counts as 1.
+    void setImportance(const Rgb& importance) {
+        Rgb clean;
+        for (int c = 0; c < 3; ++c)
+            clean[c] = std::isfinite(importance[c]) && importance[c] > 0 ? importance[c] : 0.0;
+        importance_ = clean.maxComponent() > 0 ? clean : Rgb(1.0);
+    }
+    const Rgb& importance() const { return importance_; }
 
     template <typename T>
     void emplace(const Vec3& wi, const T& state) {
@@ -107,6 +123,7 @@ class BsdfIncident {
     }
 
     Vec3 wi_;
+    Rgb importance_{1.0};
     alignas(double) unsigned char state_[kStateBytes];
 };
 
@@ -164,6 +181,11 @@ class BsdfSlice {
   public:
     BsdfSlice() = default;
     BsdfSlice(const Bsdf& bsdf, const Vec3& wi) : bsdf_(&bsdf) { bsdf.prepare(wi, in_); }
+    // With the importance of each channel (BsdfIncident::setImportance).
+    BsdfSlice(const Bsdf& bsdf, const Vec3& wi, const Rgb& importance) : bsdf_(&bsdf) {
+        in_.setImportance(importance);
+        bsdf.prepare(wi, in_);
+    }
 
     const Vec3& wi() const { return in_.wi(); }
     const Bsdf& bsdf() const { return *bsdf_; }

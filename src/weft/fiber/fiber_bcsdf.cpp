@@ -48,20 +48,22 @@ Rgb FiberBcsdf::albedo(const Vec3& wi) const {
     return f + (Rgb(1.0) - f) * params_.cTT;
 }
 
-double FiberBcsdf::probabilityR(const Rgb& f) const {
-    const double energyR = f.average();
-    const double energyTT = ((Rgb(1.0) - f) * params_.cTT).average();
+double FiberBcsdf::probabilityR(const Rgb& f, const Rgb& importance) const {
+    const double energyR = (f * importance).average();
+    const double energyTT = ((Rgb(1.0) - f) * params_.cTT * importance).average();
     const double total = energyR + energyTT;
     return total > 0 ? energyR / total : 0.5;
 }
 
-FiberBcsdf::Incident FiberBcsdf::incident(const Vec3& wi) const {
+FiberBcsdf::Incident FiberBcsdf::incident(const Vec3& wi, const Rgb& importance) const {
     const Angles a = anglesOf(wi);
     const Rgb f = fresnel(a.cosTheta);
-    return Incident{a, f, probabilityR(f)};
+    return Incident{a, f, probabilityR(f, importance)};
 }
 
-void FiberBcsdf::prepare(const Vec3& wi, BsdfIncident& in) const { in.emplace(wi, incident(wi)); }
+void FiberBcsdf::prepare(const Vec3& wi, BsdfIncident& in) const {
+    in.emplace(wi, incident(wi, in.importance()));
+}
 
 Rgb FiberBcsdf::evalPrepared(const Incident& in, const Angles& out) const {
     Rgb value;

@@ -19,9 +19,10 @@ double powerHeuristic(double a, double b) {
 // frame; world directions in and out.
 class ShadingPoint {
   public:
-    ShadingPoint(const Scene& scene, const TubeHit& hit, const Vec3& wiWorld)
+    // `throughput`: the path's, which the BSDF may pick its lobes by (core/bsdf.h).
+    ShadingPoint(const Scene& scene, const TubeHit& hit, const Vec3& wiWorld, const Rgb& throughput)
         : frame_(scene.shadingFrame(hit)),
-          slice_(scene.bsdf(hit.material), frame_.toLocal(wiWorld)) {}
+          slice_(scene.bsdf(hit.material), frame_.toLocal(wiWorld), throughput) {}
     // eval and pdf at wo in one call.
     BsdfEval evalPdf(const Vec3& wo) const { return slice_.evalPdf(frame_.toLocal(wo)); }
     // A sample with wo in world space.
@@ -118,7 +119,7 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Sampl
             break;
         }
 
-        const ShadingPoint bsdf(scene, hit, -dir);
+        const ShadingPoint bsdf(scene, hit, -dir, throughput);
 
         if (nee) {
             const int pick = std::min(static_cast<int>(stream.get1D() * lights.size()),

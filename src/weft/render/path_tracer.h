@@ -5,8 +5,11 @@
 //     one direction from its sample(), a shadow ray (blocked by tubes and by
 //     the other finite lights), weighted against BSDF sampling by the power
 //     heuristic (Veach 1997; pbrt-v4 PathIntegrator);
-//   - then one BSDF sample continues the path. Rays that escape see every
-//     infinite light, rays that hit a sphere light see it; both weighted by
+//   - then one BSDF sample continues the path. The BSDF is prepared with the
+//     path throughput as its channel importance (core/bsdf.h): the fiber
+//     BCSDF picks R or TT by it, which keeps fiber-mode throughputs bounded
+//     over hundreds of events. Rays that escape see every infinite light,
+//     rays that hit a sphere light see it; both weighted by
 //     the power heuristic against the light's NEE density (uniform light
 //     pick times Light::pdf), or fully after a delta (T lobe) or camera
 //     vertex. With NEE off, emission is always counted fully (pure BSDF

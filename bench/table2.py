@@ -12,7 +12,11 @@ and knit). A chunk renders, each in its own `weft render` process:
   - an equal-time pair: fiber mode given the time neural mode needs to reach
     relative MSE 0.01, and the neural render at that spp (seed 3);
 and compares (weft compare): neural vs fiber reference (SSIM, relative MSE,
-heatmap), the equal-time renders vs the fiber reference. Memory: Embree
+heatmap, and the per channel mean ratio, which shows a bias of either mode
+apart from noise), the equal-time renders vs the fiber reference. The fiber
+reference's render.max_depth and its share of cut paths are recorded: at the
+old default of 100 a near-white material's fiber paths were cut and its
+reference too dark (bench/max_depth.py measures it per row). Memory: Embree
 geometry + BVH bytes and peak resident bytes of the reference renders. It
 writes RESULTS/table2/<preset>-<scene>.json (meant to be committed: every
 number of the row, the ladder, and the settings: size, spp, patch, seeds,
@@ -242,6 +246,18 @@ def convergence(bench, scene, folder, mode, ref_exr, ref_spp, divisors, extra=()
             "reference_noise": last["c"] / ref_spp}
 
 
+def fiber_reference(stats):
+    """The fiber reference's path depth limit and the share of its paths cut there (weft
+    render's image.json; docs/render.md#integrator)."""
+    return {"max_depth": stats.get("max_depth"),
+            "truncated_fraction": stats.get("truncated_fraction")}
+
+
+# Chunks made before weft's default max_depth became 1000 (commit 74490ee) hold
+# no fiber_reference: `weft scene` wrote its then default, 100, into their scenes.
+OLD_DEFAULT_MAX_DEPTH = 100
+
+
 def scene_bytes(stats):
     """Memory of a render's scene: Embree geometry + BVH and the materials' BSDFs."""
     return stats["scene"]["geometry_bvh_bytes"] + stats["scene"].get("material_bytes", 0)
@@ -300,6 +316,10 @@ def scene_cell(bench, s, preset, kind, folder, figure):
         # relMSE of two converged renders = their difference + each one's noise
         # (c / N): what is left after the noise is the neural model's error.
         "rel_mse_minus_noise": quality["rel_mse"] - noise,
+        # Per channel mean of the neural reference over the fiber one's: a bias
+        # (one mode brighter) shows here, noise averages out.
+        "mean_ratio": quality["mean_ratio"], "mean_ratio_source": "exr",
+        "fiber_reference": fiber_reference(fiber_stats),
         "fiber": {"seconds_per_spp": fiber_stats["seconds_per_spp"],
                   "seconds": fiber_stats["seconds"],
                   "build_seconds": fiber_stats["scene"]["build_seconds"],
@@ -352,6 +372,7 @@ def dual_baseline(bench, s, preset, kind, folder, cell, figure):
     return {
         "name": "dual-scattering baseline (after ZMA23)",
         "ssim": quality["ssim"], "rel_mse": quality["rel_mse"],
+        "mean_ratio": quality["mean_ratio"], "mean_ratio_source": "exr",
         "ssim_scales": bench.ssim_scales(dual_ref, fiber_ref), "ssim_scales_source": "exr",
         "rel_mse_minus_noise": quality["rel_mse"] - fiber_eq["reference_noise"]
         - dual_eq["reference_noise"],
@@ -547,6 +568,52 @@ def ssim_scales_text(c):
         " (png)" if c.get("ssim_scales_source") == "figure png" else "")
 
 
+def mean_ratio_text(c):
+    """Neural / fiber reference mean per channel, marked when measured on 8-bit panels."""
+    if c.get("mean_ratio") is None:
+        return "-"
+    return " / ".join("-" if v is None else "%.3f" % v for v in c["mean_ratio"]) + (
+        " (png)" if c.get("mean_ratio_source") == "figure png" else "")
+
+
+def max_depth_text(c):
+    ref = c.get("fiber_reference")
+    if ref is None or ref.get("max_depth") is None:
+        return "-"
+    cut = ref.get("truncated_fraction")
+    return "%d%s" % (ref["max_depth"], "" if cut is None else " (%.3g %%)" % (100 * cut))
+
+
+def max_depth_lines(cells):
+    """Rows whose fiber reference was made at the old max_depth of 100, with the light that
+    limit cuts in fiber mode as bench/results/max-depth.json measured it."""
+    old = [c for c in cells
+           if (c.get("fiber_reference") or {}).get("max_depth") == OLD_DEFAULT_MAX_DEPTH]
+    if not old:
+        return []
+    path = os.path.join(ROOT, "bench", "results", "max-depth.json")
+    measured = {}
+    if os.path.exists(path):
+        with open(path) as f:
+            measured = {(r["preset"], r["scene"]): r for r in json.load(f)["rows"]}
+    lines = ["", "Rows whose fiber reference was rendered at max_depth %d (weft's default "
+             "before commit 74490ee), with what that limit costs the fiber render of the same "
+             "scene at 128 px ([max-depth.md](max-depth.md)): the share of paths cut, and the "
+             "light of a render at 1000 over one at 100 (R / G / B). Above 1.01 the reference is "
+             "too dark and the row's quality columns hold that bias; its chunk needs a rerun." %
+             OLD_DEFAULT_MAX_DEPTH, "",
+             "| material | scene | cut at 100 | light at 1000 / at 100 | neural / fiber mean |",
+             "|---|---|---|---|---|"]
+    for c in old:
+        m = measured.get((c["preset"], c["scene"]))
+        lines.append("| %s | %s | %s | %s | %s |" % (
+            c["preset"], c["scene"],
+            "-" if m is None else "%.3f %%" % (100 * m["fiber_cut"]["100"]),
+            "-" if m is None else " / ".join("%.3f" % v for v in m["fiber_light_ratio"]),
+            mean_ratio_text(c)))
+    return lines
+
+
 def c_levels(eq):
     return ", ".join("%d: %.3g" % (l["spp"], l["c"]) for l in eq["levels"])
 
@@ -662,18 +729,21 @@ def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
               "being gone (`bench/table2.py --rescore`).", "",
               "| material | scene | pixels | ref spp | SSIM | SSIM at 2x2 / 4x4 px | relMSE "
               "| fiber ref noise c/N | neural ref noise c/N | relMSE minus noise "
-              "| issue 17 targets |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
+              "| neural / fiber mean R / G / B | fiber ref max depth (cut) | issue 17 targets |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for kind, c in rows:
         if kind == "missing":
-            lines.append("| %s | %s | *missing: `%s`* | | | | | | | | |" % (
+            lines.append("| %s | %s | *missing: `%s`* | | | | | | | | | | |" % (
                 c[0], c[1], chunk_command(*c)))
             continue
         f, n = c["fiber"]["equal_quality"], c["neural"]["equal_quality"]
-        lines.append("| %s | %s | %d | %d | %.3f | %s | %.4f | %.2g | %.2g | %.4f | %s |" % (
-            c["preset"], c["scene"], c["size"], c["ref_spp"], c["ssim"], ssim_scales_text(c),
-            c["rel_mse"],
-            f["reference_noise"], n["reference_noise"], c["rel_mse_minus_noise"], targets(c)))
+        lines.append("| %s | %s | %d | %d | %.3f | %s | %.4f | %.2g | %.2g | %.4f | %s | %s "
+                     "| %s |" % (
+                         c["preset"], c["scene"], c["size"], c["ref_spp"], c["ssim"],
+                         ssim_scales_text(c), c["rel_mse"], f["reference_noise"],
+                         n["reference_noise"], c["rel_mse_minus_noise"], mean_ratio_text(c),
+                         max_depth_text(c), targets(c)))
+    lines += max_depth_lines(cells)
     lines += reason_lines(cells)
     lines += ["", "## Time at equal quality (relative MSE %.2f) and memory" % TARGET_REL_MSE, "",
               "Memory of these 3 x 3 patches; the neural material (about 1 MB per yarn model) "
@@ -877,26 +947,39 @@ def figure_panels(figure, size, indices, out_dir):
 
 
 def rescore(bench, args, results, name):
-    """--rescore: adds SSIM at PLY_SCALES (neural and baseline vs the fiber reference) to the
-    chunk files that lack it: from the cached renders when the work folder still holds them,
-    else from the 8-bit panels of the chunk's committed figures (marked "figure png"; its SSIM
-    at full resolution is kept beside, to show how closely the PNG reproduces the EXR's)."""
+    """--rescore: adds SSIM at PLY_SCALES and the mean ratio (neural and baseline vs the fiber
+    reference) to the chunk files that lack them: from the cached renders when the work folder
+    still holds them, else from the 8-bit panels of the chunk's committed figures (marked
+    "figure png"; its SSIM at full resolution is kept beside, to show how closely the PNG
+    reproduces the EXR's); and the fiber reference's max_depth (OLD_DEFAULT_MAX_DEPTH for a
+    chunk made before weft recorded it)."""
     folder = os.path.join(results, name)
     for path in sorted(glob.glob(os.path.join(folder, "*-*.json"))):
         with open(path) as f:
             cell = json.load(f)
         if cell.get("format") != CHUNK_FORMAT:
             continue
-        if "ssim_scales" in cell and not args.redo:
+        if all(k in cell for k in ("ssim_scales", "mean_ratio", "fiber_reference")) and \
+                not args.redo:
             continue
         preset, kind, size = cell["preset"], cell["scene"], cell["size"]
         work = os.path.join(bench.work, preset, kind)
         refs = {m: os.path.join(work, m + "-ref", "image.exr") for m in ("fiber", "neural", "dual")}
         pairs = [(cell, refs["neural"])] + ([(cell["dual"], refs["dual"])] if "dual" in cell else [])
+        fiber_json = os.path.join(work, "fiber-ref", "image.json")
+        if os.path.exists(fiber_json):
+            with open(fiber_json) as f:
+                cell["fiber_reference"] = fiber_reference(json.load(f))
+        elif "fiber_reference" not in cell:
+            cell["fiber_reference"] = {"max_depth": OLD_DEFAULT_MAX_DEPTH,
+                                       "truncated_fraction": None}
         if all(os.path.exists(p) for p in [refs["fiber"]] + [r for _, r in pairs]):
             for target, image in pairs:
-                target["ssim_scales"] = bench.ssim_scales(image, refs["fiber"])
-                target["ssim_scales_source"] = "exr"
+                if "ssim_scales" not in target or args.redo:
+                    target["ssim_scales"] = bench.ssim_scales(image, refs["fiber"])
+                    target["ssim_scales_source"] = "exr"
+                target["mean_ratio"] = bench.compare(image, refs["fiber"])["mean_ratio"]
+                target["mean_ratio_source"] = "exr"
         else:
             cut = os.path.join(bench.work, "rescore", "%s-%s" % (preset, kind))
             # Row figure: reference | neural | ...; Fig. 10 row: reference | baseline | neural.
@@ -906,9 +989,14 @@ def rescore(bench, args, results, name):
             for target, figure, indices in figures:
                 ref, image = figure_panels(os.path.join(results, figure), size, indices,
                                            os.path.join(cut, os.path.basename(figure)[:-4]))
-                target["ssim_scales"] = bench.ssim_scales(image, ref)
-                target["ssim_scales_source"] = "figure png"
-                target["ssim_figure_png"] = bench.compare(image, ref)["ssim"]
+                png = bench.compare(image, ref)
+                if "ssim_scales" not in target or args.redo:
+                    target["ssim_scales"] = bench.ssim_scales(image, ref)
+                    target["ssim_scales_source"] = "figure png"
+                    target["ssim_figure_png"] = png["ssim"]
+                # Of the 8-bit display values: clipped highlights pull it towards 1.
+                target["mean_ratio"] = png["mean_ratio"]
+                target["mean_ratio_source"] = "figure png"
         with open(path + ".tmp", "w") as f:
             json.dump(cell, f, indent=1)
         os.replace(path + ".tmp", path)

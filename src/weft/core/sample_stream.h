@@ -27,14 +27,18 @@ namespace weft {
 
 enum class SamplerKind { Independent, Sobol };
 
+// Every kind, in the order of their names in messages and scene-file checks.
+inline constexpr std::array<SamplerKind, 2> kSamplerKinds = {SamplerKind::Independent,
+                                                             SamplerKind::Sobol};
+
 constexpr std::string_view samplerKindName(SamplerKind k) {
     return k == SamplerKind::Sobol ? "sobol" : "independent";
 }
 
 // The kind named `name`, or nullopt.
 constexpr std::optional<SamplerKind> samplerKindFromName(std::string_view name) {
-    if (name == "independent") return SamplerKind::Independent;
-    if (name == "sobol") return SamplerKind::Sobol;
+    for (const SamplerKind k : kSamplerKinds)
+        if (samplerKindName(k) == name) return k;
     return std::nullopt;
 }
 

@@ -231,6 +231,7 @@ ImageComparison compareImages(const Image& fullA, const std::string& aName, cons
     c.ssim = mean(c.ssimMap);
     c.rmse = rmse(a, b);
     c.relMse = relativeMse(a, b);
+    c.meanA = channelMeans(a), c.meanB = channelMeans(b);
     return c;
 }
 
@@ -242,7 +243,19 @@ ImageComparison compareImageFiles(const std::string& a, const std::string& b,
     return compareImages(imageA, a, imageB, b, options);
 }
 
+Rgb channelMeans(const Image& image) {
+    Rgb sum;
+    const size_t pixels = image.pixels.size() / 3;
+    for (size_t i = 0; i < pixels; ++i)
+        for (int channel = 0; channel < 3; ++channel) sum[channel] += image.pixels[3 * i + channel];
+    return pixels > 0 ? sum / static_cast<double>(pixels) : sum;
+}
+
 nlohmann::json toJson(const ImageComparison& c) {
+    nlohmann::json ratio = nlohmann::json::array();
+    for (int channel = 0; channel < 3; ++channel)
+        ratio.push_back(c.meanB[channel] != 0 ? nlohmann::json(c.meanA[channel] / c.meanB[channel])
+                                              : nlohmann::json(nullptr));
     return {{"a", c.a},
             {"b", c.b},
             {"width", c.width},
@@ -251,6 +264,9 @@ nlohmann::json toJson(const ImageComparison& c) {
             {"ssim_mode", ssimModeName(c.mode)},
             {"rmse", c.rmse},
             {"rel_mse", c.relMse},
+            {"mean_a", {c.meanA.r, c.meanA.g, c.meanA.b}},
+            {"mean_b", {c.meanB.r, c.meanB.g, c.meanB.b}},
+            {"mean_ratio", ratio},
             {"exposure", c.exposure},
             {"scale", c.scale}};
 }

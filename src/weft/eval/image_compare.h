@@ -86,6 +86,8 @@ Image boxDownsampled(const Image& image, int factor);
 
 // The mean of the values (0 for an empty plane).
 double mean(const Plane& plane);
+// The mean of each channel over every pixel (0 for an empty image).
+Rgb channelMeans(const Image& image);
 
 // sqrt of the mean of (a - b)^2 over every pixel and channel.
 double rmse(const Image& a, const Image& b);
@@ -111,7 +113,10 @@ struct ImageComparison {
     double ssim = 0;    // mean of ssimMap
     double rmse = 0;    // linear
     double relMse = 0;  // linear
-    Plane ssimMap;      // the valid region, (width - 10) x (height - 10)
+    // Linear channel means of both images: their ratio a / b tells a bias
+    // (a brighter or darker render) from noise, which averages out.
+    Rgb meanA, meanB;
+    Plane ssimMap;  // the valid region, (width - 10) x (height - 10)
 };
 
 // Compares `a` (named aName in messages) against the reference `b`, both
@@ -127,8 +132,9 @@ ImageComparison compareImages(const Image& a, const std::string& aName, const Im
 ImageComparison compareImageFiles(const std::string& a, const std::string& b,
                                   const CompareOptions& options);
 
-// {"a", "b", "width", "height", "ssim", "ssim_mode", "rmse", "rel_mse", "exposure",
-// "scale"}.
+// {"a", "b", "width", "height", "ssim", "ssim_mode", "rmse", "rel_mse", "mean_a",
+// "mean_b", "mean_ratio" (per channel mean_a / mean_b, null where mean_b is 0),
+// "exposure", "scale"}.
 nlohmann::json toJson(const ImageComparison& comparison);
 
 // The heatmap colour scale: viridis sampled at t = k/8, k = 0..8 (the nine

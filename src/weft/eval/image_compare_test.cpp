@@ -245,7 +245,7 @@ TEST(ImageCompare, JsonHasEveryField) {
         compareImages(constantImage(12, 11, Rgb(0.2)), "x.exr", constantImage(12, 11, Rgb(0.1)),
                       "ref.exr", options(SsimMode::Luminance, 1.5));
     const nlohmann::json j = toJson(c);
-    EXPECT_EQ(j.size(), 10u);
+    EXPECT_EQ(j.size(), 13u);
     EXPECT_EQ(j.at("a"), "x.exr");
     EXPECT_EQ(j.at("b"), "ref.exr");
     EXPECT_EQ(j.at("width"), 12);
@@ -255,6 +255,35 @@ TEST(ImageCompare, JsonHasEveryField) {
     EXPECT_EQ(j.at("rel_mse").get<double>(), c.relMse);
     EXPECT_EQ(j.at("exposure").get<double>(), 1.5);
     EXPECT_EQ(j.at("scale"), 1);
+    for (int channel = 0; channel < 3; ++channel) {
+        EXPECT_NEAR(j.at("mean_a")[channel].get<double>(), 0.2, 1e-7);
+        EXPECT_NEAR(j.at("mean_b")[channel].get<double>(), 0.1, 1e-7);
+        EXPECT_NEAR(j.at("mean_ratio")[channel].get<double>(), 2.0, 1e-6);
+    }
+}
+
+TEST(ImageCompare, ChannelMeansByHandAndTheirRatio) {
+    // 24 x 24 reference (0.5, 0.25, 0); the image is the reference with one
+    // pixel raised by (5.76, 0, 0) and one G value halved: means by hand.
+    const Image b = constantImage(24, 24, {0.5, 0.25, 0.0});
+    Image a = b;
+    a.set(2, 3, {6.26, 0.25, 0.0});
+    a.set(7, 7, {0.5, 0.125, 0.0});
+    const ImageComparison c = compareImages(a, "a.exr", b, "b.exr", options());
+    EXPECT_NEAR(c.meanA.r, 0.5 + 5.76 / 576, 1e-7);
+    EXPECT_NEAR(c.meanA.g, 0.25 - 0.125 / 576, 1e-7);
+    EXPECT_EQ(c.meanA.b, 0.0);
+    EXPECT_NEAR(c.meanB.r, 0.5, 1e-7);
+    const nlohmann::json ratio = toJson(c).at("mean_ratio");
+    EXPECT_NEAR(ratio[0].get<double>(), 1.02, 1e-6);
+    EXPECT_NEAR(ratio[1].get<double>(), 1 - 0.5 / 576, 1e-6);
+    EXPECT_TRUE(ratio[2].is_null());  // a black reference channel has no ratio
+    // With --scale the means are those of the block averages: the same numbers.
+    CompareOptions blocks = options();
+    blocks.scale = 2;
+    const ImageComparison s = compareImages(a, "a.exr", b, "b.exr", blocks);
+    EXPECT_NEAR(s.meanA.r, c.meanA.r, 1e-7);
+    EXPECT_NEAR(s.meanA.g, c.meanA.g, 1e-7);
 }
 
 TEST(ImageCompare, BoxDownsampledAveragesBlocksByHand) {

@@ -49,7 +49,10 @@ void RenderOptions::validate() const {
 
 SamplerKind parseSampler(const std::string& name, const std::string& field) {
     if (const std::optional<SamplerKind> kind = samplerKindFromName(name)) return *kind;
-    throw InputError(field + " \"" + name + "\" is not a sampler: allowed independent, sobol");
+    std::string allowed;
+    for (const SamplerKind k : kSamplerKinds)
+        allowed += (allowed.empty() ? "" : ", ") + std::string(samplerKindName(k));
+    throw InputError(field + " \"" + name + "\" is not a sampler: allowed " + allowed);
 }
 
 int64_t peakResidentBytes() {

@@ -122,9 +122,10 @@ RenderDesc readRender(const JsonObjectReader& scene) {
     if (r.has("spp")) d.spp = static_cast<int>(r.integer("spp", {1, kMaxSpp}));
     if (r.has("max_depth")) d.maxDepth = static_cast<int>(r.integer("max_depth", {1, kMaxDepth}));
     if (r.has("seed")) d.seed = r.unsignedInteger("seed");
+    static_assert(kSamplerKinds.size() == 2, "name every sampler kind below");
     if (r.has("sampler"))
-        d.sampler = r.oneOf("sampler", {"independent", "sobol"}) == 0 ? SamplerKind::Independent
-                                                                      : SamplerKind::Sobol;
+        d.sampler = kSamplerKinds[r.oneOf(
+            "sampler", {samplerKindName(kSamplerKinds[0]), samplerKindName(kSamplerKinds[1])})];
     return d;
 }
 

@@ -270,7 +270,8 @@ TEST(FiberBcsdf, SamplingWithImportanceIsChiSquareConsistentWithPdf) {
                 std::vector<double> observed(grid.cells(), 0);
                 Rng rng(43, static_cast<uint64_t>(thetaDeg * 1000 + 7));
                 for (int64_t i = 0; i < n; ++i) {
-                    const BsdfSample s = slice.sample({rng.uniform(), rng.uniform(), rng.uniform()});
+                    const BsdfSample s =
+                        slice.sample({rng.uniform(), rng.uniform(), rng.uniform()});
                     ASSERT_TRUE(s.valid());
                     observed[grid.cellOf(s.wo)] += 1;
                 }

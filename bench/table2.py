@@ -584,18 +584,26 @@ def max_depth_text(c):
     return "%d%s" % (ref["max_depth"], "" if cut is None else " (%.3g %%)" % (100 * cut))
 
 
+def made_at_old_depth(c):
+    return (c.get("fiber_reference") or {}).get("max_depth") == OLD_DEFAULT_MAX_DEPTH
+
+
+def max_depth_measured():
+    """bench/results/max-depth.json's rows by (preset, scene), or {} when it is missing."""
+    path = os.path.join(ROOT, "bench", "results", "max-depth.json")
+    if not os.path.exists(path):
+        return {}
+    with open(path) as f:
+        return {(r["preset"], r["scene"]): r for r in json.load(f)["rows"]}
+
+
 def max_depth_lines(cells):
     """Rows whose fiber reference was made at the old max_depth of 100, with the light that
     limit cuts in fiber mode as bench/results/max-depth.json measured it."""
-    old = [c for c in cells
-           if (c.get("fiber_reference") or {}).get("max_depth") == OLD_DEFAULT_MAX_DEPTH]
+    old = [c for c in cells if made_at_old_depth(c)]
     if not old:
         return []
-    path = os.path.join(ROOT, "bench", "results", "max-depth.json")
-    measured = {}
-    if os.path.exists(path):
-        with open(path) as f:
-            measured = {(r["preset"], r["scene"]): r for r in json.load(f)["rows"]}
+    measured = max_depth_measured()
     lines = ["", "Rows whose fiber reference was rendered at max_depth %d (weft's default "
              "before commit 74490ee), with what that limit costs the fiber render of the same "
              "scene at 128 px ([max-depth.md](max-depth.md)): the share of paths cut, and the "
@@ -648,19 +656,25 @@ def reason_lines(cells):
              "by how much of the light M carries), the relMSE minus noise above, and how far light "
              "travels in the ply before it leaves (median and 90th percentile of the M exit "
              "distance in ply radii, [exit-distance.md](exit-distance.md); the model assumes "
-             "0)." % (coarse, coarse), "",
+             "0), and the light a fiber reference made at max_depth 100 lacks (light at 1000 / "
+             "at 100, R / G / B, [max-depth.md](max-depth.md); - for a reference made deeper)."
+             % (coarse, coarse), "",
              "| material | scene | SSIM at %sx%s px | M rel. L2 | M albedo | M rel. L2 x albedo "
-             "| R rel. L2 | relMSE minus noise | exit distance median / 90th pct |"
-             % (coarse, coarse), "|---|---|---|---|---|---|---|---|---|"]
+             "| R rel. L2 | relMSE minus noise | exit distance median / 90th pct "
+             "| fiber ref light lost to max_depth |" % (coarse, coarse),
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    depth = max_depth_measured()
     for c in low + [c for c in rows if c not in low]:
         fit, e = model_fit(c["preset"]), exits.get(c["preset"])
-        lines.append("| %s | %s | %.3f%s | %s | %s | %s | %s | %.4f | %s |" % (
+        d = depth.get((c["preset"], c["scene"])) if made_at_old_depth(c) else None
+        lines.append("| %s | %s | %.3f%s | %s | %s | %s | %s | %.4f | %s | %s |" % (
             c["preset"], c["scene"], c["ssim_scales"][coarse], "" if c in low else " (reaches)",
             "-" if fit is None else "%.3f" % fit["m_rel_l2"],
             "-" if e is None else "%.3f" % e["m_albedo"],
             "-" if fit is None or e is None else "%.3f" % (fit["m_rel_l2"] * e["m_albedo"]),
             "-" if fit is None else "%.3f" % fit["r_rel_l2"], c["rel_mse_minus_noise"],
-            "-" if e is None else "%.2f / %.2f" % (e["median"], e["p90"])))
+            "-" if e is None else "%.2f / %.2f" % (e["median"], e["p90"]),
+            "-" if d is None else " / ".join("%.3f" % v for v in d["fiber_light_ratio"])))
     return lines
 
 

@@ -2,7 +2,8 @@
 
 run(): a command's stdout, or the program's exit with the command and its
 stderr; cached() and cached_run(): work done once per folder, remembered by
-its parameters or command line (a resumable benchmark's renders and gathers).
+its parameters or command line (a resumable benchmark's renders and gathers);
+write_md_and_json(): a result table and its data, written atomically.
 """
 import json
 import os
@@ -18,6 +19,18 @@ def run(cmd, program):
         sys.exit("%s: %s failed (exit %d):\n%s" % (program, " ".join(map(str, cmd)),
                                                    r.returncode, r.stderr.strip()))
     return r.stdout
+
+
+def write_md_and_json(out_md, text, data):
+    """Writes out_md (the Markdown text) and the .json beside it (data), each to a temporary
+    file renamed into place."""
+    with open(out_md + ".tmp", "w") as f:
+        f.write(text)
+    os.replace(out_md + ".tmp", out_md)
+    out_json = os.path.splitext(out_md)[0] + ".json"
+    with open(out_json + ".tmp", "w") as f:
+        json.dump(data, f, indent=1)
+    os.replace(out_json + ".tmp", out_json)
 
 
 def cached(folder, params, make, stamp="params.json"):

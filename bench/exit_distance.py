@@ -143,13 +143,9 @@ def main():
                 r["preset"], kind, s["size"], s["ply_radius_px"], s["median_px"], s["p90_px"],
                 fmt(s.get("ssim"), "%.3f"), fmt(s.get("ssim_4x4"), "%.3f"),
                 fmt(s.get("rel_mse_minus_noise"), "%.4f")))
-    with open(args.out + ".tmp", "w") as f:
-        f.write("\n".join(lines) + "\n")
-    os.replace(args.out + ".tmp", args.out)
+    benchlib.write_md_and_json(args.out, "\n".join(lines) + "\n",
+                               {"paths": args.paths, "rows": rows})
     out_json = os.path.splitext(args.out)[0] + ".json"
-    with open(out_json + ".tmp", "w") as f:
-        json.dump({"paths": args.paths, "rows": rows}, f, indent=1)
-    os.replace(out_json + ".tmp", out_json)
     print("exit_distance: wrote %s and %s" % (args.out, out_json))
 
 

@@ -102,13 +102,7 @@ def write(rows, args, out_md):
             " / ".join("-" if v is None else "%.3f" % v for v in r["fiber_light_ratio"]),
             r["fiber_seconds_ratio"], 100 * r["neural_cut"][str(SHALLOW)]))
     text = "\n".join(lines) + "\n"
-    with open(out_md + ".tmp", "w") as f:
-        f.write(text)
-    os.replace(out_md + ".tmp", out_md)
-    out_json = os.path.splitext(out_md)[0] + ".json"
-    with open(out_json + ".tmp", "w") as f:
-        json.dump({"shallow": SHALLOW, "deep": DEEP, "rows": rows}, f, indent=1)
-    os.replace(out_json + ".tmp", out_json)
+    benchlib.write_md_and_json(out_md, text, {"shallow": SHALLOW, "deep": DEEP, "rows": rows})
     return text
 
 

@@ -858,14 +858,9 @@ def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
     if figure_note:
         lines += ["", figure_note]
     text = "\n".join(lines) + "\n"
-    with open(out_md + ".tmp", "w") as f:
-        f.write(text)
-    os.replace(out_md + ".tmp", out_md)
-    out_json = os.path.splitext(out_md)[0] + ".json"
-    with open(out_json + ".tmp", "w") as f:
-        json.dump({"cells": cells, "missing": [{"preset": p, "scene": k} for p, k in missing],
-                   "ablations": list(ablation_rows)}, f, indent=1)
-    os.replace(out_json + ".tmp", out_json)
+    benchlib.write_md_and_json(
+        out_md, text, {"cells": cells, "missing": [{"preset": p, "scene": k} for p, k in missing],
+                       "ablations": list(ablation_rows)})
     return text
 
 

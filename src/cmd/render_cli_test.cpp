@@ -9,6 +9,7 @@
 #include "cli_test_util.h"
 #include "weft/core/file.h"
 #include "weft/core/image_io.h"
+#include "weft/eval/image_compare.h"
 
 namespace weft {
 namespace {
@@ -253,14 +254,6 @@ TEST_F(RenderCliTest, WarnsWhenPathsAreCutAtMaxDepth) {
     EXPECT_EQ(nlohmann::json::parse(readFile(path("deep.json"))).at("truncated_paths"), 0);
 }
 
-// The mean of each channel of an EXR.
-Rgb meanColour(const Image& image) {
-    Rgb sum;
-    for (size_t k = 0; k < image.pixels.size(); ++k)
-        sum[static_cast<int>(k % 3)] += image.pixels[k];
-    return sum / static_cast<double>(image.pixels.size() / 3);
-}
-
 TEST_F(RenderCliTest, YarnColourInEveryMode) {
     // fleece-small's C_TT is (0.452, 0.725, 0.948); a green yarn instead.
     writeScene("green.json", R"(, "colour": [0.2, 0.9, 0.2])");
@@ -272,8 +265,8 @@ TEST_F(RenderCliTest, YarnColourInEveryMode) {
         const RunResult r = run("render green.json --mode " + mode + " --spp 4 --quiet --out " +
                                 mode + "-green.exr");
         ASSERT_EQ(r.status, 0) << r.err;
-        const Rgb plain = meanColour(readImage(path(mode + ".exr")));
-        const Rgb green = meanColour(readImage(path(mode + "-green.exr")));
+        const Rgb plain = eval::channelMeans(readImage(path(mode + ".exr")));
+        const Rgb green = eval::channelMeans(readImage(path(mode + "-green.exr")));
         EXPECT_LT(green.r, plain.r) << mode;
         EXPECT_GT(green.g, plain.g) << mode;
         EXPECT_LT(green.b, plain.b) << mode;

@@ -54,7 +54,9 @@ seconds per spp at 128 x 128 from bench/results/table2-quick.json (2 threads,
 3 x 3 patches, measured before issue 17's sampler and renderer changes, so
 it errs long), scales it by the pixel count, and counts the reference, the
 ladder, the equal-time pair (from the quick table's neural c) and the scene
-builds:
+builds (the sizes below were chosen so; --plan now starts from a row's last
+chunk where that was made at max_depth 1000, since the quick table's fiber
+timings at max_depth 100 err short for near-white yarns):
   256 x 256: every close-up (3-23 min), fleece and polyester weave and knit
              (16-39 min);
   192 x 192: silk weave and knit (25 and 27 min; 44 and 48 at 256),
@@ -64,7 +66,14 @@ builds:
 Cotton knit at 4096 spp does not fit at 128 x 128 with the full fiber ladder
 (about 59 min): its fiber ladder stops at N/16 (64, 256 spp; about 50 min).
 Fiber c of cotton was flat across the quick ladder (10.6, 12.6), so its top
-level loses little.
+level loses little. At max_depth 1000 cotton's fiber references alone take
+about 51 minutes (knit, 0.74 s/spp) and 55 (weave), so they are rendered in
+2 parts (--ref-parts, default 2 for cotton weave and knit; `weft render
+--shard K/N`, then `weft render merge`), each its own run of 25-30 minutes:
+    bench/table2.py --chunk cotton,knit --ref-part 0   # then --ref-part 1
+    bench/table2.py --chunk cotton,knit                # the rest (renders any missing part)
+The parts are cached in the work folder; the chunk file records the parts'
+count and their seconds summed (fiber_reference).
 
 --sampler sobol renders every image of a chunk with `weft render --sampler
 sobol` (Owen-scrambled Sobol' points, docs/render.md#samplers) instead of
@@ -140,6 +149,9 @@ DEFAULT_SIZE = {
 # Ladder levels as divisors of the reference spp.
 DEFAULT_LADDER = (64, 16, 4)
 DEFAULT_FIBER_LADDER = {("cotton", "knit"): (64, 16)}
+# Fiber references rendered in parts (weft render --shard), one process each, so
+# that no process outlives a session; the chunk then runs the rest.
+DEFAULT_REF_PARTS = {("cotton", "weave"): 2, ("cotton", "knit"): 2}
 DEFAULT_PATCH = 3
 SEEDS = {"reference": 1, "ladder": 10, "equal_time": 3}
 CHUNK_FORMAT = 1
@@ -156,7 +168,8 @@ def chunk_defaults(preset, kind):
     return {"size": DEFAULT_SIZE[(preset, kind)], "ref_spp": PAPER_REF_SPP[preset],
             "patch": DEFAULT_PATCH,
             "fiber_ladder": list(DEFAULT_FIBER_LADDER.get((preset, kind), DEFAULT_LADDER)),
-            "neural_ladder": list(DEFAULT_LADDER)}
+            "neural_ladder": list(DEFAULT_LADDER),
+            "ref_parts": DEFAULT_REF_PARTS.get((preset, kind), 1)}
 
 
 def ladder_spp(ref_spp, divisors):
@@ -211,6 +224,39 @@ class Bench:
         with open(os.path.join(folder, "image.json")) as f:
             return json.load(f), exr
 
+    def reference(self, scene, out_dir, name, mode, seed, spp, parts=1, only_part=None):
+        """The converged render of a chunk -> (stats dict, exr path). parts > 1: rendered as
+        `weft render --shard K/N` parts (each cached; one process each, so that a part fits a
+        session) and joined by `weft render merge`, which sums their seconds and samples: the
+        same image, up to float rounding, as one render of spp samples. only_part=K: render
+        part K only and return None."""
+        if parts <= 1:
+            return self.render(scene, out_dir, name, mode, seed, spp=spp)
+        part_dirs = []
+        for k in range(parts):
+            if only_part is not None and k != only_part:
+                continue
+            self.render(scene, out_dir, "%s-part%dof%d" % (name, k, parts), mode, seed, spp=spp,
+                        extra=("--shard", "%d/%d" % (k, parts)))
+            part_dirs.append(os.path.join(out_dir, "%s-part%dof%d" % (name, k, parts)))
+        if only_part is not None:
+            return None
+        folder = os.path.join(out_dir, name)
+        exr = os.path.join(folder, "image.exr")
+        part_cmds = []
+        for d in part_dirs:
+            with open(os.path.join(d, "params.json")) as f:
+                part_cmds.append(json.load(f))
+
+        def make(folder):
+            self.say("merge %d parts into %s" % (parts, os.path.relpath(folder, self.work)))
+            self.run([self.weft, "render", "merge"] +
+                     [os.path.join(d, "image.exr") for d in part_dirs] + ["--out", exr])
+
+        self.cached(folder, {"merge": part_cmds}, make)
+        with open(os.path.join(folder, "image.json")) as f:
+            return json.load(f), exr
+
     def compare(self, a, b, heatmap=None, scale=1):
         cmd = [self.weft, "compare", a, b] + (["--heatmap", heatmap] if heatmap else [])
         if scale != 1:
@@ -250,7 +296,9 @@ def fiber_reference(stats):
     """The fiber reference's path depth limit and the share of its paths cut there (weft
     render's image.json; docs/render.md#integrator)."""
     return {"max_depth": stats.get("max_depth"),
-            "truncated_fraction": stats.get("truncated_fraction")}
+            "truncated_fraction": stats.get("truncated_fraction"),
+            # rendered in N parts (--ref-parts), each its own process; seconds: all of them
+            "parts": stats.get("shards", {}).get("count", 1), "seconds": stats.get("seconds")}
 
 
 # Chunks made before weft's default max_depth became 1000 (commit 74490ee) hold
@@ -285,7 +333,8 @@ def scene_cell(bench, s, preset, kind, folder, figure):
     ref_spp = s["ref_spp"]
     seed = SEEDS["reference"]
 
-    fiber_stats, fiber_ref = bench.render(scene, folder, "fiber-ref", "fiber", seed, spp=ref_spp)
+    fiber_stats, fiber_ref = bench.reference(scene, folder, "fiber-ref", "fiber", seed, ref_spp,
+                                             s["ref_parts"])
     neural_stats, neural_ref = bench.render(scene, folder, "neural-ref", "neural", seed,
                                             spp=ref_spp)
     fiber_eq = convergence(bench, scene, folder, "fiber", fiber_ref, ref_spp, s["fiber_ladder"])
@@ -357,7 +406,8 @@ def dual_baseline(bench, s, preset, kind, folder, cell, figure):
     # The same scene as the chunk's (re-made, identically, when the work folder lost it).
     scene = chunk_scene(bench, s, preset, kind, folder)
     ref_spp, seed = s["ref_spp"], SEEDS["reference"]
-    fiber_stats, fiber_ref = bench.render(scene, folder, "fiber-ref", "fiber", seed, spp=ref_spp)
+    fiber_stats, fiber_ref = bench.reference(scene, folder, "fiber-ref", "fiber", seed, ref_spp,
+                                             s["ref_parts"])
     _, neural_ref = bench.render(scene, folder, "neural-ref", "neural", seed, spp=ref_spp)
     dual_stats, dual_ref = bench.render(scene, folder, "dual-ref", "dual", seed, spp=ref_spp)
     dual_eq = convergence(bench, scene, folder, "dual", dual_ref, ref_spp, s["neural_ladder"])
@@ -523,20 +573,38 @@ def now():
     return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
 
 
-def load_quick(results):
-    """Cells of table2-quick.json by (preset, scene), for the time estimates; {} if none."""
+def load_timings(results, name="table2"):
+    """Per (preset, scene), the timings the estimates start from: the chunk file
+    RESULTS/NAME/<preset>-<scene>.json where it was made with the current default
+    max_depth (it records its fiber reference's), else the quick table's cell
+    (RESULTS/table2-quick.json: 128 px, max_depth 100, so it errs short for
+    near-white fiber rows); {} if neither exists."""
+    timings = {}
     for folder in (results, os.path.join(ROOT, "bench", "results")):
         path = os.path.join(folder, "table2-quick.json")
         if os.path.exists(path):
             with open(path) as f:
                 data = json.load(f)
-            return {(c["preset"], c["scene"]): c for c in data["cells"]}
-    return {}
+            timings = {(c["preset"], c["scene"]): dict(c, source="quick table")
+                       for c in data["cells"]}
+            break
+    for preset in PRESETS:
+        for kind in SCENES:
+            path = chunk_path(os.path.join(results, name), preset, kind)
+            if not os.path.exists(path):
+                continue
+            with open(path) as f:
+                cell = json.load(f)
+            if ((cell.get("fiber_reference") or {}).get("max_depth") or 0) > OLD_DEFAULT_MAX_DEPTH:
+                timings[(preset, kind)] = dict(cell, source="last chunk")
+    return timings
 
 
-def estimate_minutes(quick, preset, kind, s):
-    """Expected chunk minutes from the quick table's seconds per spp (2 threads, 128 px, 3 x 3)."""
-    q = quick.get((preset, kind))
+def estimate_minutes(timings, preset, kind, s):
+    """Expected minutes of a chunk on 2 cores: (all of it, the fiber reference alone), from
+    the seconds per spp and build seconds of load_timings, scaled by the pixel count; None if
+    there are no timings for the row."""
+    q = timings.get((preset, kind))
     if q is None:
         return None
     scale = (s["size"] / q["size"]) ** 2
@@ -549,7 +617,30 @@ def estimate_minutes(quick, preset, kind, s):
     # The equal-time pair: neural at its spp to relMSE 0.01, fiber for the same time.
     c = max(l["c"] for l in q["neural"]["equal_quality"]["levels"])
     seconds += 2 * c / TARGET_REL_MSE * q["neural"]["seconds_per_spp"] * scale
-    return seconds / 60
+    reference = s["ref_spp"] * q["fiber"]["seconds_per_spp"] * scale
+    return seconds / 60, reference / 60
+
+
+def estimate_text(timings, preset, kind, s):
+    """'about N min on 2 cores ...' for --plan and a chunk's first line, and the minutes (or
+    None). With --ref-parts N each part of the fiber reference is its own process: the 60
+    minute budget holds per process."""
+    est = estimate_minutes(timings, preset, kind, s)
+    if est is None:
+        return "no estimate (no quick table row, no chunk file)", None
+    total, reference = est
+    source = timings[(preset, kind)]["source"]
+    if s["ref_parts"] <= 1:
+        longest, text = total, "about %.0f min on 2 cores (from the %s)" % (total, source)
+    else:
+        part, rest = reference / s["ref_parts"], total - reference
+        longest = max(part, rest)
+        text = ("about %.0f min on 2 cores (from the %s): the fiber reference in %d parts of "
+                "%.0f min (--ref-part K), then %.0f min" % (total, source, s["ref_parts"], part,
+                                                            rest))
+    if longest > BUDGET_MINUTES:
+        text += " (over the %d minute budget)" % BUDGET_MINUTES
+    return text, total
 
 
 def chunk_command(preset, kind, extra=""):
@@ -874,7 +965,7 @@ def matching_settings(a, b):
         "sampler", "independent") == b.get("sampler", "independent")
 
 
-def run_chunk(bench, args, folder, preset, kind, s, quick):
+def run_chunk(bench, args, folder, preset, kind, s, timings):
     """Renders one (material, scene) chunk and writes its result file; returns its path."""
     path = chunk_path(folder, preset, kind)
     settings = dict(s, seeds={"reference": SEEDS["reference"],
@@ -888,11 +979,11 @@ def run_chunk(bench, args, folder, preset, kind, s, quick):
                 preset, kind, shown_path(path)))
             add_baselines(bench, args, folder, preset, kind, s, path)
             return path
-    estimate = estimate_minutes(quick, preset, kind, s)
-    bench.say("%s %s: %d x %d, %d spp references, ladders %s / %s%s" % (
+    text, estimate = estimate_text(timings, preset, kind, s)
+    bench.say("%s %s: %d x %d, %d spp references, ladders %s / %s, %s" % (
         preset, kind, s["size"], s["size"], s["ref_spp"],
         ladder_spp(s["ref_spp"], s["fiber_ladder"]), ladder_spp(s["ref_spp"], s["neural_ladder"]),
-        "" if estimate is None else ", about %.0f minutes on 2 cores" % estimate))
+        text))
     started, t0 = now(), time.time()
     figure = os.path.join(folder, "%s-%s.png" % (preset, kind))
     cell = scene_cell(bench, s, preset, kind, os.path.join(bench.work, preset, kind), figure)
@@ -910,6 +1001,20 @@ def run_chunk(bench, args, folder, preset, kind, s, quick):
                                                  shown_path(path)))
     add_baselines(bench, args, folder, preset, kind, s, path)
     return path
+
+
+def run_reference_part(bench, s, preset, kind, k):
+    """--ref-part K: part K of the chunk's fiber reference (cached in the work folder)."""
+    if not 0 <= k < s["ref_parts"]:
+        sys.exit("table2: --ref-part %d: allowed 0..%d (--ref-parts %d)" % (
+            k, s["ref_parts"] - 1, s["ref_parts"]))
+    t0 = time.time()
+    folder = os.path.join(bench.work, preset, kind)
+    scene = chunk_scene(bench, s, preset, kind, folder)
+    bench.reference(scene, folder, "fiber-ref", "fiber", SEEDS["reference"], s["ref_spp"],
+                    s["ref_parts"], only_part=k)
+    bench.say("%s %s: fiber reference part %d of %d in %.1f minutes (cached in %s)" % (
+        preset, kind, k, s["ref_parts"], (time.time() - t0) / 60, folder))
 
 
 def add_baselines(bench, args, folder, preset, kind, s, path):
@@ -1088,7 +1193,8 @@ def assemble(results, name, weft):
 def run_quick(bench, args, results, name, presets, scenes):
     """The one-run quick table (unchanged method), with the Fig. 5 ablations."""
     s = {"size": args.size or 128, "ref_spp": args.ref_spp or 256, "patch": 3,
-         "fiber_ladder": list(QUICK_LADDER), "neural_ladder": list(QUICK_LADDER)}
+         "fiber_ladder": list(QUICK_LADDER), "neural_ladder": list(QUICK_LADDER),
+         "ref_parts": args.ref_parts or 1}
     cfg = {"figures": os.path.join(results, name), "ablation_paths": 2000000,
            "ablation_steps": {"t_net": 20000, "m_net": 40000}, "ablation_scenes": ["closeup"]}
     os.makedirs(cfg["figures"], exist_ok=True)
@@ -1195,6 +1301,12 @@ def main():
                         "64,16,4; 64,16 for cotton knit)")
     p.add_argument("--neural-ladder", default=None, metavar="D1,D2,...",
                    help="neural ladder levels as divisors of the reference spp (default 64,16,4)")
+    p.add_argument("--ref-parts", type=int, default=None, metavar="N",
+                   help="render the fiber reference as N parts of ref-spp / N samples, one "
+                        "process each, merged (default 1; 2 for cotton weave and knit)")
+    p.add_argument("--ref-part", type=int, default=None, metavar="K",
+                   help="with --chunk: render only part K (0..N-1) of the fiber reference and "
+                        "stop; the chunk itself renders any part still missing")
     args = p.parse_args()
     name = args.name or ("table2-quick" if args.quick else "table2")
     if not name.replace("-", "").replace("_", "").isalnum():
@@ -1202,7 +1314,8 @@ def main():
     results = os.path.abspath(args.results)
     if args.work is None:
         args.work = os.path.join(ROOT, "bench", "work", name)
-    for key, lo, hi in (("size", 16, 4096), ("ref_spp", 16, 1 << 20), ("patch", 1, 100)):
+    for key, lo, hi in (("size", 16, 4096), ("ref_spp", 16, 1 << 20), ("patch", 1, 100),
+                        ("ref_parts", 1, 64)):
         value = getattr(args, key)
         if value is not None and not lo <= value <= hi:
             sys.exit("table2: --%s %d is out of range [%d, %d]" % (key.replace("_", "-"), value,
@@ -1230,7 +1343,7 @@ def main():
 
     def settings(preset, kind):
         s = chunk_defaults(preset, kind)
-        for key in ("size", "ref_spp", "patch"):
+        for key in ("size", "ref_spp", "patch", "ref_parts"):
             if getattr(args, key) is not None:
                 s[key] = getattr(args, key)
         if args.fiber_ladder:
@@ -1240,20 +1353,17 @@ def main():
         return s
 
     if args.plan:
-        quick = load_quick(results)
+        timings = load_timings(results, name)
         total = 0.0
         for preset, kind in chunks:
             s = settings(preset, kind)
-            est = estimate_minutes(quick, preset, kind, s)
+            text, est = estimate_text(timings, preset, kind, s)
             total += est or 0.0
             print("%-45s # %d px, %d spp, ladders %s / %s: %s" % (
                 chunk_command(preset, kind, shown_arguments(
                     sys.argv[1:], drop=("--presets", "--scenes"), drop_flags=("--plan",))),
                 s["size"], s["ref_spp"], ",".join(map(str, s["fiber_ladder"])),
-                ",".join(map(str, s["neural_ladder"])),
-                "no estimate (no table2-quick.json row)" if est is None else
-                "about %.0f min on 2 cores%s" % (est, "" if est <= BUDGET_MINUTES else
-                                                 " (over the %d minute budget)" % BUDGET_MINUTES)))
+                ",".join(map(str, s["neural_ladder"])), text))
         print("# total about %.1f hours" % (total / 60))
         return
     if args.assemble:
@@ -1275,10 +1385,16 @@ def main():
                                                            key=PRESETS.index),
                         sorted({c[1] for c in chunks}, key=SCENES.index)))
         return
-    quick = load_quick(results)
+    if args.ref_part is not None:
+        if not args.chunk:
+            sys.exit("table2: --ref-part needs --chunk MATERIAL,SCENE")
+        preset, kind = chunks[0]
+        run_reference_part(bench, settings(preset, kind), preset, kind, args.ref_part)
+        return
+    timings = load_timings(results, name)
     for preset, kind in chunks:
         run_chunk(bench, args, os.path.join(results, name), preset, kind,
-                  settings(preset, kind), quick)
+                  settings(preset, kind), timings)
         text, count, missing = assemble(results, name, bench.weft)
         bench.say("assembled %s: %d chunk(s), %d missing" % (name + ".md", count, len(missing)))
     print(text)

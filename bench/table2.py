@@ -55,8 +55,9 @@ seconds per spp at 128 x 128 from bench/results/table2-quick.json (2 threads,
 it errs long), scales it by the pixel count, and counts the reference, the
 ladder, the equal-time pair (from the quick table's neural c) and the scene
 builds (the sizes below were chosen so; --plan now starts from a row's last
-chunk where that was made at max_depth 1000, since the quick table's fiber
-timings at max_depth 100 err short for near-white yarns):
+chunk where that was made at max_depth 1000, else scales the quick table's
+fiber seconds per spp, measured at max_depth 100, by bench/results/
+max-depth.json's time at 1000 over at 100, which is 1.5-2.0 for cotton):
   256 x 256: every close-up (3-23 min), fleece and polyester weave and knit
              (16-39 min);
   192 x 192: silk weave and knit (25 and 27 min; 44 and 48 at 256),
@@ -66,11 +67,12 @@ timings at max_depth 100 err short for near-white yarns):
 Cotton knit at 4096 spp does not fit at 128 x 128 with the full fiber ladder
 (about 59 min): its fiber ladder stops at N/16 (64, 256 spp; about 50 min).
 Fiber c of cotton was flat across the quick ladder (10.6, 12.6), so its top
-level loses little. At max_depth 1000 cotton's fiber references alone take
-about 51 minutes (knit, 0.74 s/spp) and 55 (weave), so they are rendered in
-2 parts (--ref-parts, default 2 for cotton weave and knit; `weft render
---shard K/N`, then `weft render merge`), each its own run of 25-30 minutes:
-    bench/table2.py --chunk cotton,knit --ref-part 0   # then --ref-part 1
+level loses little. At max_depth 1000 with the throughput lobe choice
+cotton's fiber references alone take 55 minutes (weave, measured) and about
+70 (knit, estimated), so they are rendered in parts (--ref-parts, default 2
+for cotton weave and 3 for knit; `weft render --shard K/N`, then `weft
+render merge`), each its own run of 25-30 minutes:
+    bench/table2.py --chunk cotton,knit --ref-part 0   # then 1 and 2
     bench/table2.py --chunk cotton,knit                # the rest (renders any missing part)
 The parts are cached in the work folder; the chunk file records the parts'
 count and their seconds summed (fiber_reference).
@@ -151,7 +153,7 @@ DEFAULT_LADDER = (64, 16, 4)
 DEFAULT_FIBER_LADDER = {("cotton", "knit"): (64, 16)}
 # Fiber references rendered in parts (weft render --shard), one process each, so
 # that no process outlives a session; the chunk then runs the rest.
-DEFAULT_REF_PARTS = {("cotton", "weave"): 2, ("cotton", "knit"): 2}
+DEFAULT_REF_PARTS = {("cotton", "weave"): 2, ("cotton", "knit"): 3}
 DEFAULT_PATCH = 3
 SEEDS = {"reference": 1, "ladder": 10, "equal_time": 3}
 CHUNK_FORMAT = 1
@@ -577,16 +579,24 @@ def load_timings(results, name="table2"):
     """Per (preset, scene), the timings the estimates start from: the chunk file
     RESULTS/NAME/<preset>-<scene>.json where it was made with the current default
     max_depth (it records its fiber reference's), else the quick table's cell
-    (RESULTS/table2-quick.json: 128 px, max_depth 100, so it errs short for
-    near-white fiber rows); {} if neither exists."""
+    (RESULTS/table2-quick.json: 128 px, max_depth 100), its fiber seconds per spp
+    times bench/results/max-depth.json's time at 1000 over at 100 (up to 2x for
+    cotton); {} if neither exists."""
     timings = {}
+    deeper = max_depth_measured()
     for folder in (results, os.path.join(ROOT, "bench", "results")):
         path = os.path.join(folder, "table2-quick.json")
         if os.path.exists(path):
             with open(path) as f:
                 data = json.load(f)
-            timings = {(c["preset"], c["scene"]): dict(c, source="quick table")
-                       for c in data["cells"]}
+            for c in data["cells"]:
+                key = (c["preset"], c["scene"])
+                cell = dict(c, source="quick table")
+                if key in deeper:
+                    cell["fiber"] = dict(c["fiber"], seconds_per_spp=c["fiber"]["seconds_per_spp"]
+                                         * deeper[key]["fiber_seconds_ratio"])
+                    cell["source"] = "quick table and max-depth.json"
+                timings[key] = cell
             break
     for preset in PRESETS:
         for kind in SCENES:
@@ -1303,7 +1313,7 @@ def main():
                    help="neural ladder levels as divisors of the reference spp (default 64,16,4)")
     p.add_argument("--ref-parts", type=int, default=None, metavar="N",
                    help="render the fiber reference as N parts of ref-spp / N samples, one "
-                        "process each, merged (default 1; 2 for cotton weave and knit)")
+                        "process each, merged (default 1; 2 for cotton weave, 3 for cotton knit)")
     p.add_argument("--ref-part", type=int, default=None, metavar="K",
                    help="with --chunk: render only part K (0..N-1) of the fiber reference and "
                         "stop; the chunk itself renders any part still missing")

@@ -238,9 +238,10 @@ class Bench:
         for k in range(parts):
             if only_part is not None and k != only_part:
                 continue
-            self.render(scene, out_dir, "%s-part%dof%d" % (name, k, parts), mode, seed, spp=spp,
+            part = "%s-part%dof%d" % (name, k, parts)
+            self.render(scene, out_dir, part, mode, seed, spp=spp,
                         extra=("--shard", "%d/%d" % (k, parts)))
-            part_dirs.append(os.path.join(out_dir, "%s-part%dof%d" % (name, k, parts)))
+            part_dirs.append(os.path.join(out_dir, part))
         if only_part is not None:
             return None
         folder = os.path.join(out_dir, name)

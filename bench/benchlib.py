@@ -23,7 +23,7 @@ def run(cmd, program):
 
 def write_md_and_json(out_md, text, data):
     """Writes out_md (the Markdown text) and the .json beside it (data), each to a temporary
-    file renamed into place."""
+    file renamed into place; returns the .json's path."""
     with open(out_md + ".tmp", "w") as f:
         f.write(text)
     os.replace(out_md + ".tmp", out_md)
@@ -31,6 +31,7 @@ def write_md_and_json(out_md, text, data):
     with open(out_json + ".tmp", "w") as f:
         json.dump(data, f, indent=1)
     os.replace(out_json + ".tmp", out_json)
+    return out_json
 
 
 def cached(folder, params, make, stamp="params.json"):

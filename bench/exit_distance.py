@@ -143,9 +143,8 @@ def main():
                 r["preset"], kind, s["size"], s["ply_radius_px"], s["median_px"], s["p90_px"],
                 fmt(s.get("ssim"), "%.3f"), fmt(s.get("ssim_4x4"), "%.3f"),
                 fmt(s.get("rel_mse_minus_noise"), "%.4f")))
-    benchlib.write_md_and_json(args.out, "\n".join(lines) + "\n",
-                               {"paths": args.paths, "rows": rows})
-    out_json = os.path.splitext(args.out)[0] + ".json"
+    out_json = benchlib.write_md_and_json(args.out, "\n".join(lines) + "\n",
+                                          {"paths": args.paths, "rows": rows})
     print("exit_distance: wrote %s and %s" % (args.out, out_json))
 
 

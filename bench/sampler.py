@@ -125,10 +125,10 @@ def write(args, rows):
             lines.append("| %s | %s | %s | %s | %s | %.2f | %.4f / %.4f | %s | %s |" % (
                 r["preset"], r["scene"], mode, lv(a), lv(b), r["c_ratio"][mode],
                 a["seconds_per_spp"], b["seconds_per_spp"], speed[0], speed[1]))
-    benchlib.write_md_and_json(args.out, "\n".join(lines) + "\n",
-                               {"size": args.size, "ref_spp": args.ref_spp,
-                                "ladder": args.ladder, "threads": args.threads, "rows": rows})
-    out_json = os.path.splitext(args.out)[0] + ".json"
+    out_json = benchlib.write_md_and_json(args.out, "\n".join(lines) + "\n",
+                                          {"size": args.size, "ref_spp": args.ref_spp,
+                                           "ladder": args.ladder, "threads": args.threads,
+                                           "rows": rows})
     print("sampler: wrote %s and %s" % (args.out, out_json))
 
 

@@ -5,7 +5,8 @@
 // caches see a renderer-like mix: YarnBsdf eval / pdf / sample (with and
 // without the energy guard), the same on a prepared incident (Bsdf::prepare
 // once per wi outside the timing, then eval / evalPdf / sample(in, ...): the
-// per-wo cost that a path tracer pays at a shading point), its parts (the T
+// per-wo cost that a path tracer pays at a shading point), prepare alone and
+// one whole path vertex (prepare, NEE's evalPdf, sample) of each model, its parts (the T
 // and M networks through FixedMlp, SIMD kernel and scalar reference, the R
 // lobe), Mlp<float>::forward on a batch of one (what the fixed-size evaluator
 // replaces), FiberBcsdf eval / sample, and the time to construct a YarnBsdf
@@ -220,6 +221,39 @@ void YarnPrepared(benchmark::State& state) {
     preparedCalls(state, state.range(1) != 0 ? guardedBsdf() : fittedBsdf(), state.range(0));
 }
 
+// Bsdf::prepare alone (what depends on wi: P(T), the calibration, the guard,
+// the sampling table's rows and nodes).
+void Prepare(benchmark::State& state, const Bsdf& bsdf) {
+    BsdfIncident in;
+    loop(state, [&](const Vec3& wi, const Vec3&, const BsdfSampleInput&) {
+        bsdf.prepare(wi, in);
+        benchmark::DoNotOptimize(in);
+    });
+}
+
+// One path vertex with next-event estimation: prepare(wi), evalPdf towards
+// the light (wo) and sample() of the next direction, the calls a path tracer
+// makes per bounce; the ratio of the yarn's to the fiber's is what a neural
+// render pays per vertex against a fiber render.
+void Vertex(benchmark::State& state, const Bsdf& bsdf) {
+    BsdfIncident in;
+    Rng rng(3, 4);
+    loop(state, [&](const Vec3& wi, const Vec3& wo, const BsdfSampleInput& u) {
+        bsdf.prepare(wi, in);
+        benchmark::DoNotOptimize(bsdf.evalPdf(in, wo));
+        benchmark::DoNotOptimize(bsdf.sample(in, u, rng));
+    });
+}
+
+const FiberBcsdf& fiberBcsdf() {
+    static const FiberBcsdf f(model().fiber);
+    return f;
+}
+void FiberPrepare(benchmark::State& state) { Prepare(state, fiberBcsdf()); }
+void YarnPrepare(benchmark::State& state) { Prepare(state, guardedBsdf()); }
+void FiberVertex(benchmark::State& state) { Vertex(state, fiberBcsdf()); }
+void YarnVertex(benchmark::State& state) { Vertex(state, guardedBsdf()); }
+
 // The same three calls of the dual-scattering baseline on a prepared incident.
 void DualPrepared(benchmark::State& state) { preparedCalls(state, dualBsdf(), state.range(0)); }
 
@@ -357,6 +391,10 @@ const Entry kEntries[] = {
     {"YarnPrepared/0/0", "the same eval, fitted sampling (paper eq. 9-11)"},
     {"YarnPrepared/1/0", "the same evalPdf, fitted sampling"},
     {"YarnPrepared/2/0", "the same sample, fitted sampling"},
+    {"FiberPrepare", "FiberBcsdf::prepare alone"},
+    {"YarnPrepare", "YarnBsdf::prepare alone: T network, calibration, guard, table rows and nodes"},
+    {"FiberVertex", "one path vertex, fiber: prepare, evalPdf (NEE), sample"},
+    {"YarnVertex", "one path vertex, yarn: prepare, evalPdf (NEE), sample"},
     {"YarnMNetwork", "M network alone (evalM: Vec3 in, Rgb out, SIMD kernel)"},
     {"MNetwork/1", "M network alone, FixedMlp::forward on floats (SIMD kernel)"},
     {"MNetwork/0", "M network alone, FixedMlp::forwardScalar on floats (scalar reference)"},
@@ -404,6 +442,10 @@ BENCHMARK(YarnEval)->Arg(1)->Arg(0);
 BENCHMARK(YarnPdf);
 BENCHMARK(YarnSample)->Arg(1)->Arg(0);
 BENCHMARK(YarnPrepared)->ArgsProduct({{0, 1, 2}, {1, 0}});
+BENCHMARK(FiberPrepare);
+BENCHMARK(YarnPrepare);
+BENCHMARK(FiberVertex);
+BENCHMARK(YarnVertex);
 BENCHMARK(YarnMNetwork);
 BENCHMARK(MNetwork)->Arg(1)->Arg(0);
 BENCHMARK(YarnTNetwork);
@@ -436,9 +478,12 @@ int main(int argc, char** argv) {
     std::stable_sort(reporter.rows.begin(), reporter.rows.end(), [](const auto& a, const auto& b) {
         return entryOf(a.name) < entryOf(b.name);
     });
-    double fiber = 0;
-    for (const auto& row : reporter.rows)
-        if (row.name == "FiberEval") fiber = row.fastest();
+    auto fastest = [&](const char* name) {
+        for (const auto& row : reporter.rows)
+            if (row.name == name) return row.fastest();
+        return 0.0;
+    };
+    const double fiber = fastest("FiberEval");
     std::ostringstream out;
     out << "# Yarn BSDF cost (bench/bsdf)\n\n"
         << "One machine, one thread; CPU time per call over 4096 fixed random (wi, wo) pairs (wi "
@@ -461,11 +506,7 @@ int main(int argc, char** argv) {
         out << line;
     }
     // Issue 17's targets for the per-wo cost, as ratios to FiberBcsdf::eval.
-    auto ratio = [&](const char* name) {
-        for (const auto& row : reporter.rows)
-            if (row.name == name && fiber > 0) return row.fastest() / fiber;
-        return 0.0;
-    };
+    auto ratio = [&](const char* name) { return fiber > 0 ? fastest(name) / fiber : 0.0; };
     if (ratio("YarnPrepared/0/1") > 0) {
         char line[384];
         std::snprintf(line, sizeof line,
@@ -475,6 +516,15 @@ int main(int argc, char** argv) {
                       ratio("YarnPrepared/0/1"), ratio("YarnPrepared/1/1"),
                       ratio("YarnPrepared/2/1"), ratio("YarnPrepared/0/0"),
                       ratio("YarnPrepared/1/0"), ratio("YarnPrepared/2/0"));
+        out << line;
+    }
+    if (fastest("FiberVertex") > 0 && fastest("YarnVertex") > 0) {
+        char line[256];
+        std::snprintf(line, sizeof line,
+                      "\nOne path vertex (prepare, NEE evalPdf, sample): yarn %.0f ns, fiber %.0f "
+                      "ns, yarn / fiber %.2f.\n",
+                      fastest("YarnVertex"), fastest("FiberVertex"),
+                      fastest("YarnVertex") / fastest("FiberVertex"));
         out << line;
     }
     if (!md.empty()) {

@@ -56,9 +56,12 @@ double FiberBcsdf::probabilityR(const Rgb& f, const Rgb& importance) const {
 }
 
 FiberBcsdf::Incident FiberBcsdf::incident(const Vec3& wi, const Rgb& importance) const {
-    const Angles a = anglesOf(wi);
-    const Rgb f = fresnel(a.cosTheta);
-    return Incident{a, f, probabilityR(f, importance)};
+    return incident(anglesOf(wi), importance);
+}
+
+FiberBcsdf::Incident FiberBcsdf::incident(const Angles& wi, const Rgb& importance) const {
+    const Rgb f = fresnel(wi.cosTheta);
+    return Incident{wi, f, probabilityR(f, importance)};
 }
 
 void FiberBcsdf::prepare(const Vec3& wi, BsdfIncident& in) const {

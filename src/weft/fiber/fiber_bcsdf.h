@@ -83,6 +83,8 @@ class FiberBcsdf final : public Bsdf {
         double probabilityR;  // of picking the R lobe
     };
     Incident incident(const Vec3& wi, const Rgb& importance = Rgb(1.0)) const;
+    // The same from anglesOf(wi), for a caller that has them.
+    Incident incident(const Angles& wi, const Rgb& importance = Rgb(1.0)) const;
     Rgb evalPrepared(const Incident& in, const Angles& out) const;
     BsdfEval evalPdfPrepared(const Incident& in, const Angles& out) const;
 

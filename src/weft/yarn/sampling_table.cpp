@@ -31,6 +31,14 @@ Vec3 localOf(double z, double phi) {
     return {z, r * std::sin(phi), r * std::cos(phi)};
 }
 
+// tan(d) for d in [0, pi / 64] (a row's angular step or part of it): the
+// Taylor series to d^9 is exact to rounding there (the next term is below
+// 1e-15 d), and costs no libm call.
+double tanOfSmall(double d) {
+    const double d2 = d * d;
+    return d * (1 + d2 * (1.0 / 3 + d2 * (2.0 / 15 + d2 * (17.0 / 315 + d2 * (62.0 / 2835)))));
+}
+
 // The decoded cell masses: code c > 0 is 2^((c - 255) / kCodeStep) of the
 // node's largest cell, code 0 is 0 (never stored: the floor keeps every cell
 // above the smallest code).
@@ -56,7 +64,7 @@ SamplingTable::Incident SamplingTable::rowsOf(double zi) {
     in.gamma = std::max(kWarpWidth * std::sqrt(std::max(0.0, 1.0 - zi * zi)), kWarpWidthMin);
     in.atanLo = std::atan((-1.0 - in.zc) / in.gamma);
     in.atanStep = (std::atan((1.0 - in.zc) / in.gamma) - in.atanLo) / kRows;
-    in.tanStep = std::tan(in.atanStep);
+    in.tanStep = tanOfSmall(in.atanStep);  // atanStep <= pi / kRows
     in.invGamma = 1.0 / in.gamma;
     in.invAtanStep = 1.0 / in.atanStep;
     return in;
@@ -86,11 +94,8 @@ SamplingTable::RowSpan SamplingTable::rowAt(const Incident& in, double z) {
     const int row =
         std::clamp(static_cast<int>(std::floor((a - in.atanLo) * in.invAtanStep)), 0, kRows - 1);
     // tan of the lower edge's angle a - d from tan(a) = u and tan(d), d in
-    // [0, atanStep) (atanStep < pi / 64): the Taylor series to d^9 is exact to
-    // rounding there (the next term is below 1e-15 d).
-    const double d = a - (in.atanLo + row * in.atanStep), d2 = d * d;
-    const double tanD =
-        d * (1 + d2 * (1.0 / 3 + d2 * (2.0 / 15 + d2 * (17.0 / 315 + d2 * (62.0 / 2835)))));
+    // [0, atanStep).
+    const double tanD = tanOfSmall(a - (in.atanLo + row * in.atanStep));
     return spanOf(in, row, (u - tanD) / (1.0 + u * tanD));
 }
 
@@ -182,9 +187,13 @@ size_t SamplingTable::bytes() const {
 
 SamplingTable::Incident SamplingTable::incident(const Vec3& wi) const {
     const Vec3 local = frame_.toLocal(wi);
-    Incident in = rowsOf(local.x);
-    const double theta = std::asin(std::clamp(local.x, -1.0, 1.0));
-    const double phi = std::clamp(std::atan2(local.y, std::max(local.z, 0.0)), -kHalfPi, kHalfPi);
+    const double sinTheta = std::clamp(local.x, -1.0, 1.0);
+    return incident(sinTheta, std::asin(sinTheta), std::atan2(local.y, std::max(local.z, 0.0)));
+}
+
+SamplingTable::Incident SamplingTable::incident(double sinTheta, double theta, double phi) const {
+    Incident in = rowsOf(sinTheta);
+    phi = std::clamp(phi, -kHalfPi, kHalfPi);
     int a0, b0;
     double fa, fb;
     axisCell((theta + kHalfPi) / kPi * (kIncidentTheta - 1), kIncidentTheta, &a0, &fa);

@@ -84,6 +84,9 @@ class SamplingTable {
 
     // wi: yarn frame, upper hemisphere (wi.z >= 0).
     Incident incident(const Vec3& wi) const;
+    // The same from wi's surface fiber angles, for a caller that has them:
+    // sin(theta), theta and phi = atan2(y, max(z, 0)) of the local direction.
+    Incident incident(double sinTheta, double theta, double phi) const;
     // Density per unit solid angle of sample() at the yarn-frame direction wo.
     double pdf(const Incident& in, const Vec3& wo) const;
     // uNode picks the node, u1 the cell and z in it, u2 the azimuth in it.

@@ -169,7 +169,7 @@ void YarnBsdf::buildEnergyGuard() {
         const double pT = transmissionUpper(wi);
         // The R table is smooth in fiber angles without the calibration, which is exact at eval
         // time.
-        const Rgb kept = keptReflectance(wi) * calibration_.scales(wi).r;
+        const Rgb kept = keptReflectance(surfaceIncident(wi)) * calibration_.scales(wi).r;
         const Rgb af = rLobe_.fiber().albedo(frame.toLocal(wi));
         for (int c = 0; c < 3; ++c)
             albedo[node] = std::max(albedo[node], pT + (1.0 - pT) * kept[c] * af[c] + energy[c]);
@@ -187,13 +187,19 @@ void YarnBsdf::buildEnergyGuard() {
     guardActive_ = std::find(guardCell_.begin(), guardCell_.end(), 1) != guardCell_.end();
 }
 
-Rgb YarnBsdf::keptReflectance(const Vec3& wi) const {
-    const Vec3 local = lobes_.frame().toLocal(wi);
-    const double theta = safeAsin(local.x), phi = std::atan2(local.y, std::max(local.z, 0.0));
+YarnBsdf::SurfaceIncident YarnBsdf::surfaceIncident(const Vec3& wi) const {
+    SurfaceIncident s;
+    s.local = lobes_.frame().toLocal(wi);
+    s.angles = FiberBcsdf::anglesOf(s.local);
+    s.phi = std::atan2(s.local.y, std::max(s.local.z, 0.0));
+    return s;
+}
+
+Rgb YarnBsdf::keptReflectance(const SurfaceIncident& surface) const {
     int a0, b0;
     double fa, fb;
-    axisCell((theta + kHalfPi) / kPi * (kGuardFiber - 1), kGuardFiber, &a0, &fa);
-    axisCell((phi + kHalfPi) / kPi * (kGuardFiber - 1), kGuardFiber, &b0, &fb);
+    axisCell((surface.angles.theta + kHalfPi) / kPi * (kGuardFiber - 1), kGuardFiber, &a0, &fa);
+    axisCell((surface.phi + kHalfPi) / kPi * (kGuardFiber - 1), kGuardFiber, &b0, &fb);
     auto at = [&](int a, int b) {
         return guardReflectance_[static_cast<size_t>(a) * kGuardFiber + b];
     };
@@ -235,14 +241,15 @@ Rgb YarnBsdf::energyM(const GuardCell& cell) const {
     return value;
 }
 
-YarnBsdf::GuardScales YarnBsdf::scaleUpper(const Vec3& wi, double pT,
+YarnBsdf::GuardScales YarnBsdf::scaleUpper(const Vec3& wi, const SurfaceIncident& surface,
+                                           double pT,
                                            const EnergyCalibration::Scales& calibration) const {
     GuardScales s;
     if (!guardActive_) return s;
     const GuardCell cell = guardCell(wi);
     if (!guardCell_[static_cast<size_t>(cell.a0) * kGuardPhi + cell.b0]) return s;
-    const Rgb kept = keptReflectance(wi) * calibration.r, energy = energyM(cell);
-    const Rgb af = rLobe_.fiber().albedo(lobes_.frame().toLocal(wi));
+    const Rgb kept = keptReflectance(surface) * calibration.r, energy = energyM(cell);
+    const Rgb af = rLobe_.fiber().albedo(surface.local);
     for (int c = 0; c < 3; ++c) {
         // R alone can exceed 1 - P(T) only through an energy calibration above 1.
         const double r = kept[c] * af[c];
@@ -255,7 +262,7 @@ YarnBsdf::GuardScales YarnBsdf::scaleUpper(const Vec3& wi, double pT,
 
 Rgb YarnBsdf::multipleScatteringScale(const Vec3& wi) const {
     const Vec3 i = wi.z < 0 ? mirrored(wi) : wi;
-    return scaleUpper(i, transmissionUpper(i), calibration_.scales(i)).m;
+    return scaleUpper(i, surfaceIncident(i), transmissionUpper(i), calibration_.scales(i)).m;
 }
 
 // -------------------------------------------------------------- the BSDF --
@@ -270,17 +277,18 @@ double YarnBsdf::transmission(const Vec3& wi) const {
 
 YarnBsdf::Incident YarnBsdf::incident(const Vec3& wi, double pT) const {
     const EnergyCalibration::Scales s = calibration_.scales(wi);
-    const GuardScales g = scaleUpper(wi, pT, s);
+    const SurfaceIncident surface = surfaceIncident(wi);
+    const GuardScales g = scaleUpper(wi, surface, pT, s);
     Incident in;
     in.pT = in.pickT = pT;
     in.rScale = s.r * g.r;
     in.mScale = s.m * g.m;
-    const Vec3 local = lobes_.frame().toLocal(wi);
-    if (hasReflection_) in.fiber = rLobe_.fiber().incident(local);
+    if (hasReflection_) in.fiber = rLobe_.fiber().incident(surface.angles);
     if (table_.empty()) return in;
     // Tabulated sampling (yarn_bsdf.h): the mixture's weights from the
     // energies of its parts.
-    in.table = table_.incident(wi);
+    in.table = table_.incident(std::clamp(surface.local.x, -1.0, 1.0), surface.angles.theta,
+                               surface.phi);
     double peak = 0;
     if (hasReflection_) {
         // theta_i and F(theta_i) of q_R: the R lobe's fiber state has both.

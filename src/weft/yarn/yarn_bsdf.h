@@ -109,6 +109,7 @@
 #include "weft/core/bsdf.h"
 #include "weft/core/rng.h"
 #include "weft/fiber/longitudinal.h"
+#include "weft/yarn/packed_calibration.h"
 #include "weft/yarn/sampling_table.h"
 #include "weft/yarn/yarn_lobes.h"
 #include "weft/yarn/yarn_model.h"
@@ -235,6 +236,15 @@ class YarnBsdf final : public Bsdf {
     static double guardFiberAngle(int index);  // -pi/2 + pi index / 23
 
   private:
+    // wi in the surface fiber frame: the R lobe's fiber angles and the
+    // azimuth from n, phi = atan2(y, max(z, 0)), which the guard's R table and
+    // the sampling table share (one atan2 each for theta and phi per wi).
+    struct SurfaceIncident {
+        Vec3 local;
+        FiberBcsdf::Angles angles;
+        double phi = 0;
+    };
+    SurfaceIncident surfaceIncident(const Vec3& wi) const;
     Incident incident(const Vec3& wi, double pT) const;
     // S_R and S_M (calibration and guard applied) for wi in the upper
     // hemisphere: the one place where the model's value is put together.
@@ -251,7 +261,7 @@ class YarnBsdf final : public Bsdf {
     struct GuardScales {
         Rgb r{1.0}, m{1.0};
     };
-    GuardScales scaleUpper(const Vec3& wi, double pT,
+    GuardScales scaleUpper(const Vec3& wi, const SurfaceIncident& surface, double pT,
                            const EnergyCalibration::Scales& calibration) const;
     void buildEnergyGuard();
     void buildSamplingTable();
@@ -269,7 +279,7 @@ class YarnBsdf final : public Bsdf {
     bool hasTransmission_, hasReflection_;  // S_T and S_R are part of the BSDF
     YarnSampling sampling_;
     double kappaR_;  // 0 without an R lobe
-    EnergyCalibration calibration_;
+    PackedCalibration calibration_;  // the model's energy calibration, in one SIMD pass
     bool guardActive_ = false;
     // Tables per channel: E_R / ((1 - P(T)) a_f) before the calibration (whose
     // scale is exact at eval time), kGuardFiber x kGuardFiber
@@ -287,7 +297,7 @@ class YarnBsdf final : public Bsdf {
         double fa = 0, fb = 0;
     };
     GuardCell guardCell(const Vec3& wi) const;
-    Rgb keptReflectance(const Vec3& wi) const;
+    Rgb keptReflectance(const SurfaceIncident& surface) const;
     Rgb energyM(const GuardCell& cell) const;
 };
 

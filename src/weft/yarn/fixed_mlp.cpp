@@ -165,6 +165,8 @@ FixedMlpKernel selectKernel() {
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include "weft/yarn/highway_targets.h"
+
 namespace weft {
 
 HWY_EXPORT(selectKernel);
@@ -172,13 +174,7 @@ HWY_EXPORT(selectKernel);
 FixedMlpKernel fixedMlpKernel() { return HWY_DYNAMIC_DISPATCH(selectKernel)(); }
 
 std::vector<FixedMlpKernel> fixedMlpKernels() {
-    std::vector<FixedMlpKernel> kernels;
-    for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
-        hwy::SetSupportedTargetsForTest(target);
-        kernels.push_back(HWY_DYNAMIC_DISPATCH(selectKernel)());
-    }
-    hwy::SetSupportedTargetsForTest(0);
-    return kernels;
+    return everyHighwayTarget([] { return HWY_DYNAMIC_DISPATCH(selectKernel)(); });
 }
 
 }  // namespace weft

@@ -69,18 +69,14 @@ PackedCalibrationKernel selectPackedCalibrationKernel() {
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include "weft/yarn/highway_targets.h"
+
 namespace weft {
 
 HWY_EXPORT(selectPackedCalibrationKernel);
 
 std::vector<PackedCalibrationKernel> packedCalibrationKernels() {
-    std::vector<PackedCalibrationKernel> kernels;
-    for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
-        hwy::SetSupportedTargetsForTest(target);
-        kernels.push_back(HWY_DYNAMIC_DISPATCH(selectPackedCalibrationKernel)());
-    }
-    hwy::SetSupportedTargetsForTest(0);
-    return kernels;
+    return everyHighwayTarget([] { return HWY_DYNAMIC_DISPATCH(selectPackedCalibrationKernel)(); });
 }
 
 PackedCalibration::PackedCalibration(const EnergyCalibration& calibration)

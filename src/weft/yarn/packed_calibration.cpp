@@ -3,6 +3,8 @@
 // how foreach_target compiles this file once per target).
 #include "weft/yarn/packed_calibration.h"
 
+#include <stdexcept>
+
 #ifndef HWY_DISABLED_TARGETS
 #define HWY_DISABLED_TARGETS (HWY_SVE | HWY_SVE2 | HWY_SVE_256 | HWY_SVE2_128 | HWY_RVV)
 #endif
@@ -86,7 +88,14 @@ PackedCalibration::PackedCalibration(const EnergyCalibration& calibration,
                                      const PackedCalibrationKernel& kernel)
     : degree_(calibration.degree), kernel_(kernel) {
     if (empty()) return;
+    // The model's reader validated the calibration (yarn_model.h); the stack
+    // basis of scales() holds kMaxDegree's terms.
     terms_ = EnergyCalibration::termCount(degree_);
+    for (int c = 0; c < 3; ++c)
+        if (degree_ > EnergyCalibration::kMaxDegree ||
+            calibration.r[c].size() != static_cast<size_t>(terms_) ||
+            calibration.m[c].size() != static_cast<size_t>(terms_))
+            throw std::logic_error("PackedCalibration: an unvalidated energy calibration");
     constexpr size_t kLanes = PackedCalibrationKernel::kLanes;
     coefficients_.assign(terms_ * kLanes, 0.0);
     for (int k = 0; k < terms_; ++k)

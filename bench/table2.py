@@ -279,8 +279,8 @@ def convergence(bench, scene, folder, mode, ref_exr, ref_spp, divisors, extra=()
                                   SEEDS["ladder"] + i, spp=spp, extra=extra)
         rel = bench.compare(exr, ref_exr)["rel_mse"]
         c = rel / (1.0 / spp + 1.0 / ref_spp)
-        levels.append({"spp": spp, "seed": SEEDS["ladder"] + i, "rel_mse": rel, "c": c,
-                       "seconds_per_spp": stats["seconds_per_spp"]})
+        levels.append(dict({"spp": spp, "seed": SEEDS["ladder"] + i, "rel_mse": rel, "c": c,
+                            "seconds_per_spp": stats["seconds_per_spp"]}, **ray_costs(stats)))
     last = levels[-1]
     spp_target = last["c"] / TARGET_REL_MSE
     seconds_per_spp = sum(l["seconds_per_spp"] * l["spp"] for l in levels) / sum(
@@ -293,6 +293,26 @@ def convergence(bench, scene, folder, mode, ref_exr, ref_spp, divisors, extra=()
             "c_spread": max(cs) / min(cs) if min(cs) > 0 else float("inf"),
             # the converged render's own noise: relMSE of it against the true image
             "reference_noise": last["c"] / ref_spp}
+
+
+def ray_costs(stats):
+    """Rays (closest-hit and shadow queries) per sample and thread-microseconds per ray of one
+    render (weft render's image.json): a mode's seconds per spp is their product over the
+    threads, so the equal-quality speed-up splits into rays ratio x per-ray cost ratio x c
+    ratio (the time table's decomposition)."""
+    samples = stats["width"] * stats["height"] * stats["spp"]
+    return {"rays_per_sample": stats["rays"] / samples,
+            "thread_us_per_ray": stats["seconds"] * stats["threads"] / stats["rays"] * 1e6}
+
+
+def ladder_ray_costs(levels):
+    """ray_costs over a ladder, weighted by each level's samples (None where a level lacks them)."""
+    if not levels or any("rays_per_sample" not in l for l in levels):
+        return None
+    spp = sum(l["spp"] for l in levels)
+    rays = sum(l["rays_per_sample"] * l["spp"] for l in levels)
+    busy = sum(l["rays_per_sample"] * l["spp"] * l["thread_us_per_ray"] for l in levels)
+    return {"rays_per_sample": rays / spp, "thread_us_per_ray": busy / rays}
 
 
 def fiber_reference(stats):
@@ -780,6 +800,44 @@ def reason_lines(cells):
     return lines
 
 
+def where_time_goes_lines(cells):
+    """The speed-up as rays ratio x per-ray cost ratio x c ratio (ray_costs), for the chunks
+    whose ladder renders recorded their rays."""
+    rows = []
+    for c in cells:
+        f = ladder_ray_costs(c["fiber"]["equal_quality"]["levels"])
+        n = ladder_ray_costs(c["neural"]["equal_quality"]["levels"])
+        if f and n:
+            rows.append((c, f, n))
+    if not rows:
+        return []
+    lines = ["", "## Where the time goes: speed-up = rays ratio x per-ray cost ratio x c ratio",
+             "", "Rays per sample (closest-hit and shadow queries) and thread-microseconds per "
+             "ray of each mode's ladder renders; c ratio: fiber c / neural c at the top ladder "
+             "level. Their product is the speed-up above (to rounding). A neural path is short "
+             "(a ply is one bounce), but on weave and knit each of its rays costs about what a "
+             "fiber-mode ray costs: the yarn BSDF and the lights take what Embree saves on the "
+             "smaller scene (docs/render.md, section Where Table 2's time goes).", "",
+             "| material | scene | fiber rays / sample | neural rays / sample | rays ratio "
+             "| fiber us / ray | neural us / ray | per-ray ratio | c ratio | product |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for c, f, n in rows:
+        rays = f["rays_per_sample"] / n["rays_per_sample"]
+        per_ray = f["thread_us_per_ray"] / n["thread_us_per_ray"]
+        c_ratio = (c["fiber"]["equal_quality"]["levels"][-1]["c"]
+                   / c["neural"]["equal_quality"]["levels"][-1]["c"])
+        lines.append("| %s | %s | %.2f | %.2f | %.2f | %.3f | %.3f | %.2f | %.2f | %.1fx |" % (
+            c["preset"], c["scene"], f["rays_per_sample"], n["rays_per_sample"], rays,
+            f["thread_us_per_ray"], n["thread_us_per_ray"], per_ray, c_ratio,
+            rays * per_ray * c_ratio))
+    missing = ["%s %s" % (c["preset"], c["scene"]) for c in cells
+               if c not in [r[0] for r in rows]]
+    if missing:
+        lines += ["", "Without ray counts (chunks made before table2.py recorded them, their "
+                  "ladder renders gone): %s." % ", ".join(missing)]
+    return lines
+
+
 def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
                  ablation_paths=0, figure_note=""):
     """table2*.md and .json from result cells (chunk files or one --quick run)."""
@@ -878,6 +936,7 @@ def write_tables(title, caption, cells, out_md, missing=(), ablation_rows=(),
                 n["equal_quality"]["seconds_to_target"], c["speedup"], f["seconds_per_spp"],
                 n["seconds_per_spp"], f["build_seconds"], mb(f["embree_bytes"] + f.get("material_bytes", 0)),
                 mb(n["embree_bytes"] + n.get("material_bytes", 0)), c["memory_ratio"], c["rss_ratio"]))
+    lines += where_time_goes_lines(cells)
     lines += ["", "## Convergence: c = relMSE / (1/n + 1/N) at each ladder level n (spp: c)",
               "", "Equal at every level when variance falls as 1/spp; max/min > 1.25 for neural "
               "mode misses issue 17's target (a heavy tail).", "",
@@ -1005,9 +1064,7 @@ def run_chunk(bench, args, folder, preset, kind, s, timings):
                        preset, kind, shown_arguments(sys.argv[1:], drop=("--chunk", "--presets", "--scenes")))}
     cell["format"] = CHUNK_FORMAT
     os.makedirs(folder, exist_ok=True)
-    with open(path + ".tmp", "w") as f:
-        json.dump(cell, f, indent=1)
-    os.replace(path + ".tmp", path)
+    write_json(path, cell)
     bench.say("%s %s: %.1f minutes, wrote %s" % (preset, kind, cell["run"]["wall_seconds"] / 60,
                                                  shown_path(path)))
     add_baselines(bench, args, folder, preset, kind, s, path)
@@ -1042,9 +1099,7 @@ def add_baselines(bench, args, folder, preset, kind, s, path):
     figure = os.path.join(folder, "%s-%s-fig10.png" % (preset, kind))
     cell["dual"] = dual_baseline(bench, s, preset, kind, os.path.join(bench.work, preset, kind),
                                  cell, figure)
-    with open(path + ".tmp", "w") as f:
-        json.dump(cell, f, indent=1)
-    os.replace(path + ".tmp", path)
+    write_json(path, cell)
     bench.say("%s %s: baseline in %.1f minutes, wrote %s" % (
         preset, kind, cell["dual"]["run"]["wall_seconds"] / 60, shown_path(path)))
 
@@ -1071,24 +1126,62 @@ def figure_panels(figure, size, indices, out_dir):
     return paths
 
 
+def write_json(path, data):
+    """data as indented JSON at path, through a temp file renamed over it."""
+    with open(path + ".tmp", "w") as f:
+        json.dump(data, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
+def add_ray_costs(cell, work):
+    """Adds ray_costs to the ladder levels of a chunk file that lack them, from the cached
+    ladder renders in work (only a render that is the level's own: same seed and spp, and
+    the same seconds per spp to the bit). Returns whether it added any."""
+    added = False
+    for mode, eq in [(m, cell[m]["equal_quality"]) for m in ("fiber", "neural")] + (
+            [("dual", cell["dual"]["equal_quality"])] if "dual" in cell else []):
+        for level in eq["levels"]:
+            if "rays_per_sample" in level:
+                continue
+            folder = os.path.join(work, "%s-%dspp" % (mode, level["spp"]))
+            try:
+                with open(os.path.join(folder, "image.json")) as f:
+                    stats = json.load(f)
+                with open(os.path.join(folder, "params.json")) as f:
+                    cmd = json.load(f)["cmd"]
+            except (OSError, ValueError, KeyError):
+                continue
+            seed = cmd[cmd.index("--seed") + 1] if "--seed" in cmd else None
+            if (seed != str(level["seed"]) or stats.get("spp") != level["spp"]
+                    or stats.get("seconds_per_spp") != level["seconds_per_spp"]):
+                continue
+            level.update(ray_costs(stats))
+            added = True
+    return added
+
+
 def rescore(bench, args, results, name):
     """--rescore: adds SSIM at PLY_SCALES and the mean ratio (neural and baseline vs the fiber
     reference) to the chunk files that lack them: from the cached renders when the work folder
     still holds them, else from the 8-bit panels of the chunk's committed figures (marked
     "figure png"; its SSIM at full resolution is kept beside, to show how closely the PNG
     reproduces the EXR's); and the fiber reference's max_depth (OLD_DEFAULT_MAX_DEPTH for a
-    chunk made before weft recorded it)."""
+    chunk made before weft recorded it); and the ladder levels' ray costs (add_ray_costs)."""
     folder = os.path.join(results, name)
     for path in sorted(glob.glob(os.path.join(folder, "*-*.json"))):
         with open(path) as f:
             cell = json.load(f)
         if cell.get("format") != CHUNK_FORMAT:
             continue
-        if all(k in cell for k in ("ssim_scales", "mean_ratio", "fiber_reference")) and \
-                not args.redo:
-            continue
         preset, kind, size = cell["preset"], cell["scene"], cell["size"]
         work = os.path.join(bench.work, preset, kind)
+        added_rays = add_ray_costs(cell, work)
+        if all(k in cell for k in ("ssim_scales", "mean_ratio", "fiber_reference")) and \
+                not args.redo:
+            if added_rays:
+                write_json(path, cell)
+                bench.say("%s %s: ray costs from the cached ladder renders" % (preset, kind))
+            continue
         refs = {m: os.path.join(work, m + "-ref", "image.exr") for m in ("fiber", "neural", "dual")}
         pairs = [(cell, refs["neural"])] + ([(cell["dual"], refs["dual"])] if "dual" in cell else [])
         fiber_json = os.path.join(work, "fiber-ref", "image.json")
@@ -1122,9 +1215,7 @@ def rescore(bench, args, results, name):
                 # Of the 8-bit display values: clipped highlights pull it towards 1.
                 target["mean_ratio"] = png["mean_ratio"]
                 target["mean_ratio_source"] = "figure png"
-        with open(path + ".tmp", "w") as f:
-            json.dump(cell, f, indent=1)
-        os.replace(path + ".tmp", path)
+        write_json(path, cell)
         bench.say("%s %s: SSIM at %s px blocks %s (from %s)" % (
             preset, kind, " / ".join("%dx%d" % (k, k) for k in PLY_SCALES),
             " / ".join("%.3f" % cell["ssim_scales"][str(k)] for k in PLY_SCALES),
@@ -1280,7 +1371,9 @@ def main():
     what.add_argument("--rescore", action="store_true",
                       help="add SSIM at 2x2 and 4x4 pixel blocks (weft compare --scale) to the "
                            "chunk files that lack it, from the cached renders or else from the "
-                           "committed figures' 8-bit panels (needs python3-pil), then assemble")
+                           "committed figures' 8-bit panels (needs python3-pil), and the ladder "
+                           "levels' rays per sample and cost per ray from the cached renders, "
+                           "then assemble")
     p.add_argument("--weft", default=os.path.join(ROOT, "build", "release", "weft"))
     p.add_argument("--work", default=None, help="cache folder (default bench/work/NAME)")
     p.add_argument("--results", default=os.path.join(ROOT, "bench", "results"),

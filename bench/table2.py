@@ -803,12 +803,14 @@ def reason_lines(cells):
 def where_time_goes_lines(cells):
     """The speed-up as rays ratio x per-ray cost ratio x c ratio (ray_costs), for the chunks
     whose ladder renders recorded their rays."""
-    rows = []
+    rows, missing = [], []
     for c in cells:
         f = ladder_ray_costs(c["fiber"]["equal_quality"]["levels"])
         n = ladder_ray_costs(c["neural"]["equal_quality"]["levels"])
         if f and n:
             rows.append((c, f, n))
+        else:
+            missing.append("%s %s" % (c["preset"], c["scene"]))
     if not rows:
         return []
     lines = ["", "## Where the time goes: speed-up = rays ratio x per-ray cost ratio x c ratio",
@@ -830,8 +832,6 @@ def where_time_goes_lines(cells):
             c["preset"], c["scene"], f["rays_per_sample"], n["rays_per_sample"], rays,
             f["thread_us_per_ray"], n["thread_us_per_ray"], per_ray, c_ratio,
             rays * per_ray * c_ratio))
-    missing = ["%s %s" % (c["preset"], c["scene"]) for c in cells
-               if c not in [r[0] for r in rows]]
     if missing:
         lines += ["", "Without ray counts (chunks made before table2.py recorded them, their "
                   "ladder renders gone): %s." % ", ".join(missing)]

@@ -1047,6 +1047,8 @@ def run_chunk(bench, args, folder, preset, kind, s, timings):
         if matching_settings(old.get("settings", {}), settings):
             bench.say("%s %s: %s already holds these settings (--redo to run again)" % (
                 preset, kind, shown_path(path)))
+            # The baseline is scored against the chunk's own reference: its parts as recorded.
+            s = dict(s, ref_parts=old["settings"].get("ref_parts", s["ref_parts"]))
             add_baselines(bench, args, folder, preset, kind, s, path)
             return path
     text, estimate = estimate_text(timings, preset, kind, s)

@@ -102,7 +102,8 @@ figures' 8-bit panels (Pillow, Debian python3-pil; marked "figure png").
 
 Everything is cached under the work folder (scene folders, renders, their
 JSON statistics, comparisons); a step is redone only when its command line
-changes, so an interrupted chunk resumes where it stopped. A chunk whose
+or the weft binary (its SHA-256) changes, so an interrupted chunk resumes where
+it stopped and a rebuilt weft renders everything again. A chunk whose
 result file already records the same settings is not run again (--redo).
 
     bench/table2.py --chunk gabardine,knit [--size PX] [--ref-spp N] [--threads 0]
@@ -184,6 +185,10 @@ class Bench:
     def __init__(self, args):
         self.args = args
         self.weft = os.path.abspath(args.weft)
+        # Cached steps are keyed by the binary as well as the command line: a
+        # rebuilt weft renders again (its images and timings are its own), while
+        # an interrupted chunk with the same binary resumes.
+        self.weft_sha256 = binary_digest(self.weft) if os.path.exists(self.weft) else None
         self.work = os.path.abspath(args.work)
         os.makedirs(self.work, exist_ok=True)
         self.log = open(os.path.join(self.work, "log.txt"), "a")
@@ -204,8 +209,9 @@ class Bench:
         return r.stdout
 
     def cached(self, folder, params, make):
-        """Runs make(folder) unless folder/params.json already records `params`."""
-        benchlib.cached(folder, params, make)
+        """Runs make(folder) unless folder/params.json already records `params` made by this
+        weft binary."""
+        benchlib.cached(folder, dict(params, weft_sha256=self.weft_sha256), make)
 
     def render(self, scene, out_dir, name, mode, seed, spp=None, seconds=None, extra=()):
         """weft render -> (stats dict, exr path); cached by its command line."""
@@ -553,6 +559,15 @@ def git_out(args, cwd):
     return r.stdout.strip() if r.returncode == 0 else None
 
 
+def binary_digest(path):
+    """The first 16 hex digits of the file's SHA-256."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()[:16]
+
+
 def provenance(weft):
     """Which weft made the numbers, and where: recorded in every chunk file."""
     top = git_out(["rev-parse", "--show-toplevel"], os.path.dirname(os.path.realpath(weft)))
@@ -560,10 +575,6 @@ def provenance(weft):
     if top:
         commit = git_out(["rev-parse", "HEAD"], top)
         dirty = bool(git_out(["status", "--porcelain", "--", "src", "CMakeLists.txt"], top))
-    digest = hashlib.sha256()
-    with open(weft, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
     version = subprocess.run([weft, "--version"], capture_output=True, text=True).stdout.strip()
     cpu = "unknown CPU"
     try:
@@ -578,7 +589,7 @@ def provenance(weft):
         # HEAD of the git checkout the binary sits in (the binary may be older:
         # its mtime and hash are beside it); source_dirty: uncommitted changes under src/.
         "weft_commit": commit, "weft_source_dirty": dirty, "weft_version": version,
-        "weft_binary_sha256": digest.hexdigest()[:16],
+        "weft_binary_sha256": binary_digest(weft),
         "weft_binary_mtime": datetime.datetime.fromtimestamp(
             os.path.getmtime(weft), datetime.timezone.utc).isoformat(timespec="seconds"),
         "script_commit": git_out(["rev-parse", "HEAD"], ROOT),

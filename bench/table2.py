@@ -214,7 +214,7 @@ class Bench:
         benchlib.cached(folder, dict(params, weft_sha256=self.weft_sha256), make)
 
     def render(self, scene, out_dir, name, mode, seed, spp=None, seconds=None, extra=()):
-        """weft render -> (stats dict, exr path); cached by its command line."""
+        """weft render -> (stats dict, exr path); cached by its command line and the binary."""
         folder = os.path.join(out_dir, name)
         budget = ["--spp", str(spp)] if spp is not None else ["--time", "%.3f" % seconds]
         cmd = [self.weft, "render", scene, "--mode", mode, "--seed", str(seed), "--quiet",
@@ -465,7 +465,7 @@ def dual_baseline(bench, s, preset, kind, folder, cell, figure):
         "neural_speedup_over_dual": dual_eq["seconds_to_target"] / neural_eq["seconds_to_target"],
         "memory_ratio": scene_bytes(fiber_stats) / scene_bytes(dual_stats),
         "figure": os.path.basename(os.path.dirname(figure)) + "/" + os.path.basename(figure),
-        "provenance": provenance(bench.weft),
+        "provenance": provenance(bench),
         "run": {"finished": now(), "wall_seconds": time.time() - t0},
     }
 
@@ -568,8 +568,9 @@ def binary_digest(path):
     return digest.hexdigest()[:16]
 
 
-def provenance(weft):
+def provenance(bench):
     """Which weft made the numbers, and where: recorded in every chunk file."""
+    weft = bench.weft
     top = git_out(["rev-parse", "--show-toplevel"], os.path.dirname(os.path.realpath(weft)))
     commit = dirty = None
     if top:
@@ -589,7 +590,7 @@ def provenance(weft):
         # HEAD of the git checkout the binary sits in (the binary may be older:
         # its mtime and hash are beside it); source_dirty: uncommitted changes under src/.
         "weft_commit": commit, "weft_source_dirty": dirty, "weft_version": version,
-        "weft_binary_sha256": binary_digest(weft),
+        "weft_binary_sha256": bench.weft_sha256,
         "weft_binary_mtime": datetime.datetime.fromtimestamp(
             os.path.getmtime(weft), datetime.timezone.utc).isoformat(timespec="seconds"),
         "script_commit": git_out(["rev-parse", "HEAD"], ROOT),
@@ -1071,7 +1072,7 @@ def run_chunk(bench, args, folder, preset, kind, s, timings):
     figure = os.path.join(folder, "%s-%s.png" % (preset, kind))
     cell = scene_cell(bench, s, preset, kind, os.path.join(bench.work, preset, kind), figure)
     cell["settings"] = settings
-    cell["provenance"] = provenance(bench.weft)
+    cell["provenance"] = provenance(bench)
     cell["run"] = {"started": started, "finished": now(), "wall_seconds": time.time() - t0,
                    "estimated_minutes": estimate, "command": chunk_command(
                        preset, kind, shown_arguments(sys.argv[1:], drop=("--chunk", "--presets", "--scenes")))}

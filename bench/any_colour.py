@@ -32,7 +32,7 @@ import numpy as np
 from render import write_results
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-# Table 3 (DESIGN.md 3): C_R, C_TT, beta_R, beta_TT, gamma_TT; N, rho, alpha.
+# Table 3 (docs/design.md 3): C_R, C_TT, beta_R, beta_TT, gamma_TT; N, rho, alpha.
 PRESETS = {
     "fleece": ([0.040, 0.087, 0.087], [0.452, 0.725, 0.948], 7.238, 10.000, 25.989, (300, 0.30, 0.24)),
     "silk": ([0.745, 0.008, 0.070], [0.620, 0.553, 0.562], 1.000, 10.000, 19.823, (300, 0.20, 0.00)),

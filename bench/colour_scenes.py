@@ -35,7 +35,7 @@ import time
 from render import write_results
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-# Two colours that are not Table 3's (DESIGN.md 3), inside [0.3, 0.999].
+# Two colours that are not Table 3's (docs/design.md 3), inside [0.3, 0.999].
 OCHRE = (0.85, 0.55, 0.3)
 SAGE = (0.4, 0.62, 0.5)
 

@@ -7,7 +7,7 @@
 //   random walks: 100 smooth random walks of 1000 points each (step 0.5,
 //                 the direction turned a little per step, kept inside a
 //                 60-unit box), yarn radius 0.25;
-//   tiled knit:   the shared stockinette knit (../shared/data, 826 points)
+//   tiled knit:   the shared stockinette knit (data/curves, 826 points)
 //                 tiled 11 x 11 side by side (99946 points), at its radius 1
 //                 (skipped when the file is missing; --knit names it).
 // Times are the median of three runs on one thread. Writes a Markdown table
@@ -91,7 +91,7 @@ CurveSet tiledKnit(const std::string& knitPath, int tiles) {
 int main(int argc, char** argv) {
     CLI::App app{"time of the curve report (weft curves info) on files of 10^5 points"};
     std::string out = "bench/results/curves.md";
-    std::string knit = "../shared/data/knit-stockinette-tiny.bcc";  // from the repository root
+    std::string knit = "data/curves/knit-stockinette-tiny.bcc";  // from the repository root
     app.add_option("--out", out, "Markdown table")->default_val(out);
     app.add_option("--knit", knit, "the shared knit BCC")->default_val(knit);
     CLI11_PARSE(app, argc, argv);

@@ -3,7 +3,7 @@
 
 Writes a small close-up scene (one 3-ply yarn segment filling the frame, lit
 by the procedural sky and two sphere lights) and a real knit swatch (when
-../shared/data is there), renders each with `weft render`
+data/curves is there), renders each with `weft render`
 in both modes at the same samples per pixel, each in its own process (so
 that peak resident memory is per mode), and writes a table of the measured
 values and the ratios fiber / neural to bench/results/render.md (and .json).
@@ -48,9 +48,9 @@ def closeup_scene(folder, model, size):
 
 
 def knit_scene(folder, model, size):
-    # The real stockinette swatch of ../shared/data (yarn radius 1 in the file),
+    # The real stockinette swatch of data/curves (yarn radius 1 in the file),
     # scaled to a yarn radius of 0.01, seen from the front at a slant.
-    bcc = os.path.join(ROOT, "..", "shared", "data", "knit-stockinette-tiny.bcc")
+    bcc = os.path.join(ROOT, "data", "curves", "knit-stockinette-tiny.bcc")
     if not os.path.exists(bcc):
         return None
     s = 0.01
@@ -98,7 +98,7 @@ def main():
     results = {"settings": vars(a), "scenes": {}}
     with tempfile.TemporaryDirectory(prefix="weft-bench-render-") as tmp:
         scenes = [("close-up of one 3-ply yarn", closeup_scene(tmp, a.model, a.size)),
-                  ("knit swatch, ../shared/data/knit-stockinette-tiny.bcc (22 curves)",
+                  ("knit swatch, data/curves/knit-stockinette-tiny.bcc (22 curves)",
                    knit_scene(tmp, a.model, a.size))]
         for title, scene in scenes:
             if scene is None:

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""bench/shared_data.py: the real knit and woven swatches of ../shared/data
+"""bench/shared_data.py: the real knit and woven swatches of data/curves
 rendered with every fitted material in fiber, neural and dual mode.
 
 For each model of models/ (the five Table 3 materials) and each swatch
@@ -31,7 +31,7 @@ import tempfile
 from render import write_results
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SHARED = os.path.join(ROOT, "..", "shared", "data")
+SHARED = os.path.join(ROOT, "data", "curves")
 SWATCHES = [("knit", "knit-stockinette-tiny.bcc"), ("woven", "woven-satin-small.bcc")]
 MATERIALS = ["fleece", "silk", "polyester", "cotton", "gabardine"]
 SCALE = 0.01  # file units (yarn radius 1) -> scene units (yarn radius 0.01)

@@ -7,7 +7,7 @@ WEFT_JOBS="${WEFT_JOBS:-$(nproc)}"
 # (a python3 earlier on PATH, e.g. from pyenv, would not see them).
 WEFT_PYTHON="${WEFT_PYTHON:-/usr/bin/python3}"
 
-# Debian packages weft builds with (DEVELOPERS.md: dependencies only from apt).
+# Debian packages weft builds with (dependencies come only from apt).
 WEFT_PACKAGES=(
     cmake g++ make pkg-config
     libembree-dev libtbb-dev libopenexr-dev libstb-dev nlohmann-json3-dev libcli11-dev

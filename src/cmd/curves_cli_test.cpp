@@ -81,7 +81,7 @@ TEST_F(CurvesCliTest, WritesJson) {
 }
 
 TEST_F(CurvesCliTest, SharedKnit) {
-    const std::string knit = std::string(WEFT_SHARED_DATA_DIR) + "/knit-stockinette-tiny.bcc";
+    const std::string knit = std::string(WEFT_CURVE_DATA_DIR) + "/knit-stockinette-tiny.bcc";
     if (!std::filesystem::exists(knit)) GTEST_SKIP() << knit << " is missing";
     const RunResult r = run("curves info " + testing::shellQuote(knit) + " --radius 1");
     ASSERT_EQ(r.status, 0) << r.err;

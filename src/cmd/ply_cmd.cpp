@@ -1,4 +1,4 @@
-// weft ply: the procedural ply generator (DESIGN.md 4) as centre-line files.
+// weft ply: the procedural ply generator (docs/design.md 4) as centre-line files.
 #include <cstdio>
 #include <limits>
 #include <memory>

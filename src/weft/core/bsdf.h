@@ -1,6 +1,6 @@
 // weft/core/bsdf.h — the one BSDF contract shared by the fiber and yarn models.
 //
-// Directions follow Mitsuba/pbrt (DESIGN.md 2): wi points towards the previous
+// Directions follow Mitsuba/pbrt (docs/design.md 2): wi points towards the previous
 // path vertex (camera side), wo towards the next one (light side), both unit
 // vectors in the model's local frame.
 //   eval(wi, wo)    -> Rgb  scattering value, foreshortening of wo included

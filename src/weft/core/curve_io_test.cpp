@@ -21,7 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kDataDir = WEFT_SHARED_DATA_DIR;
+const std::string kDataDir = WEFT_CURVE_DATA_DIR;
 
 using CurveIoTest = testing::TempDirTest;
 

@@ -2,8 +2,8 @@
 //
 // The device reports errors through a callback that turns them into
 // exceptions at the next check(), and counts the bytes Embree allocates
-// (memory monitor), so that geometry + BVH memory can be reported (STYLE.md:
-// Embree). initRay fills every field of a ray the same way for the gather's
+// (memory monitor), so that geometry + BVH memory can be reported (as Embree
+// recommends). initRay fills every field of a ray the same way for the gather's
 // ply tracer and the renderer's tube accelerator.
 #pragma once
 

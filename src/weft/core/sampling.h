@@ -2,7 +2,7 @@
 //
 // As pbrt-v4's util/sampling.h: every sampleX sits beside xPdf, the
 // solid-angle density of the directions it returns, and every stage that
-// samples these distributions calls them (STYLE.md: sampling twins). The
+// samples these distributions calls them (pbrt-v4 style: sampling twins). The
 // samplers map u1, u2 uniform in [0, 1) to unit vectors in a local frame
 // whose +z is the pole; each documents its mapping, which callers rely on
 // for reproducible results (the RDM gather, the lights), so a mapping is

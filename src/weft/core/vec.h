@@ -87,7 +87,7 @@ struct Frame {
     constexpr Vec3 fromLocal(const Vec3& l) const { return s * l.x + t * l.y + n * l.z; }
 };
 
-// The yarn shading frame (DESIGN.md 2) of a ply surface point with unit
+// The yarn shading frame (docs/design.md 2) of a ply surface point with unit
 // tangent t and outward unit normal n: local coordinates (w.t, w.b, w.n) with
 // b = t x n. The gather (entry frame of a walk) and the renderer (shading
 // frame of a ply hit) both use it, so the RDM and the BSDF share one frame.

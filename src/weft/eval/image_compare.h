@@ -1,5 +1,5 @@
 // weft/eval/image_compare.h — an image against a reference: SSIM, RMSE and
-// relative MSE, and an SSIM heatmap (issue 8, DESIGN.md 9; docs/compare.md).
+// relative MSE, and an SSIM heatmap (issue 8, docs/design.md 9; docs/compare.md).
 //
 // SSIM (Wang, Bovik, Sheikh, Simoncelli 2004, eqs. 13-16): for every 11 x 11
 // window w with Gaussian weights (sigma 1.5, normalised to sum 1),

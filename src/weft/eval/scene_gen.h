@@ -1,4 +1,5 @@
-// weft/eval/scene_gen.h — generated evaluation scenes for `weft render` (issue 8, DESIGN.md 8-9).
+// weft/eval/scene_gen.h — generated evaluation scenes for `weft render` (issue 8, docs/design.md
+// 8-9).
 //
 // Three scenes, each one yarn set (one curve file, one fitted model) lit as in
 // the paper's figures: the procedural sky (or an environment map) plus two

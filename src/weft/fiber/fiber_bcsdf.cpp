@@ -101,7 +101,7 @@ void FiberBcsdf::evalAndPdf(const Incident& incident, const Angles& out, Rgb* va
         cosDeltaPhi = -out.y / out.cosTheta;
     }
     const double nTT = nTT_.pdfOfCos(std::clamp(cosDeltaPhi, -1.0, 1.0));
-    // eval = S_f cos(theta_o) (DESIGN.md 3).
+    // eval = S_f cos(theta_o) (docs/design.md 3).
     if (value) *value = (f * (gR * nR) + params_.cTT * (Rgb(1.0) - f) * (gTT * nTT)) * out.cosTheta;
     if (density) {
         // (theta, phi) density p_R gR cos^2 nR + p_TT gTT cos^2 nTT, over cos(theta_o).

@@ -8,7 +8,7 @@
 // with g normalised against cos^2 on [-pi/2, pi/2] (longitudinal.h), so the
 // directional albedo is exactly F + (1 - F) C_TT.
 //
-// Frame (DESIGN.md 2, the `weft fiber` probes): the fiber tangent is +x;
+// Frame (docs/design.md 2, the `weft fiber` probes): the fiber tangent is +x;
 // theta = asin(w.x); phi = atan2(w.z, w.y) is the azimuth in the y-z plane.
 // eval() includes cos(theta_o). sample() picks R or TT in proportion to their
 // albedo summed over the channels weighted by the incident's importance

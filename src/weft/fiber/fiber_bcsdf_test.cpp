@@ -58,7 +58,7 @@ TEST(FiberBcsdf, WhiteFurnaceAlbedoIsFresnelPlusTransmission) {
         for (double thetaDeg : kIncidentThetaDeg) {
             const Vec3 wi = fiberDirection(thetaDeg, 37.0);
             const Rgb integral = integrateSphere([&](const Vec3& wo) { return fiber.eval(wi, wo); });
-            // DESIGN.md 3: albedo = F + (1 - F) C_TT, F = Schlick(theta_i).
+            // docs/design.md 3: albedo = F + (1 - F) C_TT, F = Schlick(theta_i).
             const double k = std::pow(1.0 - std::cos(radians(thetaDeg)), 5.0);
             for (int c = 0; c < 3; ++c) {
                 const double f = preset.fiber.cR[c] + (1 - preset.fiber.cR[c]) * k;
@@ -86,7 +86,7 @@ TEST(FiberBcsdf, PdfIntegratesToOne) {
     std::printf("pdf: largest |integral over the sphere - 1| = %.3g\n", worst);
 }
 
-// Independent implementation of DESIGN.md 3 for a handful of directions: the
+// Independent implementation of docs/design.md 3 for a handful of directions: the
 // normaliser by brute-force Simpson integration, the von Mises lobe from
 // std::cyl_bessel_i.
 Rgb referenceEval(const FiberParams& p, const Vec3& wi, const Vec3& wo) {

@@ -1,7 +1,7 @@
 // weft/fiber/fiber_params.h — fiber shading parameters.
 //
 // Parameters of the Khungurn et al. (2015) fiber model (paper eq. 2-4,
-// DESIGN.md 3):
+// docs/design.md 3):
 //   c_r          [r,g,b] in [0,1]  Schlick reflectance at normal incidence (C_R)
 //   c_tt         [r,g,b] in [0,1]  transmission attenuation (C_TT)
 //   beta_r_deg   [0.1, 90]         longitudinal width of R, degrees

@@ -1,6 +1,6 @@
 // weft/fiber/fiber_test_util.h — fiber parameters for the tests of fiber/ and gather/.
 //
-// The fiber half of each row of the paper's Table 3 (DESIGN.md 3), as test
+// The fiber half of each row of the paper's Table 3 (docs/design.md 3), as test
 // inputs that span narrow and wide lobes, dark and bright fibers. The
 // material presets themselves (yarn/material_preset.h) add the ply geometry
 // and sit above fiber/ and ply/, where these tests may not reach.

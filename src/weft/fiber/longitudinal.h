@@ -1,7 +1,7 @@
 // weft/fiber/longitudinal.h — the longitudinal Gaussian of the fiber model.
 //
 // g(theta; mu, beta) is a Gaussian in the longitudinal angle theta, normalised
-// on [-pi/2, pi/2] against the cos^2 measure (DESIGN.md 3, paper eq. 3,
+// on [-pi/2, pi/2] against the cos^2 measure (docs/design.md 3, paper eq. 3,
 // Khungurn et al. 2015):
 //     integral_{-pi/2}^{pi/2} g(theta; mu, beta) cos^2(theta) dtheta = 1.
 // The normaliser Z(mu) = integral exp(-(theta-mu)^2 / (2 beta^2)) cos^2 dtheta

@@ -1,7 +1,7 @@
 // weft/fiber/von_mises.h — the azimuthal von Mises lobe of the fiber model.
 //
 // N_TT(phi) = exp(kappa cos(phi - mean)) / (2 pi I0(kappa)), kappa = 1 / gamma^2
-// with gamma in radians (DESIGN.md 3, paper eq. 3). Evaluated with the scaled
+// with gamma in radians (docs/design.md 3, paper eq. 3). Evaluated with the scaled
 // Bessel function so that narrow lobes (large kappa) do not overflow. Sampling
 // is Best & Fisher's (1979) exact rejection algorithm, rewritten so that no
 // step cancels catastrophically when kappa is large.

@@ -4,7 +4,7 @@
 // The M paths sorted by cell (incident bin, outgoing bin): the value of a
 // cell for C_TT is sum over its paths of W0_c C_TT,c^k / count(i) /
 // solidAngle(o), exactly what an ordinary gather of that colour holds in
-// rdm_m (DESIGN.md 5), for any colour and without a map per colour. With the
+// rdm_m (docs/design.md 5), for any colour and without a map per colour. With the
 // paper's 16M paths over 8M cells a cell holds a few paths, so a value costs a
 // few multiplications: the training of a colour-conditioned M network draws
 // a new colour for every sample. Memory: 16 bytes per M path and 4 per cell.

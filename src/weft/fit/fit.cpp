@@ -296,7 +296,7 @@ FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_
 }
 
 std::vector<Rgb> colourFitTestColours(const ColourRange& range) {
-    // The Table 3 colours (DESIGN.md 3) and three greys, clamped into the range.
+    // The Table 3 colours (docs/design.md 3) and three greys, clamped into the range.
     std::vector<Rgb> colours;
     for (const MaterialPreset& p : materialPresets()) colours.push_back(p.fiber.cTT);
     for (double g : {0.0, 0.5, 1.0}) colours.push_back(Rgb(range.lo + g * (range.hi - range.lo)));

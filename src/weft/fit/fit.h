@@ -1,6 +1,6 @@
 // weft/fit/fit.h — fitting the neural yarn model to a gathered RDM (weft fit).
 //
-// Paper 4.1-4.4, 5.2-5.3, DESIGN.md 6. From a gather directory:
+// Paper 4.1-4.4, 5.2-5.3, docs/design.md 6. From a gather directory:
 //   1. T network (3-7-7-1, PReLU, sigmoid) on P(T | wi): incident bins are
 //      drawn in proportion to their path counts (bins with few paths weigh
 //      less, exactly as their variance says), wi uniform in solid angle
@@ -103,7 +103,7 @@ std::vector<Rgb> colourFitTestColours(const ColourRange& range);
 // rdmR = 0, P(T) kept. Naive: also P(T) = 0, and the T energy added to rdmM
 // as a density, P(T | bin i) / (solid angle of bin o), grey, in the outgoing
 // bin o = transmissionOutgoingBin(bins, i) (S_T's direction wo = -wi,
-// DESIGN.md 7); so for every incident bin the target's integral over wo,
+// docs/design.md 7); so for every incident bin the target's integral over wo,
 // sum_o rdmM dOmega_o, is P(T) + E_R + E_M of the gather.
 RdmData ablationTarget(const RdmData& rdm, YarnAblation ablation);
 // The outgoing bin of -wi for wi at the centre of incident bin i.

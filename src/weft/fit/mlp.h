@@ -1,6 +1,6 @@
 // weft/fit/mlp.h — the tiny multilayer perceptrons of the neural yarn model.
 //
-// Paper 5.2-5.3, DESIGN.md 6: fully connected layers y = W x + b, a
+// Paper 5.2-5.3, docs/design.md 6: fully connected layers y = W x + b, a
 // channel-wise PReLU after every hidden layer (one learnable slope per
 // channel, He et al. 2015), and an output function on the last layer:
 // sigmoid (T network, P(T | wi)) or exp (M network, RGB radiance).

@@ -133,7 +133,7 @@ GatherSums gatherSums(const GatherOptions& o) {
                 for (int64_t k = first; k < last; ++k) {
                     // Path k's stream depends on (seed, k) alone, not on the shard.
                     Rng rng(static_cast<uint64_t>(k), o.seed);
-                    // Entry point and frame (DESIGN.md 5).
+                    // Entry point and frame (docs/design.md 5).
                     const double psi = kTwoPi * rng.uniform();
                     const Vec3 n{std::cos(psi), std::sin(psi), 0.0};
                     const Vec3 t{0.0, 0.0, 1.0};

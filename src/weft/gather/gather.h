@@ -1,6 +1,6 @@
 // weft/gather/gather.h — the RDM gather: random walks through an explicit ply.
 //
-// Paper 4, 5.1-5.3; DESIGN.md 5. Every path starts on the ply's bounding
+// Paper 4, 5.1-5.3; docs/design.md 5. Every path starts on the ply's bounding
 // cylinder (radius R = 1), uniformly over the circumference and over one
 // twist period along the axis, with wi uniform over the upper hemisphere of
 // the entry frame (t = +z, n = outward radial, b = t x n), and travels along
@@ -14,7 +14,7 @@
 //
 //   count(i)      paths per incident bin       p_t(i) = count_t(i) / count(i)
 //   rdm_c(i, o)   sum of label-c weights / count(i) / solidAngle(o)  (c = R, M)
-// i.e. exactly what eval(wi, wo) of that component must return (DESIGN.md 5).
+// i.e. exactly what eval(wi, wo) of that component must return (docs/design.md 5).
 //
 // Determinism: path k draws from random stream k of the seed; weights are
 // accumulated in 64-bit fixed point (2^-32 units) with atomic adds, which is

@@ -57,7 +57,7 @@ TEST(RdmBins, SolidAnglesAndBinsAreConsistent) {
     }
     EXPECT_NEAR(sphere, 4 * kPi, 1e-12);
     EXPECT_NEAR(hemisphere, 2 * kPi, 1e-12);
-    // Conventions of DESIGN.md 2: theta from n, phi from t towards b.
+    // Conventions of docs/design.md 2: theta from n, phi from t towards b.
     EXPECT_EQ(bins.outgoingBin({0, 0, 1}) / bins.phiO, 0u);
     EXPECT_EQ(bins.outgoingBin({0, 0, -1}) / bins.phiO, 44u);
     EXPECT_EQ(bins.outgoingBin({1, 1e-9, 0}) % bins.phiO, 45u);  // phi = 0+ is the middle bin
@@ -299,7 +299,7 @@ TEST(Gather, SingleFiberFirstBounceEnergyIsTheFiberAlbedo) {
                 const size_t cell = (i * nOut + j) * 3 + c;
                 gathered += (static_cast<double>(r.rdmR[cell]) + r.rdmM[cell]) *
                             bins.outgoingSolidAngle(j);
-                // R is the upper hemisphere only (DESIGN.md 5).
+                // R is the upper hemisphere only (docs/design.md 5).
                 if (static_cast<int>(j) / bins.phiO >= bins.thetaO / 2) {
                     EXPECT_EQ(r.rdmR[cell], 0.f);
                 }

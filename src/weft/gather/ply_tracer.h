@@ -1,6 +1,6 @@
 // weft/gather/ply_tracer.h — ray tracing through an explicit, infinitely long ply.
 //
-// The ply of DESIGN.md 4 (axis +z, radius R, fibers as right-handed helices)
+// The ply of docs/design.md 4 (axis +z, radius R, fibers as right-handed helices)
 // is invariant under a shift of one twist period P = 2R / alpha along z
 // (the cross-section turns by exactly 2 pi), so one period of geometry,
 // wrapped periodically in z, is an exact model of an infinitely long ply: no
@@ -17,7 +17,7 @@
 // radius); straight fibers (alpha = 0) are exact cylinders of one segment.
 // See docs/gather.md for the choice of primitive.
 //
-// Far-field fiber model (DESIGN.md 5): a ray leaving fiber i never hits
+// Far-field fiber model (docs/design.md 5): a ray leaving fiber i never hits
 // fiber i again on that straight segment: an intersection filter rejects it.
 #pragma once
 

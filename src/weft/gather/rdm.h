@@ -1,6 +1,6 @@
 // weft/gather/rdm.h — binning of the reflectance distribution map (RDM).
 //
-// DESIGN.md 2: RDM angles are spherical angles in the yarn (entry) frame
+// docs/design.md 2: RDM angles are spherical angles in the yarn (entry) frame
 // (t, b, n): theta is the polar angle from n, phi the azimuth from t towards
 // b in [-pi, pi). Incident directions cover the upper hemisphere (theta_i in
 // [0, pi/2]), outgoing ones the whole sphere (theta_o in [0, pi]); bins are

@@ -1,7 +1,7 @@
 // weft/ply/ply.h — explicit fiber geometry of one straight, twisted ply.
 //
 // Computes the fiber centre lines of a ply of radius R and length L along +z
-// (paper section 3, eq. 1, App. A; DESIGN.md sections 2 and 4):
+// (paper section 3, eq. 1, App. A; docs/design.md sections 2 and 4):
 //   - fiber radius r = R sqrt(rho / N)                          (eq. 1)
 //   - N fiber centres in the cross-section z = 0: points in the disk of radius
 //     R - r with pairwise distance >= 2r (so the fibers do not overlap and stay
@@ -10,7 +10,7 @@
 //   - each fiber is a right-handed helix about the axis: the cross-section
 //     turns counter-clockwise (seen from +z) by pi alpha z / R after axial
 //     length z, so at the ply surface (radius R) fibers are tilted from the
-//     axis by phi~ = atan(pi alpha) towards b = t x n (DESIGN.md 2, eq. 17).
+//     axis by phi~ = atan(pi alpha) towards b = t x n (docs/design.md 2, eq. 17).
 //
 // Parameters (PlyParams, paper Table 3):
 //   fibers   N     integer in [1, kMaxPlyFibers]

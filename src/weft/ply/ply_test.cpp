@@ -1,5 +1,5 @@
-// Tests for weft/ply/ply.h: fiber packing (DESIGN.md 4) and the helix geometry
-// with its surface tilt atan(pi alpha) (DESIGN.md 2, paper eq. 1 and App. A).
+// Tests for weft/ply/ply.h: fiber packing (docs/design.md 4) and the helix geometry
+// with its surface tilt atan(pi alpha) (docs/design.md 2, paper eq. 1 and App. A).
 // Every check recomputes the expected value independently (brute-force pair
 // distances, atan2 angles, finite-difference tangents) instead of reusing the
 // library's own formulas.
@@ -26,7 +26,7 @@ struct Preset {
     double twist;
 };
 
-// Paper Table 3 / DESIGN.md 3.
+// Paper Table 3 / docs/design.md 3.
 const Preset kPresets[] = {
     {"fleece", 300, 0.30, 0.24}, {"silk", 300, 0.20, 0.00},      {"polyester", 200, 0.40, 0.20},
     {"cotton", 600, 0.35, 0.06}, {"gabardine", 450, 0.25, 0.12},
@@ -55,7 +55,7 @@ PackingStats measurePacking(const PlyGeometry& ply) {
     return stats;
 }
 
-// Checks the DESIGN.md 4 packing constraints on a generated ply.
+// Checks the docs/design.md 4 packing constraints on a generated ply.
 void expectValidPacking(const PlyGeometry& ply, int fibers, double density, double radius) {
     ASSERT_EQ(ply.centres.size(), static_cast<size_t>(fibers));
     const double r = radius * std::sqrt(density / fibers);
@@ -124,7 +124,7 @@ TEST(PlyPacking, SameSeedSameCentresOtherSeedOtherCentres) {
 }
 
 TEST(PlyPacking, PlacementScalesWithRadius) {
-    // Everything is scale-invariant (DESIGN.md 4): the same seed at R = 0.5
+    // Everything is scale-invariant (docs/design.md 4): the same seed at R = 0.5
     // gives the R = 1 centres halved, up to rounding.
     const PlyParams params{300, 0.3, 0.24};
     const PlyGeometry one = generatePly(params, 1.0, 1.0, 5);
@@ -311,7 +311,7 @@ TEST(PlyHelix, PolylineResolutionOption) {
 }
 
 TEST(PlyHelix, SurfaceFiberTiltMatchesPaper) {
-    // DESIGN.md 2 / paper App. A: the cross-section turns by pi alpha s / R, so
+    // docs/design.md 2 / paper App. A: the cross-section turns by pi alpha s / R, so
     // a fiber whose centre is at radius rho_c is tilted from the axis by
     // atan(pi alpha rho_c / R) towards b = t x n, which is phi~ = atan(pi alpha)
     // at the ply surface rho = R. The tangent is measured by central
@@ -363,7 +363,7 @@ TEST(PlyHelix, SurfaceFiberTiltMatchesPaper) {
 
 TEST(PlyHelix, OutermostFibersAreTiltedByAtanPiAlphaAtTheSurface) {
     // Issue 3: "the tilt of the outermost fibers equals atan(pi alpha) within 1
-    // degree". The surface fiber frame (DESIGN.md 2) describes what is seen
+    // degree". The surface fiber frame (docs/design.md 2) describes what is seen
     // from outside the ply: the outer edge of the fibers that touch the
     // boundary. For every fiber whose centre is within r/2 of the outermost
     // ring, the helix traced by its outermost point (centre + r along the

@@ -434,7 +434,7 @@ TEST(YarnOverlaps, WarningNamesTheEntryTheFractionAndTheRadius) {
 
 // The shared real knit: the search against brute force on real data.
 TEST(CurveReportSharedData, KnitMatchesBruteForce) {
-    const std::string file = std::string(WEFT_SHARED_DATA_DIR) + "/knit-stockinette-tiny.bcc";
+    const std::string file = std::string(WEFT_CURVE_DATA_DIR) + "/knit-stockinette-tiny.bcc";
     if (!std::filesystem::exists(file)) GTEST_SKIP() << file << " is missing";
     const CurveSet set = readCurves(file);
     const CurveReport r = curveReport(set, 1.0);

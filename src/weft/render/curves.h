@@ -1,6 +1,6 @@
 // weft/render/curves.h — yarn curve files as the renderer reads them (issue 7).
 //
-// readCurves loads a .bcc, .txt or .obj file (DESIGN.md section 8) into a
+// readCurves loads a .bcc, .txt or .obj file (docs/design.md section 8) into a
 // CurveSet: per curve its control points, optional per-point radii, whether
 // it is closed and how its control points are joined (CurveBasis). Nothing is
 // resampled or converted: a Catmull-Rom curve comes back as its control

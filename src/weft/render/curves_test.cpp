@@ -57,7 +57,7 @@ namespace {
 using testing::expectInputError;
 using CurvesTest = testing::TempDirTest;
 
-const std::string kSharedDataDir = WEFT_SHARED_DATA_DIR;
+const std::string kSharedDataDir = WEFT_CURVE_DATA_DIR;
 
 // ---------------------------------------------------------------------------
 // A BCC writer of its own, so that tests can build valid and broken files.
@@ -266,7 +266,7 @@ TEST_F(CurvesTest, BccTruncatedAtEveryByteIsAnInputError) {
 }
 
 // ---------------------------------------------------------------------------
-// The real yarn data in ../shared/data. The expected numbers were computed
+// The real yarn data in data/curves. The expected numbers were computed
 // with an independent Python struct.unpack reader of the same files.
 
 struct SharedBccFile {

@@ -1,4 +1,4 @@
-// weft/render/lights.h — the light sources of a cloth scene (issue 7, DESIGN.md 8).
+// weft/render/lights.h — the light sources of a cloth scene (issue 7, docs/design.md 8).
 //
 // Four kinds, all behind one interface so that the path tracer can do
 // next-event estimation (sample) and multiple importance sampling (pdf) the

@@ -1,4 +1,4 @@
-// weft/render/path_tracer.h — unidirectional path tracing for cloth (issue 7, DESIGN.md 8).
+// weft/render/path_tracer.h — unidirectional path tracing for cloth (issue 7, docs/design.md 8).
 //
 // radiance() estimates the radiance arriving at `org` from direction -dir:
 //   - at every tube hit, next-event estimation: one light picked uniformly,
@@ -26,7 +26,7 @@
 //     fibers need many events (cotton: about 13 fiber events per ply visit,
 //     so 100 cut 10 % of a cotton cloth's light in fiber mode); the default
 //     1000 is the gather's (gather.h), whose RDM the neural model learns.
-// Shading frames: neural mode, the yarn frame of DESIGN.md 2 (t = segment
+// Shading frames: neural mode, the yarn frame of docs/design.md 2 (t = segment
 // tangent, n = outward tube normal, b = t x n); fiber mode, the fiber frame
 // with the tangent as +x (FiberBcsdf); both from Scene::shadingFrame.
 // All random numbers come from the caller's SampleStream (core/sample_stream.h):

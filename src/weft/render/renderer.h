@@ -1,4 +1,4 @@
-// weft/render/renderer.h — the image loop of `weft render` (issue 7, DESIGN.md 8).
+// weft/render/renderer.h — the image loop of `weft render` (issue 7, docs/design.md 8).
 //
 // render() traces `spp` paths per pixel (pathRadiance, path_tracer.h) at
 // uniformly random film positions inside the pixel (a box filter) and

@@ -5,7 +5,7 @@
 //   - the lights (lights.h; none given: the procedural sky);
 //   - the geometry (tube_accel.h) from each yarn's curves (yarn_geometry.h):
 //       neural mode: one tube per ply, shaded with the YarnBsdf of the
-//         yarn's model (DESIGN.md 7);
+//         yarn's model (docs/design.md 7);
 //       fiber mode: the plies filled with the model's fibers (N, rho, alpha
 //         from its "ply" block; generatePly seeded per ply by the yarn,
 //         curve and ply index, so the fibers do not change with the render
@@ -106,7 +106,7 @@ class Scene {
     // mode) or the FiberBcsdf (fiber mode) of its model.
     const Bsdf& bsdf(int material) const { return *bsdfs_[material]; }
     // The local frame of that BSDF at a hit: in neural mode the yarn frame
-    // (t, t x n, n) of DESIGN.md 2, in fiber mode the fiber frame with the
+    // (t, t x n, n) of docs/design.md 2, in fiber mode the fiber frame with the
     // tangent as +x (fiber_bcsdf.h).
     Frame shadingFrame(const TubeHit& hit) const {
         return drawsPlies(mode_) ? yarnFrame(hit.tangent, hit.normal) : Frame::fromX(hit.tangent);

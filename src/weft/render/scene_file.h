@@ -1,4 +1,4 @@
-// weft/render/scene_file.h — the scene file of `weft render` (issue 7, DESIGN.md 8).
+// weft/render/scene_file.h — the scene file of `weft render` (issue 7, docs/design.md 8).
 //
 // A JSON object (every key documented in docs/scene-format.md):
 //   {

@@ -7,7 +7,7 @@
 // shading geometry: the segment direction as tangent and Embree's geometric
 // normal, made orthogonal to it, as the outward normal.
 //
-// Self-intersection (DESIGN.md 7): a ray that leaves a tube (reflected,
+// Self-intersection (docs/design.md 7): a ray that leaves a tube (reflected,
 // transmitted, or a shadow ray) carries that tube as its origin, and an
 // intersection filter drops, on that one tube only,
 //   - hits closer than kSelfHitDistance times the tube radius (the surface the

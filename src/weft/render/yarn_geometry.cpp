@@ -376,7 +376,7 @@ std::vector<FramedCurve> plyCurves(const FramedCurve& yarn, int plies, double pl
     if (plies == 1) return {yarn};  // one ply fills the yarn: R_ply = R, no offset
 
     // theta(s) - theta(0) = integral pi ply_twist / R(u) du (the helix turns by
-    // pi ply_twist per yarn radius of length, like the fibers of DESIGN.md 4).
+    // pi ply_twist per yarn radius of length, like the fibers of docs/design.md 4).
     double loopTurn = 0;
     std::vector<double> phase = turnIntegral(yarn, kPi * plyTwist, &loopTurn);
     const size_t n = yarn.size();
@@ -449,7 +449,7 @@ std::vector<Tube> fiberTubes(const FramedCurve& ply, const PlyParams& params, ui
     // R_ply(0); the length does not affect the placement.
     const PlyGeometry layout = generatePly(params, r0, r0, seed);
 
-    // Cross-section turn psi(s) = integral pi alpha / R_ply(u) du (DESIGN.md 4:
+    // Cross-section turn psi(s) = integral pi alpha / R_ply(u) du (docs/design.md 4:
     // right-handed about T, N and B standing for x and y).
     double loopTurn = 0;
     std::vector<double> psi = turnIntegral(ply, kPi * params.twist, &loopTurn);

@@ -2,7 +2,7 @@
 //
 // A yarn curve (render/curves.h) is drawn either as k plies (neural mode: each
 // ply is one tube shaded with the yarn BSDF) or as the fibers of those plies
-// (fiber mode: each fiber is one tube shaded with the fiber BCSDF), DESIGN.md 8.
+// (fiber mode: each fiber is one tube shaded with the fiber BCSDF), docs/design.md 8.
 //
 // 1. frameCurve samples the centre line (a uniform Catmull-Rom spline is
 //    evaluated; polyline spans are split) so that no sample spacing exceeds
@@ -33,7 +33,7 @@
 // 2. plyCurves wraps k plies around the yarn: ply j's centre is
 //        c_j(s) = p(s) + (R(s) - R_ply(s)) (cos theta_j(s) N(s) + sin theta_j(s) B(s)),
 //        theta_j(s) = 2 pi j / k + integral_0^s pi ply_twist / R(u) du
-//    (right-handed about T for ply_twist > 0, like the fibers of DESIGN.md 4;
+//    (right-handed about T for ply_twist > 0, like the fibers of docs/design.md 4;
 //    left-handed for ply_twist < 0), R_ply = R sin(pi/k) / (1 + sin(pi/k)) for
 //    k >= 2 and R for k = 1, so that the plies touch each other and the yarn
 //    surface. On a closed curve ply_twist is rounded so that the total turn
@@ -45,7 +45,7 @@
 // 3. fiberTubes fills one ply with the fibers of the model's ply block: the
 //    fiber centres of generatePly (ply/ply.h, the generator the gather uses)
 //    at radius R_ply, turned about the ply's T by pi alpha s / R_ply (the
-//    right-handed twist of DESIGN.md 4, with N and B standing for x and y),
+//    right-handed twist of docs/design.md 4, with N and B standing for x and y),
 //    scaled with R_ply(s) / R_ply(0) where the radius varies (the turn is
 //    then integral_0^s pi alpha / R_ply(u) du). On a closed ply alpha is
 //    rounded so that the loop makes a whole number m of turns (m >= 1 when

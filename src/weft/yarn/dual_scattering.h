@@ -4,10 +4,10 @@
 // The paper's second baseline, [ZMA*23], aggregates fiber scattering inside a
 // ply with dual-scattering theory (Zinke et al. 2008). Its text was not
 // available; this is our reconstruction from Zinke's formulas specialised to
-// KSZ15 fibers (../shared/reference/dual-scattering-baseline.md, docs/dual-scattering.md),
+// KSZ15 fibers (docs/dual-scattering.md),
 // called everywhere "dual-scattering baseline (after ZMA23)", never ZMA23 itself.
 //
-// Frame and conventions as the neural yarn BSDF (yarn_bsdf.h, DESIGN.md 2):
+// Frame and conventions as the neural yarn BSDF (yarn_bsdf.h, docs/design.md 2):
 // directions in the yarn frame (t, b, n) = (+x, +y, +z) at a point of the ply
 // surface, eval includes the cosine of wo, wi is the camera side and wo the
 // light side. For wi.z < 0 both directions are mirrored through the surface

@@ -8,7 +8,7 @@
 // function y = out(W_L ... prelu(W_1 x + b_1) ... + b_L) without touching the
 // heap:
 //   - widths are run-time values up to MaxWidth (the architecture is a fit
-//     option, DESIGN.md 6); all parameters after padding fit in Capacity floats;
+//     option, docs/design.md 6); all parameters after padding fit in Capacity floats;
 //   - forward() is float32 SIMD through Google Highway (libhwy-dev) with
 //     dynamic dispatch (fixed_mlp.cpp): the kernel is compiled for every x86
 //     instruction set from SSSE3 to AVX-512 (plus Highway's portable EMU128),

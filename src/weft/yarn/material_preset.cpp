@@ -7,7 +7,7 @@
 namespace weft {
 
 const std::vector<MaterialPreset>& materialPresets() {
-    // Paper Table 3 (DESIGN.md 3): N, rho, alpha; C_R; C_TT; beta_R, beta_TT, gamma_TT.
+    // Paper Table 3 (docs/design.md 3): N, rho, alpha; C_R; C_TT; beta_R, beta_TT, gamma_TT.
     static const std::vector<MaterialPreset> presets = {
         {"fleece",
          {{0.040, 0.087, 0.087}, {0.452, 0.725, 0.948}, 7.238, 10.000, 25.989},

@@ -1,7 +1,7 @@
 // weft/yarn/material_preset.h — the paper's Table 3 materials: fiber and ply.
 //
 // A material preset names one of the five materials of the paper's Table 3
-// (DESIGN.md 3) and holds both halves of its row: the fiber shading
+// (docs/design.md 3) and holds both halves of its row: the fiber shading
 // parameters (C_R, C_TT, beta_R, beta_TT, gamma_TT; fiber/fiber_params.h)
 // and the ply geometry (N, rho, alpha; ply/ply.h). It lives above fiber/ and
 // ply/ so that neither depends on the other; the CLI (--preset), the Python

@@ -1,6 +1,6 @@
 // weft/yarn/network.h — the weights of the yarn model's small networks, as plain data.
 //
-// Paper 5.2-5.3, DESIGN.md 6: fully connected layers y = W x + b, a
+// Paper 5.2-5.3, docs/design.md 6: fully connected layers y = W x + b, a
 // channel-wise PReLU y = max(z, 0) + a min(z, 0) after every hidden layer, and
 // an output function on the last layer: sigmoid (T network, P(T | wi)) or exp
 // (M network, RGB radiance). NetworkWeights is what model.json stores

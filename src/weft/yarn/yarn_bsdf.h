@@ -1,4 +1,4 @@
-// weft/yarn/yarn_bsdf.h — the aggregated yarn BSDF (paper 4, eq. 6-11; DESIGN.md 7).
+// weft/yarn/yarn_bsdf.h — the aggregated yarn BSDF (paper 4, eq. 6-11; docs/design.md 7).
 //
 // S(wi, wo) = S_T + S_R + S_M for one ply material, from a fitted model.json:
 //   S_T = P(T|wi) delta(wo + wi)           T network (3-7-7-1, sigmoid)
@@ -8,7 +8,7 @@
 // and, when the model has one, S_R and S_M times the fit's energy calibration
 // s_R(wi), s_M(wi) (energy_calibration.h).
 // Directions are unit vectors in the yarn shading frame of the ply hit:
-// t = +x (ply tangent), b = +y, n = +z (outward normal), DESIGN.md 2; the
+// t = +x (ply tangent), b = +y, n = +z (outward normal), docs/design.md 2; the
 // caller converts world directions with Frame(t, b, n). The BSDF contract is
 // core/bsdf.h: eval includes the foreshortening of wo (eq. 8 and the RDM the
 // M network learnt both do).

@@ -421,7 +421,7 @@ TEST(YarnIntegrals, EnergyGuardScalesOnlyOvershootingDirections) {
     }
 }
 
-// DESIGN.md 7 / issue 6: the directional albedo of the BSDF the renderer uses
+// docs/design.md 7 / issue 6: the directional albedo of the BSDF the renderer uses
 // never exceeds 1 + 1e-2, between the guard's nodes included.
 TEST(YarnIntegrals, AlbedoNeverExceedsOne) {
     const int count = testing::sampleScale() < 1 ? 12 : 60;

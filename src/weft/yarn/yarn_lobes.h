@@ -2,7 +2,7 @@
 // (paper eq. 8) and the sampling densities (paper eq. 9-10).
 //
 // Directions are local to the yarn frame (t, b, n) = (+x, +y, +z), as in the
-// RDM (DESIGN.md 2). The surface fiber frame turns t about n by the surface
+// RDM (docs/design.md 2). The surface fiber frame turns t about n by the surface
 // tilt phi~ = atan(pi alpha): in yarn-local coordinates the frame is turned
 // about n, t~ = cos(phi~) t + sin(phi~) b and b~ = -sin(phi~) t + cos(phi~) b,
 // so (t~, b~, n) has the same handedness as (t, b, n). In that frame the fiber model's own convention applies (fiber

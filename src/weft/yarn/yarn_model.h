@@ -1,6 +1,6 @@
 // weft/yarn/yarn_model.h — the fitted neural yarn model and its model.json file.
 //
-// One self-describing file per ply material (DESIGN.md 6, issue 5), format
+// One self-describing file per ply material (docs/design.md 6, issue 5), format
 // "weft-yarn-model" version 1, documented key by key in docs/model-format.md:
 //   fiber     the fiber parameters (FiberParams JSON)
 //   ply       {"fibers": N, "density": rho, "twist": alpha}
@@ -59,7 +59,7 @@ struct RLobeParams {
     void validate() const;
 };
 
-// Lobe selection and the M sampling lobe (paper eq. 9-11, DESIGN.md 7).
+// Lobe selection and the M sampling lobe (paper eq. 9-11, docs/design.md 7).
 struct SamplingParams {
     double kappaR = 0.5;   // share of R in the non-T energy, in [0, 1]
     double betaMDeg = 20;  // longitudinal width of the M lobe, degrees in (0, 90]

@@ -29,7 +29,7 @@ import time
 
 import numpy as np
 
-from render import write_results
+from benchlib import write_results
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # Table 3 (docs/design.md 3): C_R, C_TT, beta_R, beta_TT, gamma_TT; N, rho, alpha.

@@ -35,7 +35,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from any_colour import PLY_SEED, PRESETS  # noqa: E402  (Table 3, shared with any_colour.py)
-from render import write_results  # noqa: E402
+from benchlib import write_results  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 

@@ -32,7 +32,8 @@ import subprocess
 import sys
 import time
 
-from render import write_results
+import benchlib
+from benchlib import portable_path, write_results
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # Two colours that are not Table 3's (docs/design.md 3), inside [0.3, 0.999].
@@ -138,7 +139,7 @@ def main():
         "# A colour-conditioned model against the fibers in new colours",
         "",
         f"`bench/colour_scenes.py`, {result['date']}, {os.cpu_count()} cores. Model "
-        f"`{os.path.relpath(model, ROOT)}`; {a.size} x {a.size}, neural {a.spp} spp against a fiber "
+        f"`{portable_path(model)}`; {a.size} x {a.size}, neural {a.spp} spp against a fiber "
         f"reference of {a.ref_spp} spp (seed 1); \"reference noise\" compares a second fiber render "
         "(seed 2, same spp) with it. Colours: ochre "
         f"{colour_arg(OCHRE)}, sage {colour_arg(SAGE)} (C_TT; not Table 3 colours).",
@@ -162,7 +163,9 @@ def main():
             f"{r['fiber_seconds_per_spp'] / r['neural_seconds_per_spp']:.1f} |")
     lines += ["", "Figure `colour-scenes.png`: a row per case, fiber reference | neural.", ""]
     os.makedirs(os.path.dirname(a.out), exist_ok=True)
-    run([weft, "montage", *figure, "--columns", 2, "--out", a.out + ".png"])
+    made = os.path.join(a.work, "figure.png")
+    run([weft, "montage", *figure, "--columns", 2, "--out", made])
+    benchlib.publish_png(made, a.out + ".png")  # written only when its pixels change
     write_results(a.out + ".md", lines, result)
 
 

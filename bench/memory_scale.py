@@ -78,12 +78,6 @@ def row(preset, kind, size, stats):
     }
 
 
-def write_atomic(path, text):
-    with open(path + ".tmp", "w") as f:
-        f.write(text)
-    os.replace(path + ".tmp", path)
-
-
 def main():
     p = argparse.ArgumentParser(description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -137,10 +131,10 @@ def main():
                          r["memory_ratio"], r["geometry_ratio"], r["fiber_rss_bytes"] / MB,
                          r["neural_rss_bytes"] / MB, r["rss_ratio"]))
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-    write_atomic(args.out, "\n".join(lines) + "\n")
-    write_atomic(os.path.splitext(args.out)[0] + ".json",
-                 json.dumps({"weft_version": version, "date": datetime.date.today().isoformat(),
-                             "rows": rows}, indent=1) + "\n")
+    benchlib.write_text(args.out, "\n".join(lines) + "\n")
+    benchlib.write_text(os.path.splitext(args.out)[0] + ".json", json.dumps(benchlib.portable(
+        {"weft_version": version, "date": datetime.date.today().isoformat(), "rows": rows}),
+        indent=1) + "\n")
     print("wrote %s" % os.path.relpath(args.out, ROOT))
 
 

@@ -18,6 +18,8 @@ import subprocess
 import sys
 import tempfile
 
+from benchlib import portable_path, write_results
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
@@ -118,7 +120,7 @@ def main():
                 "## %s" % title,
                 "",
                 "%dx%d, %d spp, %d threads, model `%s`."
-                % (a.size, a.size, a.spp, n["threads"], os.path.relpath(a.model, ROOT)),
+                % (a.size, a.size, a.spp, n["threads"], portable_path(os.path.abspath(a.model))),
                 "",
                 "| quantity | neural | fiber | fiber / neural |",
                 "| --- | --- | --- | --- |",
@@ -133,20 +135,6 @@ def main():
             results["scenes"][stem] = {"title": title, "table": table, "neural": n, "fiber": f}
 
     write_results(a.out, lines, results)
-
-
-def write_results(out, lines, results):
-    """The Markdown table at `out` and the same results as JSON beside it
-    (.json), each written to a temporary file and renamed; the table is printed."""
-    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
-    with open(out + ".tmp", "w") as fo:
-        fo.write("\n".join(lines))
-    os.replace(out + ".tmp", out)
-    json_out = os.path.splitext(out)[0] + ".json"
-    with open(json_out + ".tmp", "w") as fo:
-        json.dump(results, fo, indent=2)
-    os.replace(json_out + ".tmp", json_out)
-    print("\n".join(lines))
 
 
 if __name__ == "__main__":

@@ -34,7 +34,8 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from render import closeup_scene, write_results  # noqa: E402
+from benchlib import portable_path, write_results  # noqa: E402
+from render import closeup_scene  # noqa: E402
 
 
 def render(weft, scene, mode, spp, threads, seed, out):
@@ -109,7 +110,7 @@ def main():
         "at the start, %.1f at the end (%d cores)."
         % ("The close-up of bench/render.py" if a.scene == "closeup"
            else "The %s of `weft scene %s --size %d`" % (a.scene, a.scene, a.patch),
-           a.size, a.size, os.path.relpath(os.path.abspath(a.model), ROOT), a.seed, a.threads,
+           a.size, a.size, portable_path(os.path.abspath(a.model)), a.seed, a.threads,
            a.runs, results["load_average_start"][0], results["load_average_end"][0],
            os.cpu_count()),
         "",

@@ -24,11 +24,11 @@ import argparse
 import json
 import os
 import struct
-import subprocess
 import sys
 import tempfile
 
-from render import write_results
+import benchlib
+from benchlib import write_results
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SHARED = os.path.join(ROOT, "data", "curves")
@@ -90,7 +90,7 @@ def swatch_scene(folder, name, bcc, model, size, spp, radius):
 
 def run(cmd):
     print("bench/shared_data:", " ".join(cmd), file=sys.stderr)
-    return subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+    return benchlib.run(cmd, "bench/shared_data")
 
 
 def main():
@@ -153,7 +153,9 @@ def main():
                 images += [exr["fiber"], exr["neural"], exr["dual"]]
             figure = os.path.join(os.path.dirname(os.path.abspath(a.out)),
                                   "shared-data-%s.png" % swatch)
-            run([a.weft, "montage", *images, "--columns", "3", "--out", figure])
+            made = os.path.join(tmp, os.path.basename(figure))
+            run([a.weft, "montage", *images, "--columns", "3", "--out", made])
+            benchlib.publish_png(made, figure)  # written only when its pixels change
             captions.append("- `%s`: rows %s; columns fiber reference | neural | dual." % (
                 os.path.basename(figure), ", ".join(materials)))
     lines += ["", "Yarn radius (scene units): %s." % ", ".join(

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cli_test_util.h"
 #include "weft/core/file.h"
@@ -195,6 +197,67 @@ TEST_F(FitCliTest, BadInputIsAClearError) {
     std::filesystem::remove(path("rdm/rdm_m.npy"));
     expectUserError(run("fit --rdm rdm --out m.json --config short.json"), {"rdm_m.npy"});
     EXPECT_FALSE(std::filesystem::exists(path("m.json")));
+}
+
+// A network the renderer cannot run (yarn/network_capacity.h) is refused
+// before any training: exit 2, the field and the limit named, and neither a
+// model nor a report written. Without --quiet the fit prints a line per
+// finished phase ("fit: R lobe (eq. 8) in ..."): none may appear. With
+// energy_calibration_degree -1 such a fit used to train for minutes and then
+// write a model that weft render refused.
+TEST_F(FitCliTest, RefusesANetworkTheRendererCannotRunBeforeTraining) {
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {R"({"m_net": {"hidden": [128, 21], "steps": 200, "batch": 64}})",
+         "wide.json: m_net.hidden = [128, 21] is out of range: the renderer's M network holds "
+         "layers at most 64 wide"},
+        {R"({"m_net": {"hidden": [65], "steps": 200, "batch": 64},
+             "energy_calibration_degree": -1})",
+         "wide.json: m_net.hidden = [65] is out of range: the renderer's M network holds layers "
+         "at most 64 wide"},
+        {R"({"t_net": {"hidden": [33], "steps": 200, "batch": 64}})",
+         "wide.json: t_net.hidden = [33] is out of range: the renderer's T network holds layers "
+         "at most 32 wide"},
+        {R"({"t_net": {"hidden": [32, 32, 32], "steps": 200, "batch": 64}})",
+         "the renderer's T network holds 2048 parameters"},
+        {R"({"m_net": {"hidden": [4, 4, 4, 4, 4, 4, 4, 4]}})",
+         "the renderer's M network holds at most 7 hidden layers"},
+        {R"({"energy_calibration_degree": 13})",
+         "wide.json: energy_calibration_degree = 13 is out of range: allowed [-1, 12]"}};
+    for (const auto& [config, message] : cases) {
+        writeFileAtomic(path("wide.json"), config);
+        const RunResult r = run("fit --rdm rdm --out wide-model.json --config wide.json --seed 1");
+        expectUserError(r, {message});
+        EXPECT_FALSE(testing::contains(r.err, "fit: ")) << r.err;
+        EXPECT_FALSE(std::filesystem::exists(path("wide-model.json"))) << config;
+        EXPECT_FALSE(std::filesystem::exists(path("wide-model-report"))) << config;
+    }
+    // --recalibrate reads the configuration the same way.
+    expectUserError(run("fit --recalibrate missing.json --rdm rdm --out re.json --config wide.json"),
+                    {"energy_calibration_degree = 13"});
+}
+
+// Networks at the evaluators' limits train, and the renderer loads the model:
+// T 3-32-32-15-1 is exactly 2048 floats after padding, M 6-64-56-41-3 exactly
+// 8192, and every layer of both is as wide as allowed or within one padded block.
+TEST_F(FitCliTest, NetworksAtTheRenderersLimitsFitAndRender) {
+    writeFileAtomic(path("limits.json"),
+                    R"({"t_net": {"hidden": [32, 32, 15], "steps": 40, "restarts": 1, "batch": 64},
+                        "m_net": {"hidden": [64, 56, 41], "steps": 40, "batch": 64}})");
+    RunResult r = run("fit --rdm rdm --out model.json --config limits.json --no-report --quiet");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const YarnModel model = loadYarnModel(path("model.json"));
+    EXPECT_EQ(model.tNet.widths(), (std::vector<int>{3, 32, 32, 15, 1}));
+    EXPECT_EQ(model.mNet.widths(), (std::vector<int>{6, 64, 56, 41, 3}));
+    writeFileAtomic(path("yarn.txt"), "-0.2 0 0\n0 0.01 0\n0.2 0 0\n");
+    writeFileAtomic(path("scene.json"), R"({
+        "camera": {"from": [0, 0, 1], "to": [0, 0, 0], "fov_deg": 8},
+        "film": {"width": 8, "height": 6},
+        "render": {"spp": 2, "seed": 1},
+        "yarns": [{"curves": "yarn.txt", "radius": 0.03, "plies": 3, "ply_twist": 0.3,
+                   "model": "model.json"}]})");
+    r = run("render scene.json --quiet --out limits.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(std::filesystem::exists(path("limits.exr")));
 }
 
 // The ablations of paper Fig. 5 (docs/fit.md): fitted, written, rendered.

@@ -151,6 +151,8 @@ FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_
                        YarnAblation ablation, const ColourFitOptions* colour) {
     if (colour && ablation != YarnAblation::None)
         throw InputError("a colour-conditioned fit has no ablations");
+    // Before any training: networks and a calibration that the renderer runs.
+    config.validate("fit configuration");
     const auto t0 = Clock::now();
     // Every step below sees the ablated model's target; the full model's is the gather itself.
     RdmData ablated;
@@ -379,6 +381,7 @@ FitResult recalibrateConditioned(const YarnModel& fitted, const RdmData& rdm,
 FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& gathered,
                                const FitConfig& config, bool quiet,
                                const std::vector<ColourPath>* paths) {
+    config.validate("fit configuration");
     if (fitted.colour) return recalibrateConditioned(fitted, gathered, config, quiet, paths);
     const auto t0 = Clock::now();
     RdmData ablated;

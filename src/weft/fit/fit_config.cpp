@@ -1,11 +1,11 @@
 // weft fit's configuration (fit_config.h): strict JSON reading and writing.
 #include "weft/fit/fit_config.h"
 
-
 #include "weft/core/error.h"
 #include "weft/core/json_file.h"
 #include "weft/core/json_reader.h"
 #include "weft/yarn/energy_calibration.h"
+#include "weft/yarn/network_capacity.h"
 
 namespace weft {
 
@@ -23,8 +23,10 @@ NetworkTraining trainingFromJson(JsonObjectReader r, NetworkTraining t) {
     r.allowKeys(
         {"hidden", "steps", "restarts", "batch", "learning_rate", "final_learning_rate", "loss"});
     if (r.has("hidden")) {
+        // Any list of positive widths here; FitConfig::validate holds them to
+        // what the renderer runs, with the reason in its message.
         t.hidden.clear();
-        for (int64_t w : r.integers("hidden", 1, 8, {1, 256}, "(layer widths)"))
+        for (int64_t w : r.integers("hidden", 1, 64, {1, 4096}, "(layer widths)"))
             t.hidden.push_back(static_cast<int>(w));
     }
     if (r.has("steps")) t.steps = r.integer("steps", {1, 100'000'000});
@@ -52,7 +54,15 @@ FitConfig FitConfig::fromJson(const nlohmann::json& j, const std::string& source
             "energy_calibration_degree", {-1, EnergyCalibration::kMaxDegree, "(-1: off)"}));
     if (r.has("threads"))
         c.threads = static_cast<int>(r.integer("threads", {0, 1024, "(0: all cores)"}));
+    c.validate(source);
     return c;
+}
+
+void FitConfig::validate(const std::string& source) const {
+    checkHiddenWidths(t.hidden, kTransmissionCapacity, source + ": t_net.hidden");
+    checkHiddenWidths(m.hidden, kScatteringCapacity, source + ": m_net.hidden");
+    checkRange(source + ": energy_calibration_degree =", calibrationDegree, -1,
+               EnergyCalibration::kMaxDegree, " (-1: off)");
 }
 
 FitConfig FitConfig::fromJsonFile(const std::string& path) {

@@ -33,10 +33,18 @@ struct FitConfig {
     int calibrationDegree = 8;  // energy calibration polynomial degree; -1: none
     int threads = 0;        // 0: all cores; never changes the result
 
-    // Strict reading (unknown keys are errors naming the key); missing keys keep the defaults.
+    // Strict reading (unknown keys are errors naming the key); missing keys
+    // keep the defaults. The result is validate()d.
     static FitConfig fromJson(const nlohmann::json& j, const std::string& source);
     static FitConfig fromJsonFile(const std::string& path);
     nlohmann::json toJson() const;
+
+    // InputError naming `source` and the field unless the renderer can run
+    // what this configuration fits: hidden widths within the T and M
+    // evaluators' capacities (yarn/network_capacity.h), and an energy
+    // calibration degree that a model file may hold (-1 or
+    // [0, EnergyCalibration::kMaxDegree]). weft fit calls it before training.
+    void validate(const std::string& source) const;
 };
 
 }  // namespace weft

@@ -132,50 +132,5 @@ TEST(Fit, DeterministicForAnyThreadCount) {
     EXPECT_FALSE(one.model.mNet == other.model.mNet);
 }
 
-TEST(FitConfig, DefaultsRoundTripAndStrictKeys) {
-    const FitConfig defaults;
-    EXPECT_EQ(defaults.t.hidden, (std::vector<int>{7, 7}));
-    const FitConfig again = FitConfig::fromJson(defaults.toJson(), "test");
-    EXPECT_EQ(again.toJson(), defaults.toJson());
-    const FitConfig partial = FitConfig::fromJson({{"m_net", {{"hidden", {21, 21}}}}}, "test");
-    EXPECT_EQ(partial.m.hidden, (std::vector<int>{21, 21}));
-    EXPECT_EQ(partial.m.steps, defaults.m.steps);
-    const auto expectError = [](const nlohmann::json& j, const std::string& message) {
-        testing::expectInputError([&] { FitConfig::fromJson(j, "fit.json"); }, {message});
-    };
-    expectError({{"epochs", 3}},
-                "fit.json: unknown key \"epochs\" (allowed: t_net, m_net, jitter, masking, "
-                "threads, energy_calibration_degree)");
-    expectError({{"t_net", {{"epoch", 3}}}},
-                "fit.json: t_net: unknown key \"epoch\" (allowed: hidden, steps, restarts, batch, "
-                "learning_rate, final_learning_rate, loss)");
-    expectError({{"t_net", 3}}, "fit.json: t_net: expected an object, got 3");
-    expectError({{"m_net", {{"steps", 0}}}},
-                "fit.json: m_net.steps = 0 is out of range: allowed [1, 100000000]");
-    expectError({{"m_net", {{"steps", 5.0}}}},
-                "fit.json: m_net.steps: expected an integer in [1, 100000000], got 5 (written as "
-                "a floating-point number)");
-    // Beyond int: out of range, not wrapped round into it.
-    expectError({{"t_net", {{"restarts", 4294967297}}}},
-                "fit.json: t_net.restarts = 4294967297 is out of range: allowed [1, 64]");
-    expectError({{"m_net", {{"loss", "l1"}}}},
-                "fit.json: m_net.loss: expected one of \"mse\", \"log-mse\", got the string "
-                "\"l1\"");
-    expectError({{"t_net", {{"hidden", {7, 0}}}}},
-                "fit.json: t_net.hidden[1] = 0 is out of range: allowed [1, 256]");
-    expectError({{"t_net", {{"hidden", nlohmann::json::array()}}}},
-                "fit.json: t_net.hidden: expected an array of 1 to 8 integers in [1, 256] (layer "
-                "widths), got an array of 0");
-    expectError({{"t_net", {{"learning_rate", -1}}}},
-                "fit.json: t_net.learning_rate = -1 is out of range: allowed (0, 1]");
-    expectError({{"jitter", 1}}, "fit.json: jitter: expected true or false, got 1");
-    expectError({{"threads", 2000}},
-                "fit.json: threads = 2000 is out of range: allowed [0, 1024] (0: all cores)");
-    expectError({{"energy_calibration_degree", -2}},
-                "fit.json: energy_calibration_degree = -2 is out of range: allowed [-1, 12] (-1: "
-                "off)");
-    expectError(nlohmann::json::array(), "fit.json: expected an object, got an array of 0");
-}
-
 }  // namespace
 }  // namespace weft

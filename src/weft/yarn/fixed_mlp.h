@@ -46,6 +46,7 @@
 #include "weft/core/rgb.h"
 #include "weft/core/vec.h"
 #include "weft/yarn/network.h"
+#include "weft/yarn/network_capacity.h"
 
 namespace weft {
 
@@ -61,8 +62,8 @@ struct FixedMlpLayer {
 struct FixedMlpKernel {
     // No kernel is wider than this (floats per vector); capacities are
     // checked as if every layer were padded to it, so that whether a network
-    // fits does not depend on the machine.
-    static constexpr int kMaxLanes = 16;
+    // fits does not depend on the machine (network_capacity.h).
+    static constexpr int kMaxLanes = kNetworkPaddingLanes;
     // z[0, outPadded of the last layer) = the last layer's pre-activation of
     // the network at x; `a` and `b` hold the hidden activations (each a
     // padded width long). z, a and b are aligned to 64 bytes.
@@ -85,7 +86,7 @@ std::vector<FixedMlpKernel> fixedMlpKernels();
 template <int MaxWidth, int Capacity>
 class FixedMlp {
   public:
-    static constexpr int kMaxLayers = 8;
+    static constexpr int kMaxLayers = kMaxNetworkLayers;
 
     FixedMlp() = default;
 
@@ -102,7 +103,8 @@ class FixedMlp {
                              " layers; the renderer's network evaluator supports 1 to " +
                              std::to_string(kMaxLayers));
         const int lanes = kernel_.lanes;
-        int offset = 0, worstCase = 0;
+        int offset = 0;
+        long long worstCase = 0;
         layerCount_ = static_cast<int>(layers.size());
         for (int l = 0; l < layerCount_; ++l) {
             const NetworkLayer& src = layers[l];
@@ -117,9 +119,8 @@ class FixedMlp {
             dst.outPadded = roundUp(src.out, lanes);
             dst.prelu = src.hasPrelu();
             dst.offset = offset;
-            const int rows = dst.in + 1 + (dst.prelu ? 1 : 0);
-            offset += dst.outPadded * rows;
-            worstCase += roundUp(src.out, FixedMlpKernel::kMaxLanes) * rows;
+            offset += static_cast<int>(paddedLayerFloats(dst.in, dst.out, dst.prelu, lanes));
+            worstCase += paddedLayerFloats(dst.in, dst.out, dst.prelu);
             if (worstCase > Capacity)
                 throw InputError(name + ": " + std::to_string(net.parameterCount()) +
                                  " parameters need more than the " + std::to_string(Capacity) +
@@ -210,10 +211,14 @@ class FixedMlp {
     alignas(64) std::array<float, Capacity> params_{};
 };
 
-// The yarn model's two evaluators (yarn_bsdf.h) and their inputs: float
-// copies of yarn-frame unit vectors, wi for the T network, (wi, wo) for M.
-using TransmissionMlp = FixedMlp<32, 2048>;
-using ScatteringMlp = FixedMlp<64, 8192>;
+// The yarn model's two evaluators (yarn_bsdf.h), of the sizes that
+// network_capacity.h gives (weft fit checks its networks against the same
+// numbers), and their inputs: float copies of yarn-frame unit vectors, wi for
+// the T network, (wi, wo) for M.
+using TransmissionMlp = FixedMlp<kTransmissionCapacity.maxWidth, kTransmissionCapacity.floats>;
+using ScatteringMlp = FixedMlp<kScatteringCapacity.maxWidth, kScatteringCapacity.floats>;
+static_assert(TransmissionMlp::kMaxLayers == kTransmissionCapacity.maxLayers &&
+              ScatteringMlp::kMaxLayers == kScatteringCapacity.maxLayers);
 
 inline double evalTransmission(const TransmissionMlp& net, const Vec3& wi) {
     const float x[3] = {static_cast<float>(wi.x), static_cast<float>(wi.y),

@@ -165,6 +165,31 @@ TEST_F(FitCliTest, WritesAValidModelAndItsReport) {
     EXPECT_TRUE(recalibrated.fit.contains("recalibrated"));
     expectUserError(run("fit --recalibrate missing.json --rdm rdm --out re2.json --quiet"),
                     {"missing.json"});
+
+    // The gather folder is recorded as given when relative, relative to the
+    // current directory when absolute inside it, and by its name alone when
+    // absolute elsewhere: never an absolute path of this machine
+    // (docs/model-format.md, "fit").
+    EXPECT_EQ(model.fit.at("rdm").at("path"), "rdm");
+    EXPECT_EQ(recalibrated.fit.at("recalibrated").at("rdm"), "rdm");
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("model-report/errors.json"))).at("rdm"), "rdm");
+    const std::string elsewhere = dir_.string() + "-elsewhere";
+    for (const std::string& copy : {path("g16/cotton-rdm"), elsewhere + "/g16/cotton-rdm"}) {
+        std::filesystem::create_directories(std::filesystem::path(copy).parent_path());
+        std::filesystem::copy(path("rdm"), copy, std::filesystem::copy_options::recursive);
+    }
+    for (const auto& [rdm, recorded] :
+         {std::pair<std::string, std::string>{path("g16/cotton-rdm"), "g16/cotton-rdm"},
+          {elsewhere + "/g16/cotton-rdm", "cotton-rdm"},
+          {"./g16/../g16/cotton-rdm/", "g16/cotton-rdm"}}) {
+        const RunResult a = run("fit --recalibrate again.json --rdm " + rdm +
+                                " --out abs.json --config short.json --no-report --quiet");
+        ASSERT_EQ(a.status, 0) << a.err;
+        const nlohmann::json record = loadYarnModel(path("abs.json")).fit;
+        EXPECT_EQ(record.at("recalibrated").at("rdm"), recorded) << rdm;
+        EXPECT_EQ(record.at("rdm").at("path"), "rdm");  // the original fit's, kept
+    }
+    std::filesystem::remove_all(elsewhere);
 }
 
 TEST_F(FitCliTest, ReferenceAddsNoiseFloor) {

@@ -28,6 +28,37 @@ std::string lowercaseExtension(const std::string& path) {
 
 namespace {
 
+// `p` relative to `base` if it lies inside it ("." for `base` itself), else empty.
+std::filesystem::path insideOf(const std::filesystem::path& p, const std::filesystem::path& base) {
+    const std::filesystem::path rel = p.lexically_relative(base.lexically_normal());
+    return !rel.empty() && *rel.begin() != ".." ? rel : std::filesystem::path();
+}
+
+}  // namespace
+
+std::string recordedPath(const std::string& path, const std::string& base) {
+    namespace fs = std::filesystem;
+    fs::path p = fs::path(path).lexically_normal();
+    if (!p.empty() && p.filename().empty()) p = p.parent_path();  // "rdm/" -> "rdm"
+    if (p.is_relative()) return p.empty() ? path : p.string();
+    if (const fs::path inside = insideOf(p, base); !inside.empty()) return inside.string();
+    return p.filename().string();  // "" for "/"
+}
+
+std::string recordedPath(const std::string& path) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::path cwd = fs::current_path(ec);  // links resolved
+    if (ec || fs::path(path).is_relative()) return recordedPath(path, cwd.string());
+    // Inside the current directory through a link in `path` ("/tmp" -> "/private/tmp").
+    const fs::path resolved = fs::weakly_canonical(path, ec);
+    if (!ec && insideOf(fs::path(path).lexically_normal(), cwd).empty())
+        if (const fs::path inside = insideOf(resolved, cwd); !inside.empty()) return inside.string();
+    return recordedPath(path, cwd.string());
+}
+
+namespace {
+
 std::string errnoText(int err) { return std::strerror(err); }
 
 [[noreturn]] void fail(const std::string& what, const std::string& path, int err) {

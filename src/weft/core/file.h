@@ -54,6 +54,15 @@ void checkOutputsSpareInputs(const std::vector<CommandPath>& inputFiles,
 // for picking a reader by file type.
 std::string lowercaseExtension(const std::string& path);
 
+// `path` as an output that may be committed or shared records it (the gather
+// folder in a model's fit record): never an absolute path of this machine. A
+// relative path is kept as given, lexically normalised ("./rdm/" -> "rdm"); an
+// absolute one becomes relative to `base` (the current directory) when it lies
+// inside it, and is otherwise reduced to its final component
+// ("/data/g16/cotton" -> "cotton"). docs/model-format.md, "fit".
+std::string recordedPath(const std::string& path, const std::string& base);
+std::string recordedPath(const std::string& path);
+
 // The whole file as bytes; InputError naming `path` if it is missing, a
 // directory, not a regular file (a device or FIFO), larger than
 // maxInputBytes() (core/limits.h) or unreadable.

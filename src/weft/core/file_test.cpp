@@ -285,5 +285,26 @@ TEST_F(FileTest, TempDirCommitErrorsNamePath) {
     EXPECT_FALSE(std::filesystem::exists(notDir + ".tmp." + std::to_string(::getpid())));
 }
 
+// What a model records of its gather folder (docs/model-format.md, "fit").
+TEST(RecordedPath, NeverAnAbsolutePathOfThisMachine) {
+    const std::string base = "/srv/weft";
+    // Relative: as given, normalised.
+    EXPECT_EQ(recordedPath("cotton-rdm", base), "cotton-rdm");
+    EXPECT_EQ(recordedPath("./g16/cotton/", base), "g16/cotton");
+    EXPECT_EQ(recordedPath("a/../b", base), "b");
+    EXPECT_EQ(recordedPath("../g16/cotton", base), "../g16/cotton");
+    // Absolute inside the current directory: relative to it.
+    EXPECT_EQ(recordedPath("/srv/weft/build/g16/cotton", base), "build/g16/cotton");
+    EXPECT_EQ(recordedPath("/srv/weft/./rdm/", base), "rdm");
+    // Absolute elsewhere: the folder's name alone.
+    EXPECT_EQ(recordedPath("/data/g16/cotton", base), "cotton");
+    EXPECT_EQ(recordedPath("/data/fa/", base), "fa");
+    EXPECT_EQ(recordedPath("/srv/weftly/rdm", base), "rdm");  // not inside /srv/weft
+    EXPECT_EQ(recordedPath("/srv/weft/../other/rdm", base), "rdm");
+    // The one-argument form is relative to the current directory.
+    EXPECT_EQ(recordedPath((fs::current_path() / "x" / "rdm").string()), "x/rdm");
+    EXPECT_EQ(recordedPath("rdm"), "rdm");
+}
+
 }  // namespace
 }  // namespace weft

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "weft/core/error.h"
+#include "weft/core/file.h"
 #include "weft/fit/metrics.h"
 #include "weft/yarn/material_preset.h"
 #include "weft/yarn/yarn_lobes.h"
@@ -83,7 +84,7 @@ nlohmann::json fitRecord(const FitReport& report, const FitConfig& config, uint6
                  {"seed", seed},
                  {"config", config.toJson()},
                  {"rdm",
-                  {{"path", rdm.dir},
+                  {{"path", recordedPath(rdm.dir)},
                    {"paths", rdm.meta.value("paths", nlohmann::json())},
                    {"seed", rdm.meta.value("seed", nlohmann::json())},
                    {"ply_seed", rdm.meta.value("ply_seed", nlohmann::json())},
@@ -330,7 +331,7 @@ void measureKeptParts(const YarnModel& model, const YarnModel& fitted, const Rdm
 
 // The fit record's "recalibrated" entry.
 nlohmann::json recalibratedEntry(const RdmData& rdm, const FitConfig& config, double seconds) {
-    return {{"rdm", rdm.dir},
+    return {{"rdm", recordedPath(rdm.dir)},
             {"energy_calibration_degree", config.calibrationDegree},
             {"seconds", seconds}};
 }

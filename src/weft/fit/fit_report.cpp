@@ -65,7 +65,7 @@ void writeFitReport(const FitResult& fit, const RdmData& rdm, const RdmData* ref
         {"error_grid", kCoarseErrorBins.toString()},
         {"seconds", {{"total", r.seconds}, {"t_net", r.tSeconds}, {"m_net", r.mSeconds}}},
         {"m_training_samples_per_second", r.mSamplesPerSecond},
-        {"rdm", rdm.dir},
+        {"rdm", recordedPath(rdm.dir)},
     };
     const std::vector<float> mFit = modelMultipleScatteringMap(fit.model, bins);
     const std::vector<float> rFit = modelReflectionMap(fit.model, bins);

@@ -296,7 +296,7 @@ void TNetwork(benchmark::State& state) {
 void YarnMNetwork(benchmark::State& state) {
     const YarnBsdf& bsdf = rawBsdf();
     loop(state, [&](const Vec3& wi, const Vec3& wo, const BsdfSampleInput&) {
-        benchmark::DoNotOptimize(bsdf.evalM(wi, wo));
+        benchmark::DoNotOptimize(bsdf.model().evalM(wi, wo));
     });
 }
 
@@ -308,7 +308,7 @@ void YarnTNetwork(benchmark::State& state) {
 }
 
 void YarnRLobe(benchmark::State& state) {
-    const RLobe& lobe = rawBsdf().rLobe();
+    const RLobe& lobe = rawBsdf().model().rLobe();
     loop(state, [&](const Vec3& wi, const Vec3& wo, const BsdfSampleInput&) {
         benchmark::DoNotOptimize(lobe.eval(wi, wo, 0.1));
     });

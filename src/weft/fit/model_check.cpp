@@ -160,7 +160,7 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
     for (size_t i = 0; i < nIn; ++i) {
         const DirectionalIntegrals& d = integrals[i];
         const Rgb a = d.albedo(), b = rdmR[i] + rdmM[i] + Rgb(rdm.pT[i]);
-        const Rgb scale = guarded->multipleScatteringScale(bins.incidentCentre(i));
+        const Rgb scale = guarded->model().multipleScatteringScale(bins.incidentCentre(i));
         const Rgb g = Rgb(d.pT) + d.r + d.m * scale;
         binsScaled += !(scale == Rgb(1.0));
         for (int c = 0; c < 3; ++c) {
@@ -313,7 +313,7 @@ YarnCheckResult computeYarnCheck(const YarnModel& model, const std::string& mode
         orNull(coarseChecked, coarseWithin / (3.0 * std::max<double>(1.0, coarseChecked)));
 
     nlohmann::json& guard = summary["energy_guard"];
-    guard["active"] = guarded->energyGuardActive();
+    guard["active"] = guarded->model().energyGuard().active();
     guard["bins_scaled"] = binsScaled;
     guard["albedo_max_all_bins"] = rgbJson(guardedMax);
     guard["relative_error_mean_abs"] = meanOrNull(sumAbsGuarded);

@@ -30,7 +30,7 @@ TEST(ModelMaps, MatchTheYarnBsdfComponents) {
                 const Vec3 wi = bins.incidentCentre(i);
                 EXPECT_NEAR(bsdf.transmission(wi), pT[i], 1e-6);
                 for (size_t o = 0; o < bins.outgoingCount(); ++o) {
-                    const YarnBsdf::Components c = bsdf.components(wi, bins.outgoingCentre(o));
+                    const YarnComponents c = bsdf.components(wi, bins.outgoingCentre(o));
                     for (int k = 0; k < 3; ++k) {
                         const size_t index = (i * bins.outgoingCount() + o) * 3 + k;
                         EXPECT_NEAR(c.m[k], m[index], 1e-5 * m[index]);

@@ -58,8 +58,8 @@ Vec3 SamplingTable::nodeDirection(const SurfaceFiberFrame& frame, int a, int b) 
     return frame.direction(nodeTheta(a), nodePhi(b));
 }
 
-SamplingTable::Incident SamplingTable::rowsOf(double zi) {
-    Incident in;
+SamplingTable::Layout SamplingTable::rowsOf(double zi) {
+    Layout in;
     in.zc = -zi;
     in.gamma = std::max(kWarpWidth * std::sqrt(std::max(0.0, 1.0 - zi * zi)), kWarpWidthMin);
     in.atanLo = std::atan((-1.0 - in.zc) / in.gamma);
@@ -70,7 +70,7 @@ SamplingTable::Incident SamplingTable::rowsOf(double zi) {
     return in;
 }
 
-SamplingTable::RowSpan SamplingTable::spanOf(const Incident& in, int k, double tanLower) {
+SamplingTable::RowSpan SamplingTable::spanOf(const Layout& in, int k, double tanLower) {
     // tanLower = tan(a), a = atanLo + k atanStep in (-pi/2, pi/2); tan(a +
     // atanStep) = (tanLower + tanStep) / (1 - tanLower tanStep), whose
     // denominator is > 0 while a + atanStep < pi/2, i.e. for every row but the
@@ -85,11 +85,11 @@ SamplingTable::RowSpan SamplingTable::spanOf(const Incident& in, int k, double t
     return span;
 }
 
-SamplingTable::RowSpan SamplingTable::rowSpan(const Incident& in, int k) {
+SamplingTable::RowSpan SamplingTable::rowSpan(const Layout& in, int k) {
     return spanOf(in, k, std::tan(in.atanLo + k * in.atanStep));
 }
 
-SamplingTable::RowSpan SamplingTable::rowAt(const Incident& in, double z) {
+SamplingTable::RowSpan SamplingTable::rowAt(const Layout& in, double z) {
     const double u = (z - in.zc) * in.invGamma, a = std::atan(u);
     const int row =
         std::clamp(static_cast<int>(std::floor((a - in.atanLo) * in.invAtanStep)), 0, kRows - 1);
@@ -112,7 +112,7 @@ SamplingTable::SamplingTable(const SurfaceFiberFrame& frame, int parts, const Fu
     const auto& decoded = codeValues();
     tbb::parallel_for(0, kNodes, [&](int node) {
         const Vec3 wi = nodeDirection(frame, node / kIncidentPhi, node % kIncidentPhi);
-        const Incident rows = rowsOf(frame.toLocal(wi).x);
+        const Layout rows = rowsOf(frame.toLocal(wi).x);
         double edges[kRows + 1];
         for (int k = 0; k < kRows; ++k) {
             const RowSpan span = rowSpan(rows, k);
@@ -185,14 +185,14 @@ size_t SamplingTable::bytes() const {
            energy_.size() * sizeof(double);
 }
 
-SamplingTable::Incident SamplingTable::incident(const Vec3& wi) const {
+SamplingTable::Layout SamplingTable::layout(const Vec3& wi) const {
     const Vec3 local = frame_.toLocal(wi);
     const double sinTheta = std::clamp(local.x, -1.0, 1.0);
-    return incident(sinTheta, std::asin(sinTheta), std::atan2(local.y, std::max(local.z, 0.0)));
+    return layout(sinTheta, std::asin(sinTheta), std::atan2(local.y, std::max(local.z, 0.0)));
 }
 
-SamplingTable::Incident SamplingTable::incident(double sinTheta, double theta, double phi) const {
-    Incident in = rowsOf(sinTheta);
+SamplingTable::Layout SamplingTable::layout(double sinTheta, double theta, double phi) const {
+    Layout in = rowsOf(sinTheta);
     phi = std::clamp(phi, -kHalfPi, kHalfPi);
     int a0, b0;
     double fa, fb;
@@ -211,7 +211,7 @@ SamplingTable::Incident SamplingTable::incident(double sinTheta, double theta, d
     return in;
 }
 
-double SamplingTable::pdf(const Incident& in, const Vec3& wo) const {
+double SamplingTable::pdf(const Layout& in, const Vec3& wo) const {
     const Vec3 local = frame_.toLocal(wo);
     const double z = std::clamp(local.x, -1.0, 1.0);
     const RowSpan span = rowAt(in, z);
@@ -227,7 +227,7 @@ double SamplingTable::pdf(const Incident& in, const Vec3& wo) const {
     return p / (height * kColumnWidth);
 }
 
-Vec3 SamplingTable::sample(const Incident& in, double uNode, double u1, double u2) const {
+Vec3 SamplingTable::sample(const Layout& in, double uNode, double u1, double u2) const {
     int n = 0;
     for (double cumulative = in.weight[0]; n < 3 && !(uNode < cumulative);)
         cumulative += in.weight[++n];
@@ -252,7 +252,7 @@ Vec3 SamplingTable::sample(const Incident& in, double uNode, double u1, double u
     return frame_.fromLocal(localOf(z, phi));
 }
 
-double SamplingTable::blend(const Incident& in, const std::vector<double>& perNode) const {
+double SamplingTable::blend(const Layout& in, const std::vector<double>& perNode) const {
     double value = 0;
     for (int n = 0; n < 4; ++n)
         if (in.weight[n] > 0) value += in.weight[n] * perNode[in.node[n]];

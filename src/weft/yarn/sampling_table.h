@@ -59,8 +59,9 @@ class SamplingTable {
     static constexpr double kFloor = 0.03;
     static constexpr double kCodeStep = 12;  // codes per factor 2 of a cell's mass
 
-    // What depends on wi: the row layout and the four nodes with their weights.
-    struct Incident {
+    // The table laid out for one wi: its row edges and the four nodes it
+    // blends, with their weights.
+    struct Layout {
         double zc = 0, gamma = 1, atanLo = 0,
                atanStep = 1;  // rows: z = zc + gamma tan(atanLo + k atanStep)
         double tanStep = 0;   // tan(atanStep): the next row edge without another tan
@@ -83,20 +84,20 @@ class SamplingTable {
     bool empty() const { return codes_.empty(); }
 
     // wi: yarn frame, upper hemisphere (wi.z >= 0).
-    Incident incident(const Vec3& wi) const;
+    Layout layout(const Vec3& wi) const;
     // The same from wi's surface fiber angles, for a caller that has them:
     // sin(theta), theta and phi = atan2(y, max(z, 0)) of the local direction.
-    Incident incident(double sinTheta, double theta, double phi) const;
+    Layout layout(double sinTheta, double theta, double phi) const;
     // Density per unit solid angle of sample() at the yarn-frame direction wo.
-    double pdf(const Incident& in, const Vec3& wo) const;
+    double pdf(const Layout& in, const Vec3& wo) const;
     // uNode picks the node, u1 the cell and z in it, u2 the azimuth in it.
-    Vec3 sample(const Incident& in, double uNode, double u1, double u2) const;
+    Vec3 sample(const Layout& in, double uNode, double u1, double u2) const;
     // The integral of term `part` over the sphere at node n (kNodes of them).
     double nodeEnergy(int node, int part) const {
         return energy_[static_cast<size_t>(node) * parts_ + part];
     }
     // Any per-node quantity (kNodes values, theta-major) bilinear between the nodes.
-    double blend(const Incident& in, const std::vector<double>& perNode) const;
+    double blend(const Layout& in, const std::vector<double>& perNode) const;
 
     // The yarn-frame direction of node (a, b).
     static Vec3 nodeDirection(const SurfaceFiberFrame& frame, int a, int b);
@@ -105,16 +106,16 @@ class SamplingTable {
     size_t bytes() const;
 
   private:
-    static Incident rowsOf(double zi);
+    static Layout rowsOf(double zi);
     // Row k and its edges z0 < z1; rowSpan from one tan, rowAt (the row
     // holding z) from none: the same edges up to rounding.
     struct RowSpan {
         int row;
         double z0, z1;
     };
-    static RowSpan rowSpan(const Incident& in, int k);
-    static RowSpan rowAt(const Incident& in, double z);
-    static RowSpan spanOf(const Incident& in, int k, double tanLower);
+    static RowSpan rowSpan(const Layout& in, int k);
+    static RowSpan rowAt(const Layout& in, double z);
+    static RowSpan spanOf(const Layout& in, int k, double tanLower);
     static int columnOf(double phi);
 
     SurfaceFiberFrame frame_;

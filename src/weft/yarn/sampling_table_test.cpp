@@ -62,7 +62,7 @@ double sphereIntegral(const G& g, int rows = 1500, int columns = 1000) {
 TEST(SamplingTable, PdfIsPositiveAndIntegratesToOne) {
     const SamplingTable& table = testTable();
     for (const Vec3& wi : incidentDirections()) {
-        const SamplingTable::Incident in = table.incident(wi);
+        const SamplingTable::Layout in = table.layout(wi);
         double smallest = 1e300;
         const double integral = sphereIntegral([&](const Vec3& wo) {
             const double p = table.pdf(in, wo);
@@ -80,7 +80,7 @@ TEST(SamplingTable, SamplingIsChiSquareConsistentWithPdf) {
     const double alpha = sidakCorrectedLevel(0.01, static_cast<int>(directions.size()));
     const SphereGrid grid{60, 60};
     for (const Vec3& wi : directions) {
-        const SamplingTable::Incident in = table.incident(wi);
+        const SamplingTable::Layout in = table.layout(wi);
         const int64_t n = testing::scaled(300000);
         std::vector<double> observed(grid.cells(), 0);
         Rng rng(3, static_cast<uint64_t>(1e6 * (wi.x + 2 * wi.y + 3 * wi.z) + 1e7));
@@ -104,7 +104,7 @@ TEST(SamplingTable, SamplingIsChiSquareConsistentWithPdf) {
 TEST(SamplingTable, WeightOfItsFunctionStaysNearItsIntegral) {
     const SamplingTable& table = testTable();
     for (const Vec3& wi : incidentDirections()) {
-        const SamplingTable::Incident in = table.incident(wi);
+        const SamplingTable::Layout in = table.layout(wi);
         double largest = 0;
         const double integral =
             sphereIntegral([&](const Vec3& wo) { return testFunction(testFrame(), wi, wo); });

@@ -71,11 +71,11 @@ TEST(YarnBsdfAblation, NaiveHasNoTransmissionAndNoReflection) {
         const Vec3 wi = randomUnitVector(rng), wo = randomUnitVector(rng);
         transmitting += full.transmission(wi) > 0.01;
         ASSERT_EQ(naive.transmission(wi), 0.0);
-        const YarnBsdf::Components c = naive.components(wi, wo);
+        const YarnComponents c = naive.components(wi, wo);
         EXPECT_EQ(c.pT, 0.0);
         EXPECT_TRUE(c.r.isBlack());
         EXPECT_EQ(naive.eval(wi, wo), c.m);
-        const YarnBsdf::LobeProbabilities p = naive.lobeProbabilities(wi);
+        const YarnLobeProbabilities p = naive.lobeProbabilities(wi);
         EXPECT_EQ(p.t, 0.0);
         EXPECT_EQ(p.r, 0.0);
         EXPECT_EQ(p.m, 1.0);

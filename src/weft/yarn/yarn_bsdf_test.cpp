@@ -13,6 +13,7 @@
 #include "weft/core/file.h"
 #include "weft/core/math.h"
 #include "weft/core/test_util.h"
+#include "weft/yarn/energy_guard.h"
 #include "weft/yarn/material_preset.h"
 #include "weft/yarn/yarn_integrals.h"
 #include "weft/yarn/yarn_test_util.h"
@@ -68,7 +69,7 @@ const Incident kIncident[] = {
     {"grazing", [](const YarnBsdf&) { return yarnDirection(87, 100); }},
     {"along the surface fibers",
      [](const YarnBsdf& b) {
-         return b.surfaceFiberFrame().fromLocal({std::sin(radians(85)), 0, std::cos(radians(85))});
+         return b.model().frame().fromLocal({std::sin(radians(85)), 0, std::cos(radians(85))});
      }},
     {"below the surface", [](const YarnBsdf&) { return yarnDirection(120, 30); }},
 };
@@ -199,7 +200,7 @@ TEST(YarnBsdf, FiniteForEveryDirection) {
                                        yarnDirection(1e-9, 10)};
     for (const char* name : kModels) {
         const YarnBsdf& bsdf = testBsdf(name);
-        const SurfaceFiberFrame& frame = bsdf.surfaceFiberFrame();
+        const SurfaceFiberFrame& frame = bsdf.model().frame();
         std::vector<Vec3> dirs = special;
         // Along the surface fibers, exactly and a hair above the surface.
         for (const Vec3& local :
@@ -297,7 +298,7 @@ TEST(YarnBsdf, EnergyCalibrationScalesTheLobes) {
     Rng rng(5, 5);
     for (int k = 0; k < 200; ++k) {
         const Vec3 wi = randomUnitVector(rng), wo = randomUnitVector(rng);
-        const YarnBsdf::Components ca = a.components(wi, wo), cb = b.components(wi, wo);
+        const YarnComponents ca = a.components(wi, wo), cb = b.components(wi, wo);
         const double x = wi.x;  // the mirroring below the surface keeps x
         for (int c = 0; c < 3; ++c) {
             EXPECT_NEAR(cb.r[c], 0.5 * ca.r[c], 1e-12 + 1e-9 * ca.r[c]);
@@ -388,19 +389,19 @@ TEST(YarnIntegrals, EnergyGuardScalesOnlyOvershootingDirections) {
     for (const char* name : kModels) {
         const YarnBsdf& guarded = testBsdf(name);
         const YarnBsdf raw(testModel(name), name, YarnBsdfOptions{false});
-        EXPECT_FALSE(raw.energyGuardActive());
+        EXPECT_FALSE(raw.model().energyGuard().active());
         int scaled = 0, nodes = 0;
         double worstRaw = 0;
         // Nodes of the M table (the R table's part is interpolated there);
         // fewer of them under the sanitizers.
         const int stride = testing::sampleScale() < 1 ? 3 : 1;
-        for (int a = 0; a < YarnBsdf::kGuardTheta; a += 2 * stride)
-            for (int b = 0; b < YarnBsdf::kGuardPhi; b += 4 * stride) {
-                const Vec3 wi = sphericalDirection(YarnBsdf::guardPolarAngle(a),
-                                                   -kPi + kTwoPi * b / YarnBsdf::kGuardPhi);
+        for (int a = 0; a < EnergyGuard::kTheta; a += 2 * stride)
+            for (int b = 0; b < EnergyGuard::kPhi; b += 4 * stride) {
+                const Vec3 wi = sphericalDirection(EnergyGuard::polarAngle(a),
+                                                   -kPi + kTwoPi * b / EnergyGuard::kPhi);
                 const Rgb before = integrateDirections(raw, wi).albedo();
                 const Rgb after = integrateDirections(guarded, wi).albedo();
-                const Rgb scale = guarded.multipleScatteringScale(wi);
+                const Rgb scale = guarded.model().multipleScatteringScale(wi);
                 ++nodes;
                 worstRaw = std::max(worstRaw, before.maxComponent());
                 for (int c = 0; c < 3; ++c) {

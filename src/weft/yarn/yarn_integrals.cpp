@@ -9,8 +9,8 @@
 namespace weft {
 
 SphereRule yarnSphereRule(const YarnBsdf& bsdf, const Vec3& wi, int refinement) {
-    return surfaceFiberSphereRule(bsdf.surfaceFiberFrame(),
-                                  radians(bsdf.rLobe().fiber().params().betaRDeg), wi, refinement);
+    return surfaceFiberSphereRule(bsdf.model().frame(),
+                                  radians(bsdf.model().rLobe().fiber().params().betaRDeg), wi, refinement);
 }
 
 DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, int refinement,
@@ -25,7 +25,7 @@ DirectionalIntegrals integrateDirections(const YarnBsdf& bsdf, const Vec3& wi, i
     for (size_t k = 0; k < rule.directions.size(); ++k) {
         const Vec3& wo = rule.directions[k];
         const double w = rule.weights[k];
-        const YarnBsdf::Components c = bsdf.components(wi, wo);
+        const YarnComponents c = bsdf.components(wi, wo);
         out.r += c.r * w;
         out.m += c.m * w;
         if (!secondMoments) continue;

@@ -37,7 +37,7 @@ inline YarnModel withCalibration(YarnModel model) {
 inline Chi2Result yarnSamplingChi2(const YarnBsdf& bsdf, const Vec3& wi, const SphereGrid& grid,
                                    int64_t n, uint64_t seed, bool inFiberFrame) {
     const SurfaceFiberFrame identity;
-    const SurfaceFiberFrame& frame = inFiberFrame ? bsdf.surfaceFiberFrame() : identity;
+    const SurfaceFiberFrame& frame = inFiberFrame ? bsdf.model().frame() : identity;
     std::vector<double> observed(grid.cells() + 1, 0);
     Rng rng(seed, static_cast<uint64_t>(1e6 * (wi.x + 2 * wi.y + 3 * wi.z) + 1e7));
     for (int64_t k = 0; k < n; ++k) {

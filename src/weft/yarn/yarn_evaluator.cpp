@@ -1,0 +1,106 @@
+#include "weft/yarn/yarn_evaluator.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "weft/core/error.h"
+
+namespace weft {
+
+namespace {
+
+// The model's own checks (yarn_model.h), before any member is built.
+const YarnModel& validated(const YarnModel& model, const std::string& source) {
+    try {
+        model.validate();
+        // The file format holds any float; inference must stay finite.
+        model.tNet.checkFiniteOnUnitInputs("t_net");
+        model.mNet.checkFiniteOnUnitInputs("m_net");
+    } catch (const InputError& e) {
+        throw InputError(source + ": " + e.what());
+    }
+    return model;
+}
+
+// Builds a member, prefixing the InputError of its constructor with `source`.
+template <typename T, typename... Args>
+T withSource(const std::string& source, const Args&... args) {
+    try {
+        return T(args...);
+    } catch (const InputError& e) {
+        throw InputError(source + ": " + e.what());
+    }
+}
+
+}  // namespace
+
+YarnEvaluator::YarnEvaluator(const YarnModel& model, const std::string& source, bool energyGuard)
+    : tNet_(validated(model, source).tNet, source + ": t_net"),
+      mNet_(model.mNet, source + ": m_net"),
+      rLobe_(withSource<RLobe>(source, model.fiber, model.rLobe)),
+      ablation_(model.ablation),
+      hasTransmission_(model.hasTransmissionLobe()),
+      hasReflection_(model.hasReflectionLobe()),
+      calibration_(model.calibration) {
+    if (energyGuard) guard_ = EnergyGuard(*this);
+}
+
+size_t YarnEvaluator::memoryBytes() const {
+    return sizeof(*this) + rLobe_.fiber().memoryBytes() - sizeof(FiberBcsdf) +
+           guard_.memoryBytes();
+}
+
+double YarnEvaluator::transmission(const Vec3& wi) const {
+    return hasTransmission_ ? evalTransmission(tNet_, wi) : 0.0;
+}
+
+Rgb YarnEvaluator::evalM(const Vec3& wi, const Vec3& wo) const {
+    return evalScattering(mNet_, wi, wo);
+}
+
+SurfaceFiberAngles YarnEvaluator::surfaceAngles(const Vec3& wi) const {
+    SurfaceFiberAngles s;
+    s.local = frame().toLocal(wi);
+    s.angles = FiberBcsdf::anglesOf(s.local);
+    s.phi = std::atan2(s.local.y, std::max(s.local.z, 0.0));
+    return s;
+}
+
+FiberBcsdf::Angles YarnEvaluator::outAngles(const Vec3& wo) const {
+    if (!hasReflection_ || wo.z <= 0) return {};
+    return FiberBcsdf::anglesOf(frame().toLocal(wo));
+}
+
+void YarnEvaluator::prepare(const SurfaceFiberAngles& surface, YarnIncident& in) const {
+    const EnergyCalibration::Scales s = calibration_.scales(in.wi);
+    const EnergyGuard::Scales g = guard_.scales(in.wi, surface, in.pT, s, rLobe_.fiber());
+    in.rScale = s.r * g.r;
+    in.mScale = s.m * g.m;
+    if (hasReflection_) in.fiber = rLobe_.fiber().incident(surface.angles);
+}
+
+YarnIncident YarnEvaluator::incident(const Vec3& wi) const {
+    YarnIncident in;
+    in.wi = wi;
+    in.pT = transmission(wi);
+    prepare(surfaceAngles(wi), in);
+    return in;
+}
+
+YarnComponents YarnEvaluator::components(const Vec3& wo, const YarnIncident& in,
+                                         const FiberBcsdf::Angles& out) const {
+    YarnComponents c;
+    c.pT = in.pT;
+    if (hasReflection_) c.r = rLobe_.eval(in.wi, wo, in.fiber, out, in.pT) * in.rScale;
+    c.m = evalM(in.wi, wo) * in.mScale;
+    return c;
+}
+
+Rgb YarnEvaluator::multipleScatteringScale(const Vec3& wi) const {
+    const Vec3 i = wi.z < 0 ? mirrored(wi) : wi;
+    return guard_.scales(i, surfaceAngles(i), transmission(i), calibration_.scales(i),
+                         rLobe_.fiber())
+        .m;
+}
+
+}  // namespace weft

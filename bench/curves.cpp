@@ -1,7 +1,8 @@
 // bench/curves — the time of `weft curves info` (render/curve_report.h) on
 // files of 10^5 points.
 //
-// Two generated BCC files, each read back with the renderer's reader and
+// Two generated BCC files, each read back with readCurves (core/curves.h,
+// the reader of `weft render` and `weft curves info`) and
 // reported without a radius (counts and the closest contact) and with one
 // (plus the overlap at that radius):
 //   random walks: 100 smooth random walks of 1000 points each (step 0.5,
@@ -12,8 +13,6 @@
 //                 (skipped when the file is missing; --knit names it).
 // Times are the median of three runs on one thread. Writes a Markdown table
 // (default bench/results/curves.md).
-#include "weft/render/curves.h"
-
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -27,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "weft/core/curve_io.h"
+#include "weft/core/curves.h"
 #include "weft/core/file.h"
 #include "weft/core/rng.h"
 #include "weft/render/curve_report.h"
@@ -66,21 +65,21 @@ CurveSet randomWalks(int curves, int points, uint64_t seed) {
             if (p.z + step * dir.z < 0 || p.z + step * dir.z > box) dir.z = -dir.z;
             p += step * dir;
         }
-        set.curves.push_back(curve);
+        set.curves.push_back({curve, {}, false, CurveBasis::Polyline, {}});
     }
     return set;
 }
 
 CurveSet tiledKnit(const std::string& knitPath, int tiles) {
-    const CurveSet knit = readBcc(knitPath);
-    const render::Bounds3 box = render::bounds(render::readCurves(knitPath));
+    const CurveSet knit = readCurves(knitPath);
+    const Bounds3 box = bounds(knit);
     const Vec3 size = box.hi - box.lo;
     CurveSet set;
     for (int i = 0; i < tiles; ++i)
         for (int j = 0; j < tiles; ++j)
-            for (const std::vector<Vec3>& curve : knit.curves) {
-                std::vector<Vec3> moved = curve;
-                for (Vec3& p : moved) p += Vec3{i * size.x, j * size.y, 0};
+            for (const Curve& curve : knit.curves) {
+                Curve moved = curve;
+                for (Vec3& p : moved.points) p += Vec3{i * size.x, j * size.y, 0};
                 set.curves.push_back(moved);
             }
     return set;
@@ -122,8 +121,8 @@ int main(int argc, char** argv) {
           "| radius | overlap fraction |\n"
        << "| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
     for (const Case& c : cases) {
-        render::CurveSet set;
-        const double read = medianSeconds([&] { set = render::readCurves(c.file); });
+        CurveSet set;
+        const double read = medianSeconds([&] { set = readCurves(c.file); });
         render::CurveReport plain, withRadius;
         const double report = medianSeconds([&] { plain = render::curveReport(set); });
         const double overlap =

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "cli_test_util.h"
-#include "weft/core/curve_io.h"
+#include "weft/core/curves.h"
 #include "weft/core/file.h"
 #include "weft/core/npy.h"
 #include "weft/core/rgb.h"
@@ -552,19 +552,19 @@ TEST_F(CliTest, PlyPresetText) {
     EXPECT_DOUBLE_EQ(summary.at("radius").get<double>(), 1.0);
     EXPECT_EQ(summary.at("out").get<std::string>(), "p.txt");
 
-    const CurveSet set = readCurveText(file("p.txt"));
+    const CurveSet set = readCurves(file("p.txt"));
     ASSERT_EQ(set.curves.size(), 300u);
     EXPECT_EQ(static_cast<int64_t>(set.pointCount()), summary.at("points").get<int64_t>());
     for (size_t i = 0; i < set.curves.size(); ++i) {
-        const auto& c = set.curves[i];
+        const auto& c = set.curves[i].points;
         ASSERT_GE(c.size(), 2u) << "curve " << i;
         EXPECT_EQ(c.front().z, 0.0) << "curve " << i;
         EXPECT_EQ(c.back().z, 5.0) << "curve " << i;
-        EXPECT_FALSE(set.isClosed(i));
-        ASSERT_TRUE(set.hasRadii(i)) << "curve " << i;
-        ASSERT_EQ(set.radii[i].size(), c.size());
+        EXPECT_FALSE(set.curves[i].closed);
+        ASSERT_EQ(set.curves[i].radii.size(), c.size()) << "curve " << i;
         for (size_t k = 0; k < c.size(); ++k) {
-            expectRelNear(set.radii[i][k], fiberRadius, 1e-8,
+            // Radii read back at float32 precision, as the renderer draws them.
+            expectRelNear(set.curves[i].radii[k], fiberRadius, 1e-7,
                           "radius of curve " + std::to_string(i));
             // Centres stay within R - r of the axis.
             EXPECT_LE(std::hypot(c[k].x, c[k].y), 1 - fiberRadius + 1e-7);
@@ -578,21 +578,21 @@ TEST_F(CliTest, PlyPresetBccMatchesText) {
     ASSERT_EQ(r.status, 0) << r.err;
     r = run("ply --preset fleece --radius 1 --length 5 --seed 3 --out p.txt");
     ASSERT_EQ(r.status, 0) << r.err;
-    const CurveSet bcc = readBcc(file("p.bcc"));
-    const CurveSet text = readCurveText(file("p.txt"));
+    const CurveSet bcc = readCurves(file("p.bcc"));
+    const CurveSet text = readCurves(file("p.txt"));
     ASSERT_EQ(bcc.curves.size(), 300u);
     ASSERT_EQ(text.curves.size(), 300u);
     for (size_t i = 0; i < bcc.curves.size(); ++i) {
-        ASSERT_EQ(bcc.curves[i].size(), text.curves[i].size()) << "curve " << i;
-        EXPECT_FALSE(bcc.isClosed(i));
-        for (size_t k = 0; k < bcc.curves[i].size(); ++k) {
-            EXPECT_NEAR(length(bcc.curves[i][k] - text.curves[i][k]), 0.0, 1e-6)
-                << "curve " << i << " point " << k;
+        const std::vector<Vec3>&b = bcc.curves[i].points, &t = text.curves[i].points;
+        ASSERT_EQ(b.size(), t.size()) << "curve " << i;
+        EXPECT_FALSE(bcc.curves[i].closed);
+        for (size_t k = 0; k < b.size(); ++k) {
+            EXPECT_NEAR(length(b[k] - t[k]), 0.0, 1e-6) << "curve " << i << " point " << k;
         }
         if (::testing::Test::HasFailure()) break;
     }
-    EXPECT_EQ(bcc.curves.front().front().z, 0.0);
-    EXPECT_EQ(bcc.curves.front().back().z, 5.0);
+    EXPECT_EQ(bcc.curves.front().points.front().z, 0.0);
+    EXPECT_EQ(bcc.curves.front().points.back().z, 5.0);
 }
 
 TEST_F(CliTest, PlySameSeedSameOutput) {
@@ -615,13 +615,13 @@ TEST_F(CliTest, PlyExplicitGeometry) {
     EXPECT_DOUBLE_EQ(summary.at("fiber_radius").get<double>(), fiberRadius);
     EXPECT_DOUBLE_EQ(summary.at("twist_period").get<double>(), 2 * 2 / 0.1);
     EXPECT_EQ(summary.at("seed").get<uint64_t>(), 0u);
-    const CurveSet set = readCurveText(file("p.txt"));
+    const CurveSet set = readCurves(file("p.txt"));
     ASSERT_EQ(set.curves.size(), 50u);
-    for (size_t i = 0; i < set.curves.size(); ++i) {
-        EXPECT_EQ(set.curves[i].front().z, 0.0);
-        EXPECT_EQ(set.curves[i].back().z, 3.0);
-        ASSERT_TRUE(set.hasRadii(i));
-        expectRelNear(set.radii[i].front(), fiberRadius, 1e-8, "radius");
+    for (const Curve& c : set.curves) {
+        EXPECT_EQ(c.points.front().z, 0.0);
+        EXPECT_EQ(c.points.back().z, 3.0);
+        ASSERT_FALSE(c.radii.empty());
+        expectRelNear(c.radii.front(), fiberRadius, 1e-7, "radius");
     }
 }
 
@@ -630,9 +630,10 @@ TEST_F(CliTest, PlyStraightFibersHaveNullTwistPeriod) {
     ASSERT_EQ(r.status, 0) << r.err;
     const nlohmann::json summary = nlohmann::json::parse(r.out);
     EXPECT_TRUE(summary.at("twist_period").is_null());
-    const CurveSet set = readCurveText(file("p.txt"));
+    const CurveSet set = readCurves(file("p.txt"));
     ASSERT_EQ(set.curves.size(), 20u);
-    for (const auto& c : set.curves) {
+    for (const auto& curve : set.curves) {
+        const std::vector<Vec3>& c = curve.points;
         EXPECT_EQ(c.front().x, c.back().x);
         EXPECT_EQ(c.front().y, c.back().y);
     }

@@ -8,10 +8,10 @@
 #include <string>
 
 #include "commands.h"
+#include "weft/core/curves.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/render/curve_report.h"
-#include "weft/render/curves.h"
 
 namespace weft::cmd {
 
@@ -41,11 +41,11 @@ void printLine(const std::string& label, const std::string& value) {
 // The report as a person reads it: one aligned line per quantity.
 void printReport(const std::string& file, const render::CurveReport& r) {
     printLine("file", file);
-    printLine("curves", std::to_string(r.curves) + " (" + std::to_string(r.closedCurves) +
-                            " closed), " +
-                            (r.basis == render::CurveBasis::CatmullRom
-                                 ? "Catmull-Rom (analysed on the control polygon)"
-                                 : "polyline"));
+    printLine(
+        "curves",
+        std::to_string(r.curves) + " (" + std::to_string(r.closedCurves) + " closed), " +
+            (r.basis == CurveBasis::CatmullRom ? "Catmull-Rom (analysed on the control polygon)"
+                                               : "polyline"));
     printLine("points", std::to_string(r.points));
     printLine("segments", std::to_string(r.segments) + " (" + std::to_string(r.degenerateSegments) +
                               " of zero length)");
@@ -86,7 +86,7 @@ void printReport(const std::string& file, const render::CurveReport& r) {
 void runInfo(const CurvesInfoOptions& o) {
     if (o.radiusOpt->count()) render::checkOverlapRadius(o.radius, "--radius");
     checkOutputsSpareInputs({{"FILE", o.file}}, {{"--json", o.json}});
-    const render::CurveSet set = render::readCurves(o.file);
+    const CurveSet set = readCurves(o.file);
     const render::CurveReport report =
         render::curveReport(set, o.radiusOpt->count() ? std::optional(o.radius) : std::nullopt);
     if (!o.json.empty()) {

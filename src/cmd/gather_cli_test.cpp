@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "weft/core/curve_io.h"
+#include "weft/core/curves.h"
 #include "weft/core/file.h"
 #include "weft/core/npy.h"
 #include "weft/core/test_util.h"
@@ -207,14 +207,14 @@ TEST_F(GatherCliTest, MetaJsonAndPly) {
     }
 
     // ply.txt: the 300 traced fiber centre lines, radius r = R sqrt(rho / N).
-    const CurveSet ply = readCurveText(path("out/ply.txt"));
+    const CurveSet ply = readCurves(path("out/ply.txt"));
     ASSERT_EQ(ply.curves.size(), 300u);
     const double r = std::sqrt(0.30 / 300);
     for (size_t i = 0; i < ply.curves.size(); ++i) {
-        ASSERT_GE(ply.curves[i].size(), 2u) << i;
-        ASSERT_TRUE(ply.hasRadii(i)) << i;
-        EXPECT_NEAR(ply.radii[i][0], r, 1e-6) << i;
-        for (const Vec3& p : ply.curves[i]) {
+        ASSERT_GE(ply.curves[i].points.size(), 2u) << i;
+        ASSERT_FALSE(ply.curves[i].radii.empty()) << i;
+        EXPECT_NEAR(ply.curves[i].radii[0], r, 1e-6) << i;
+        for (const Vec3& p : ply.curves[i].points) {
             EXPECT_LE(std::hypot(p.x, p.y), 1.0 - r + 1e-6) << "curve " << i;
         }
     }
@@ -359,7 +359,7 @@ TEST_F(GatherCliTest, ParamsWithExplicitPly) {
     EXPECT_DOUBLE_EQ(m.at("fiber").at("beta_tt_deg").get<double>(), 12.0);
     EXPECT_DOUBLE_EQ(m.at("fiber").at("gamma_tt_deg").get<double>(), 25.0);
     EXPECT_EQ(m.at("fiber").at("c_tt"), nlohmann::json({1.0, 1.0, 1.0}));
-    EXPECT_EQ(readCurveText(path("out/ply.txt")).curves.size(), 40u);
+    EXPECT_EQ(readCurves(path("out/ply.txt")).curves.size(), 40u);
     int64_t paths = 0;
     for (int64_t c : values<int64_t>(readNpy(path("out/count.npy")))) paths += c;
     EXPECT_EQ(paths, 3000);

@@ -4,9 +4,11 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "commands.h"
-#include "weft/core/curve_io.h"
+#include "weft/core/curves.h"
 #include "weft/core/error.h"
 #include "weft/ply/ply.h"
 #include "weft/yarn/material_preset.h"
@@ -41,9 +43,11 @@ void runPly(const PlyOptions& o) {
     }
     const PlyGeometry ply = generatePly(params, o.radius, o.length, o.seed);
     CurveSet set;
-    set.curves = ply.polylines(o.pointsPerTwist);
-    for (const auto& curve : set.curves) set.radii.emplace_back(curve.size(), ply.fiberRadius);
-    set.closed.assign(set.curves.size(), false);
+    for (std::vector<Vec3>& line : ply.polylines(o.pointsPerTwist)) {
+        Curve& fiber = set.curves.emplace_back();
+        fiber.radii.assign(line.size(), ply.fiberRadius);
+        fiber.points = std::move(line);
+    }
     if (endsWith(o.out, ".bcc")) {
         writeBcc(o.out, set, "weft ply");
     } else {

@@ -68,7 +68,7 @@ TEST_F(SceneCliTest, EveryKindWithDefaults) {
         EXPECT_TRUE(std::filesystem::path(s.yarns[0].model).is_absolute());
         ASSERT_EQ(s.lights.size(), 3u);
         EXPECT_EQ(s.lights[0].type, render::LightDesc::Type::Sky);
-        const size_t curves = render::readCurves(s.yarns[0].curves).curves.size();
+        const size_t curves = readCurves(s.yarns[0].curves).curves.size();
         // The close-up's one yarn; the 12 yarns (6 courses) in view of a patch plus
         // those around them that hide the ends.
         if (kind == "closeup") {
@@ -91,7 +91,7 @@ TEST_F(SceneCliTest, EveryKindWithDefaults) {
     EXPECT_EQ(s.film.height, 32);
     EXPECT_EQ(s.render.spp, 3);
     // The 2 courses in view, one more above and below, and any that hide the ends.
-    EXPECT_GE(render::readCurves(s.yarns[0].curves).curves.size(), 4u);
+    EXPECT_GE(readCurves(s.yarns[0].curves).curves.size(), 4u);
 }
 
 TEST_F(SceneCliTest, TwoColoursMakeTwoYarnEntries) {

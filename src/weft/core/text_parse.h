@@ -1,7 +1,7 @@
 // weft/core/text_parse.h — tokenising text inputs: line-based files (curve
 // files) and small flag values (parseColour).
 //
-// Shared by the lenient curve readers of core/curve_io.cpp and the strict ones
+// Shared by the curve readers of core/curves.cpp and the vertex colour reader
 // of render/curves.cpp. Whitespace is ' ', '\t', '\r', '\n', '\f', '\v'.
 #pragma once
 

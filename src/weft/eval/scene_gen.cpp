@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "weft/core/curve_io.h"
+#include "weft/core/curves.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/json_message.h"
@@ -65,13 +65,13 @@ std::string absolutePath(const std::string& path) {
 }
 
 // The corners of `box` grown by `pad` on every side.
-render::Bounds3 padded(render::Bounds3 box, double pad) {
+Bounds3 padded(Bounds3 box, double pad) {
     box.lo -= Vec3{pad, pad, pad};
     box.hi += Vec3{pad, pad, pad};
     return box;
 }
 
-Vec3 boxCentre(const render::Bounds3& box) { return 0.5 * (box.lo + box.hi); }
+Vec3 boxCentre(const Bounds3& box) { return 0.5 * (box.lo + box.hi); }
 
 // Sky (or envmap) plus the key and fill spheres around the camera's view.
 std::vector<render::LightDesc> paperLights(const render::CameraDesc& camera,
@@ -111,7 +111,7 @@ std::vector<render::LightDesc> paperLights(const render::CameraDesc& camera,
 // from which space-dyed colours are measured along the curve, so that the
 // pattern does not move with the margin that hides the ends.
 struct PatternedCurves {
-    render::CurveSet set;
+    CurveSet set;
     std::vector<int> group;
     std::vector<size_t> anchor;
 };
@@ -119,10 +119,10 @@ struct PatternedCurves {
 // Space-dyed colours (--dye-length): along each curve, colour 0 for
 // L = dyeLength R of arc length from the anchor, then colour 1 for L, and so
 // on both ways; a point takes the colour of the stretch it lies in.
-void spaceDye(render::CurveSet& set, const std::vector<size_t>& anchor, const SceneOptions& o) {
+void spaceDye(CurveSet& set, const std::vector<size_t>& anchor, const SceneOptions& o) {
     const double stretch = o.dyeLength * o.radius;
     for (size_t c = 0; c < set.curves.size(); ++c) {
-        render::Curve& curve = set.curves[c];
+        Curve& curve = set.curves[c];
         std::vector<double> arc(curve.points.size(), 0.0);
         for (size_t i = 1; i < arc.size(); ++i)
             arc[i] = arc[i - 1] + length(curve.points[i] - curve.points[i - 1]);
@@ -306,8 +306,8 @@ Vec3 knitPoint(const KnitGeometry& g, int row, double t) {
                           g.height * std::cos(t) + row * g.rowSpacing, g.depth * std::cos(2 * t)};
 }
 
-render::CameraDesc frameBox(const render::Bounds3& box, const Vec3& forward, double fovDeg,
-                            int width, int height, double fill) {
+render::CameraDesc frameBox(const Bounds3& box, const Vec3& forward, double fovDeg, int width,
+                            int height, double fill) {
     render::CameraDesc cam;
     cam.fovDeg = fovDeg;
     const render::ViewAxes axes = render::viewAxes(forward, cam.up);
@@ -403,7 +403,7 @@ GeneratedScene closeupScene(const SceneOptions& o) {
     const auto yarn = [&](int margin) {
         const int steps = static_cast<int>(kCloseupLengthRadii) * kCloseupSamplesPerRadius +
                           2 * margin * kCloseupSamplesPerRadius;
-        render::Curve c;
+        Curve c;
         for (int i = 0; i <= steps; ++i) {
             const double x =
                 -0.5 * len +
@@ -419,8 +419,8 @@ GeneratedScene closeupScene(const SceneOptions& o) {
         return curves;
     };
     const render::CameraDesc camera =
-        frameBox(padded(render::bounds(yarn(0).set), o.radius), kCloseupForward, kFovDeg, o.width,
-                 o.height, kCloseupFill);
+        frameBox(padded(bounds(yarn(0).set), o.radius), kCloseupForward, kFovDeg, o.width, o.height,
+                 kCloseupFill);
     return assemble(extendEndsOutOfView(yarn, camera, o), camera, o);
 }
 
@@ -440,7 +440,7 @@ GeneratedScene weaveScene(const SceneOptions& o) {
         // Warp blocks start with colour 0, weft blocks with colour 1 (a check).
         PatternedCurves curves;
         for (int j = first; j <= last; ++j) {  // warp: along x at y = j d
-            render::Curve c;
+            Curve c;
             for (int i = 0; i < samples; ++i) {
                 const double x = along(i);
                 c.points.push_back({x, j * d, parity(j) * a * std::cos(k * x)});
@@ -450,7 +450,7 @@ GeneratedScene weaveScene(const SceneOptions& o) {
             curves.anchor.push_back(static_cast<size_t>((1 - first) * kWeaveSamplesPerSpacing));
         }
         for (int i = first; i <= last; ++i) {  // weft: along y at x = i d, opposite phase
-            render::Curve c;
+            Curve c;
             for (int s = 0; s < samples; ++s) {
                 const double y = along(s);
                 c.points.push_back({i * d, y, -parity(i) * a * std::cos(k * y)});
@@ -479,7 +479,7 @@ GeneratedScene knitScene(const SceneOptions& o) {
         const int samples = loops * kKnitSamplesPerLoop + 1;
         PatternedCurves curves;
         for (int row = -margin - 1; row <= n + margin; ++row) {
-            render::Curve c;
+            Curve c;
             for (int i = 0; i < samples; ++i)
                 c.points.push_back(knitPoint(
                     g, row, kTwoPi * (static_cast<double>(i) / kKnitSamplesPerLoop - margin)));
@@ -512,8 +512,8 @@ std::string yarnCurveFile(int entry, int entryCount) {
     return entryCount == 1 ? "yarns.txt" : "yarns-" + std::to_string(entry + 1) + ".txt";
 }
 
-std::vector<render::CurveSet> entryCurves(const GeneratedScene& generated) {
-    std::vector<render::CurveSet> sets(generated.scene.yarns.size());
+std::vector<CurveSet> entryCurves(const GeneratedScene& generated) {
+    std::vector<CurveSet> sets(generated.scene.yarns.size());
     for (size_t c = 0; c < generated.curves.curves.size(); ++c)
         sets.at(generated.entryOfCurve.at(c)).curves.push_back(generated.curves.curves[c]);
     return sets;
@@ -545,7 +545,7 @@ nlohmann::json sceneSummary(const GeneratedScene& generated, SceneKind kind, con
             {"yarn_overlap", render::yarnOverlapJson(overlap)}};
 }
 
-std::string vertexColoursText(const render::CurveSet& curves) {
+std::string vertexColoursText(const CurveSet& curves) {
     std::string text;
     char line[96];
     for (size_t c = 0; c < curves.curves.size(); ++c) {
@@ -558,13 +558,12 @@ std::string vertexColoursText(const render::CurveSet& curves) {
     return text;
 }
 
-std::string curvesText(const render::CurveSet& curves) {
+std::string curvesText(const CurveSet& curves) {
+    // Points and closed flags: the colours have their own file.
     CurveSet out;
-    for (const render::Curve& c : curves.curves) {
-        out.curves.push_back(c.points);
-        out.closed.push_back(c.closed);
-    }
-    return formatCurveText(out);
+    for (const Curve& c : curves.curves)
+        out.curves.push_back({c.points, {}, c.closed, CurveBasis::Polyline, {}});
+    return formatCurveText(out, "yarns.txt");
 }
 
 void writeScene(const GeneratedScene& generated, const std::string& dir) {
@@ -585,7 +584,7 @@ void writeScene(const GeneratedScene& generated, const std::string& dir) {
         if (ec) throw InputError("cannot list output directory '" + dir + "': " + ec.message());
     }
     TempDirCommit out(dir);
-    const std::vector<render::CurveSet> sets = entryCurves(generated);
+    const std::vector<CurveSet> sets = entryCurves(generated);
     for (size_t e = 0; e < sets.size(); ++e) {
         const render::YarnDesc& yarn = generated.scene.yarns[e];
         writeFileAtomic(out.path() + "/" + yarn.curves, curvesText(sets[e]));

@@ -43,9 +43,9 @@
 #include <string>
 #include <vector>
 
+#include "weft/core/curves.h"
 #include "weft/core/rgb.h"
 #include "weft/core/vec.h"
-#include "weft/render/curves.h"
 #include "weft/render/scene_file.h"
 
 namespace weft::eval {
@@ -94,7 +94,7 @@ struct GeneratedScene {
     // (relative: the folder writeScene writes); the model and envmap paths are
     // absolute. path and baseDir are empty.
     render::SceneDesc scene;
-    render::CurveSet curves;  // every yarn centre line in scene units: open polylines
+    CurveSet curves;  // every yarn centre line in scene units: open polylines
     // The yarn entry of each curve (curves.curves.size() entries, each in
     // [0, scene.yarns.size())).
     std::vector<int> entryOfCurve;
@@ -103,7 +103,7 @@ struct GeneratedScene {
 // "yarns.txt" for a scene with one yarn entry, else "yarns-1.txt", "yarns-2.txt", ...
 std::string yarnCurveFile(int entry, int entryCount);
 // The curves of each yarn entry, in entry order (the sets writeScene writes).
-std::vector<render::CurveSet> entryCurves(const GeneratedScene& generated);
+std::vector<CurveSet> entryCurves(const GeneratedScene& generated);
 
 // Each validates `options` first.
 GeneratedScene closeupScene(const SceneOptions& options);
@@ -143,8 +143,8 @@ Vec3 knitPoint(const KnitGeometry& g, int row, double t);
 // up (0, 1, 0): the smallest D for which every corner of the box projects
 // within `fill` (0 < fill <= 1) of the film's half-width and half-height, so
 // the whole box is in view (the view frustum is convex).
-render::CameraDesc frameBox(const render::Bounds3& box, const Vec3& forward, double fovDeg,
-                            int width, int height, double fill);
+render::CameraDesc frameBox(const Bounds3& box, const Vec3& forward, double fovDeg, int width,
+                            int height, double fill);
 
 // A camera looking along `forward` (up (0, 1, 0)) at the centre of the
 // rectangle [x0, x1] x [y0, y1] of the plane z = 0, as far away as it can be
@@ -175,9 +175,9 @@ nlohmann::json sceneSummary(const GeneratedScene& generated, SceneKind kind, con
 
 // The curves' colours as a vertex colour file (docs/scene-format.md):
 // "r g b" per point (%.9g), a blank line between curves.
-std::string vertexColoursText(const render::CurveSet& curves);
+std::string vertexColoursText(const CurveSet& curves);
 
 // The curves as the text that writeScene writes ("x y z" lines, %.9g).
-std::string curvesText(const render::CurveSet& curves);
+std::string curvesText(const CurveSet& curves);
 
 }  // namespace weft::eval

@@ -63,7 +63,7 @@ double segmentDistance(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec
 }
 
 // Smallest distance between two different polylines (every segment pair).
-double curveDistance(const render::Curve& a, const render::Curve& b) {
+double curveDistance(const Curve& a, const Curve& b) {
     double best = std::numeric_limits<double>::infinity();
     for (size_t i = 0; i + 1 < a.points.size(); ++i)
         for (size_t j = 0; j + 1 < b.points.size(); ++j)
@@ -72,7 +72,7 @@ double curveDistance(const render::Curve& a, const render::Curve& b) {
     return best;
 }
 
-double minDistanceBetweenCurves(const render::CurveSet& set) {
+double minDistanceBetweenCurves(const CurveSet& set) {
     double best = std::numeric_limits<double>::infinity();
     for (size_t i = 0; i < set.curves.size(); ++i)
         for (size_t j = i + 1; j < set.curves.size(); ++j)
@@ -84,7 +84,7 @@ double minDistanceBetweenCurves(const render::CurveSet& set) {
 // apart along it (a tube of radius R is free of self-intersection when this
 // is >= 2 R for gap = pi R: the chord of an arc of length pi R bent at
 // curvature radius rho >= R is >= 2 R).
-double selfDistance(const render::Curve& c, double gap) {
+double selfDistance(const Curve& c, double gap) {
     std::vector<double> arc(c.points.size(), 0.0);
     for (size_t i = 1; i < c.points.size(); ++i)
         arc[i] = arc[i - 1] + length(c.points[i] - c.points[i - 1]);
@@ -97,9 +97,9 @@ double selfDistance(const render::Curve& c, double gap) {
     return best;
 }
 
-double minSelfDistance(const render::CurveSet& set, double gap) {
+double minSelfDistance(const CurveSet& set, double gap) {
     double best = std::numeric_limits<double>::infinity();
-    for (const render::Curve& c : set.curves) best = std::min(best, selfDistance(c, gap));
+    for (const Curve& c : set.curves) best = std::min(best, selfDistance(c, gap));
     return best;
 }
 
@@ -130,7 +130,7 @@ void expectProjectionMatchesCamera(const GeneratedScene& g) {
     const render::SceneDesc& s = g.scene;
     const render::Camera camera(s.camera, s.film.width, s.film.height);
     int checked = 0;
-    for (const render::Curve& c : g.curves.curves)
+    for (const Curve& c : g.curves.curves)
         for (const Vec3& p : c.points) {
             const FilmPoint fp = project(s.camera, s.film.width, s.film.height, p);
             if (fp.depth <= 0 || fp.px < 0 || fp.px > s.film.width || fp.py < 0 ||
@@ -148,7 +148,7 @@ void expectProjectionMatchesCamera(const GeneratedScene& g) {
 void expectEndsOutOfView(const GeneratedScene& g) {
     const render::SceneDesc& s = g.scene;
     const double radius = *s.yarns[0].radius;
-    for (const render::Curve& c : g.curves.curves)
+    for (const Curve& c : g.curves.curves)
         for (const Vec3& end : {c.points.front(), c.points.back()})
             for (int i = 0; i <= 12; ++i)
                 for (int j = 0; j < 24; ++j) {
@@ -243,8 +243,8 @@ TEST(SceneGen, KnitCoursesDoNotIntersect) {
     EXPECT_LE(between, 1.05 * twoR);  // neighbouring courses touch (within 5%)
     EXPECT_GE(self, twoR);
     // Courses interlock: each overlaps its neighbour in y by more than 2 R.
-    const render::Bounds3 b0 = render::bounds({{g.curves.curves[0]}});
-    const render::Bounds3 b1 = render::bounds({{g.curves.curves[1]}});
+    const Bounds3 b0 = bounds({{g.curves.curves[0]}});
+    const Bounds3 b1 = bounds({{g.curves.curves[1]}});
     EXPECT_GT(b0.hi.y - b1.lo.y, twoR);
 }
 
@@ -322,7 +322,7 @@ TEST(SceneGen, OutOfViewIsTheWholeBall) {
 
 TEST(SceneGen, FrameBoxIsTight) {
     // A flat square seen head-on touches the frame on all four sides.
-    render::Bounds3 box;
+    Bounds3 box;
     box.extend({-1, -1, 0});
     box.extend({1, 1, 0});
     const render::CameraDesc cam = frameBox(box, {0, 0, -1}, 30, 100, 100, 1.0);
@@ -392,7 +392,7 @@ TEST_F(SceneGenFiles, WrittenFilesReadBack) {
         EXPECT_EQ(s.yarns[0].plyTwist, -0.5);
         EXPECT_EQ(s.lights.size(), 3u);
 
-        const render::CurveSet read = render::readCurves(s.yarns[0].curves);
+        const CurveSet read = readCurves(s.yarns[0].curves);
         ASSERT_EQ(read.curves.size(), g.curves.curves.size());
         for (size_t c = 0; c < read.curves.size(); ++c) {
             ASSERT_EQ(read.curves[c].points.size(), g.curves.curves[c].points.size());
@@ -430,7 +430,7 @@ TEST_F(SceneGenFiles, Deterministic) {
 TEST_F(SceneGenFiles, ReplacesAnEarlierSceneOnly) {
     writeScene(weaveScene(options(2)), path("out"));
     writeScene(knitScene(options(2)), path("out"));  // an earlier scene is replaced
-    EXPECT_EQ(render::readCurves(path("out/yarns.txt")).curves.size(),
+    EXPECT_EQ(readCurves(path("out/yarns.txt")).curves.size(),
               knitScene(options(2)).curves.curves.size());
     EXPECT_NE(knitScene(options(2)).curves.curves.size(),
               weaveScene(options(2)).curves.curves.size());
@@ -610,7 +610,7 @@ TEST(SceneGen, SpaceDyedYarnsAlternateEveryDyeLengthAlongTheCurve) {
         EXPECT_FALSE(g.scene.yarns[0].colour);
         EXPECT_EQ(g.scene.yarns[0].vertexColours, "colours.txt");
         const double stretch = 5 * o.radius;
-        for (const render::Curve& c : g.curves.curves) {
+        for (const Curve& c : g.curves.curves) {
             ASSERT_EQ(c.colours.size(), c.points.size());
             // Runs of one colour, alternating; every run but the first and
             // the last spans the dye length to within one point spacing.
@@ -641,8 +641,8 @@ TEST(SceneGen, SpaceDyedYarnsAlternateEveryDyeLengthAlongTheCurve) {
     const GeneratedScene wide = knitScene(o);
     // Courses that are the same row in both have the same colours where their points meet.
     size_t matched = 0;
-    for (const render::Curve& c0 : square.curves.curves)
-        for (const render::Curve& c1 : wide.curves.curves)
+    for (const Curve& c0 : square.curves.curves)
+        for (const Curve& c1 : wide.curves.curves)
             for (size_t i = 0; i < c0.points.size(); i += 7)
                 for (size_t j = 0; j < c1.points.size(); ++j)
                     if (length(c0.points[i] - c1.points[j]) < 1e-12) {
@@ -674,7 +674,7 @@ TEST_F(SceneGenFiles, TwoColourFilesReadBackAsTwoEntries) {
     size_t total = 0;
     for (int e = 0; e < 2; ++e) {
         EXPECT_EQ(*s.yarns[e].colour, o.colours[e]);
-        const render::CurveSet read = render::readCurves(s.yarns[e].curves);
+        const CurveSet read = readCurves(s.yarns[e].curves);
         EXPECT_EQ(read.curves.size(),
                   static_cast<size_t>(std::count(g.entryOfCurve.begin(), g.entryOfCurve.end(), e)));
         total += read.curves.size();
@@ -688,7 +688,7 @@ TEST_F(SceneGenFiles, TwoColourFilesReadBackAsTwoEntries) {
     writeScene(dyed, path("out"));
     const render::SceneDesc d = render::loadScene(path("out/scene.json"));
     ASSERT_EQ(d.yarns.size(), 1u);
-    render::CurveSet read = render::readCurves(d.yarns[0].curves);
+    CurveSet read = readCurves(d.yarns[0].curves);
     render::readVertexColours(d.yarns[0].vertexColours, &read);
     ASSERT_EQ(read.curves.size(), 1u);
     EXPECT_EQ(read.curves[0].colours, dyed.curves.curves[0].colours);

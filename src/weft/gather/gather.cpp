@@ -14,7 +14,7 @@
 #include <optional>
 #include <sstream>
 
-#include "weft/core/curve_io.h"
+#include "weft/core/curves.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/json_reader.h"
@@ -359,9 +359,11 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
 void writePlyLines(const std::string& path, const std::vector<std::vector<Vec3>>& lines,
                    double fiberRadius) {
     CurveSet set;
-    set.curves = lines;
-    for (const auto& c : set.curves) set.radii.emplace_back(c.size(), fiberRadius);
-    set.closed.assign(set.curves.size(), false);
+    for (const std::vector<Vec3>& line : lines) {
+        Curve& fiber = set.curves.emplace_back();
+        fiber.points = line;
+        fiber.radii.assign(line.size(), fiberRadius);
+    }
     writeCurveText(path, set);
 }
 

@@ -185,7 +185,7 @@ class TempDirCommit;
 // unwritable destination fails at once.
 void writeGather(const GatherResult& result, const GatherOptions& options, TempDirCommit& out,
                  const nlohmann::json& extraMeta = nlohmann::json::object());
-// ply.txt: the traced fiber centre lines as a curve file (core/curve_io.h).
+// ply.txt: the traced fiber centre lines as a curve file (core/curves.h).
 void writePlyLines(const std::string& path, const std::vector<std::vector<Vec3>>& lines,
                    double fiberRadius);
 // The content of meta.json: inputs, bins, statistics, versions, array descriptions.

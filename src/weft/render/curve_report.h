@@ -62,8 +62,8 @@
 #include <string>
 #include <vector>
 
+#include "weft/core/curves.h"
 #include "weft/core/vec.h"
-#include "weft/render/curves.h"
 
 namespace weft::render {
 

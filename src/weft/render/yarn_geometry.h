@@ -61,10 +61,10 @@
 #include <string>
 #include <vector>
 
+#include "weft/core/curves.h"
 #include "weft/core/rgb.h"
 #include "weft/core/vec.h"
 #include "weft/ply/ply.h"
-#include "weft/render/curves.h"
 
 namespace weft::render {
 

@@ -715,13 +715,15 @@ py::array_t<float> imageArray(const Image& image) {
     return pixels;
 }
 
-py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, const py::object& spp,
+py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const py::object& spp,
                    const py::object& seconds, int threads, const py::object& seed, bool nee,
                    const std::string& yarnSampling, const py::object& sampler,
                    const py::object& baseDir, const py::object& shard, bool quiet) {
-    const render::RenderMode mode = render::parseRenderMode(modeName, "mode");
-    YarnBsdfOptions yarnOptions;
-    yarnOptions.sampling = parseYarnSampling(yarnSampling, "yarn_sampling");
+    render::SceneOptions sceneOptions;
+    if (!modeName.is_none())
+        sceneOptions.mode = render::yarnModeNamed(modeName.cast<std::string>(), "mode").name();
+    sceneOptions.quiet = quiet;
+    sceneOptions.yarn.sampling = parseYarnSampling(yarnSampling, "yarn_sampling");
     render::SceneDesc desc;
     py::object sceneFile = py::none();
     if (py::isinstance<py::dict>(sceneArg)) {
@@ -759,7 +761,7 @@ py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, cons
     {
         py::gil_scoped_release release;
         hash = render::sceneHash(desc);
-        const render::Scene scene(desc, mode, quiet, yarnOptions);
+        const render::Scene scene(desc, sceneOptions);
         result = render::render(scene, options);
     }
     // The overlap warnings of `weft render`, as Python warnings (filterable).
@@ -772,7 +774,7 @@ py::tuple pyRender(const py::object& sceneArg, const std::string& modeName, cons
     json stats = render::toJson(result->stats);
     stats["scene_hash"] = hash;
     stats["next_event_estimation"] = nee;
-    stats["yarn_sampling"] = yarnSamplingName(yarnOptions.sampling);
+    stats["yarn_sampling"] = yarnSamplingName(sceneOptions.yarn.sampling);
     stats["max_depth"] = options.maxDepth;
     stats["version"] = WEFT_VERSION;
     py::dict statsDict = pyFromJson(stats).cast<py::dict>();
@@ -1077,14 +1079,16 @@ PYBIND11_MODULE(weft, m) {
           "colours make a striped knit or a check weave (stripe yarns per stripe, default 2), or with "
           "dye_length=L space-dyed yarns (the colour alternating every L yarn radii).");
 
-    m.def("render", &pyRender, py::arg("scene"), py::kw_only(), py::arg("mode") = "neural",
+    m.def("render", &pyRender, py::arg("scene"), py::kw_only(), py::arg("mode") = py::none(),
           py::arg("spp") = py::none(), py::arg("seconds") = py::none(), py::arg("threads") = 0,
           py::arg("seed") = py::none(), py::arg("nee") = true, py::arg("yarn_sampling") = "tabulated",
           py::arg("sampler") = py::none(), py::arg("base_dir") = py::none(),
           py::arg("shard") = py::none(),
           py::arg("quiet") = true,
           "`weft render`: a scene file or dict to an (H,W,3) float32 linear RGB image and the "
-          "statistics dict; shard=(k, n) traces only shard k of n of the spp samples.");
+          "statistics dict; mode (\"neural\", \"fiber\" or \"dual\") draws every yarn so, "
+          "over the yarns' own \"mode\" (None: each yarn's, neural where it names none); "
+          "shard=(k, n) traces only shard k of n of the spp samples.");
 
     m.def("render_merge", &renderMerge, py::arg("parts"),
           "`weft render merge`: the sample-weighted mean of the PART.exr files (PART.json "

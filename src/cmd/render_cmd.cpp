@@ -1,4 +1,4 @@
-// weft render: a cloth scene to an image, in neural, fiber or dual mode (docs/render.md).
+// weft render: a cloth scene to an image, its yarns in neural, fiber or dual mode (docs/render.md).
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -20,7 +20,7 @@ namespace weft::cmd {
 namespace {
 
 struct RenderCmdOptions {
-    std::string scene, mode = "neural", out, yarnSampling = "tabulated", shard, sampler;
+    std::string scene, mode, out, yarnSampling = "tabulated", shard, sampler;
     int spp = 0, threads = 0;
     double seconds = 0, exposure = 0;
     uint64_t seed = 0;
@@ -67,9 +67,10 @@ void runRender(const RenderCmdOptions& o) {
                          "PART.exr... --out IMAGE.exr)");
     const std::string stem = outputStem(o.out);
     checkExposure(o.exposure);
-    const render::RenderMode mode = render::parseRenderMode(o.mode);
-    YarnBsdfOptions yarnOptions;
-    yarnOptions.sampling = parseYarnSampling(o.yarnSampling, "--yarn-sampling");
+    render::SceneOptions sceneOptions;
+    if (!o.mode.empty()) sceneOptions.mode = render::yarnModeNamed(o.mode).name();
+    sceneOptions.quiet = o.quiet;
+    sceneOptions.yarn.sampling = parseYarnSampling(o.yarnSampling, "--yarn-sampling");
     const render::SceneDesc desc = render::loadScene(o.scene);
     checkOutputsSpareInputs(render::sceneInputs(desc, o.scene),
                             {{"--out", o.out},
@@ -92,7 +93,7 @@ void runRender(const RenderCmdOptions& o) {
     options.validate();
 
     const std::string hash = render::sceneHash(desc);
-    const render::Scene scene(desc, mode, o.quiet, yarnOptions);
+    const render::Scene scene(desc, sceneOptions);
     if (!o.quiet)
         for (const std::string& w :
              render::yarnOverlapWarnings(desc.path, scene.stats().yarnOverlap))
@@ -103,7 +104,7 @@ void runRender(const RenderCmdOptions& o) {
     stats["scene_file"] = o.scene;
     stats["scene_hash"] = hash;
     stats["next_event_estimation"] = !o.noNee;
-    stats["yarn_sampling"] = yarnSamplingName(yarnOptions.sampling);
+    stats["yarn_sampling"] = yarnSamplingName(sceneOptions.yarn.sampling);
     stats["max_depth"] = options.maxDepth;
     stats["version"] = WEFT_VERSION;
     if (const std::string w = render::truncationWarning(result.stats, options.maxDepth); !w.empty())
@@ -145,10 +146,11 @@ void addRenderCommand(CLI::App& app) {
         "IMAGE.png and IMAGE.json (statistics).");
     cmd->add_option("scene", o->scene, "Scene file (JSON; required)");
     cmd->add_option("--mode", o->mode,
-                    "neural: plies as curves with the yarn BSDF; fiber: every fiber drawn "
-                    "(ground truth); dual: plies as curves with the dual-scattering baseline "
-                    "(after ZMA23, docs/dual-scattering.md), from the model's fiber and ply")
-        ->capture_default_str();
+                    "Draw every yarn this way, over the yarns' own \"mode\" (default: each "
+                    "yarn's, neural where it names none). neural: plies as curves with the yarn "
+                    "BSDF; fiber: every fiber drawn (ground truth); dual: plies as curves with the "
+                    "dual-scattering baseline (after ZMA23, docs/dual-scattering.md), from the "
+                    "model's fiber and ply");
     cmd->add_option("--yarn-sampling", o->yarnSampling,
                     "Neural mode: how the yarn BSDF samples directions: tabulated (in "
                     "proportion to the model, from tables built at load), fitted (the paper's "

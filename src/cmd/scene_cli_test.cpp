@@ -67,7 +67,7 @@ TEST_F(SceneCliTest, EveryKindWithDefaults) {
         EXPECT_EQ(s.yarns[0].plyTwist, 0.3);
         EXPECT_TRUE(std::filesystem::path(s.yarns[0].model).is_absolute());
         ASSERT_EQ(s.lights.size(), 3u);
-        EXPECT_EQ(s.lights[0].type, render::LightDesc::Type::Sky);
+        EXPECT_STREQ(s.lights[0]->type(), "sky");
         const size_t curves = readCurves(s.yarns[0].curves).curves.size();
         // The close-up's one yarn; the 12 yarns (6 courses) in view of a patch plus
         // those around them that hide the ends.

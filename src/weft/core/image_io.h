@@ -1,6 +1,6 @@
 // weft/core/image_io.h — reading and writing the HDR image files.
 //
-// The one home of linear image files: envmaps (render/lights.h) and the
+// The one home of linear image files: envmaps (render/environment_light.h) and the
 // images compared and laid out by eval/ are read here, and renders written
 // here. PNG, an 8-bit display format, is written by writePng (image.h, which
 // this header includes) and read by decodePng / readImageOrPng (figures and

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 #include <stdexcept>
 #include <utility>
 
@@ -28,7 +29,7 @@ std::string counted(size_t n, std::string_view noun) {
 }
 
 // "\"a\", \"b\"" (quoted) or "a, b" (as is).
-std::string joined(std::initializer_list<std::string_view> names, bool quoted) {
+std::string joined(std::span<const std::string_view> names, bool quoted) {
     std::string out;
     for (std::string_view n : names)
         out += (out.empty() ? "" : ", ") + (quoted ? jsonString(n) : std::string(n));
@@ -157,8 +158,8 @@ void JsonObjectReader::allowKeys(std::initializer_list<std::string_view> allowed
     keysChecked_ = true;
     for (const auto& item : object_->items())
         if (std::find(allowed_.begin(), allowed_.end(), item.key()) == allowed_.end())
-            fail("unknown key " + jsonString(item.key()) + " (allowed: " + joined(allowed, false) +
-                 ")");
+            fail("unknown key " + jsonString(item.key()) + " (allowed: " +
+                 joined({allowed.begin(), allowed.size()}, false) + ")");
 }
 
 void JsonObjectReader::checkDeclared(std::string_view key) const {
@@ -281,11 +282,16 @@ std::string JsonObjectReader::string(std::string_view key) const {
 
 size_t JsonObjectReader::oneOf(std::string_view key,
                                std::initializer_list<std::string_view> allowed) const {
+    return oneOf(key, std::span<const std::string_view>(allowed.begin(), allowed.size()));
+}
+
+size_t JsonObjectReader::oneOf(std::string_view key,
+                               std::span<const std::string_view> allowed) const {
     const json& v = value(key);
     if (v.is_string()) {
         const std::string& s = v.get_ref<const std::string&>();
         for (size_t i = 0; i < allowed.size(); ++i)
-            if (s == allowed.begin()[i]) return i;
+            if (s == allowed[i]) return i;
     }
     fail(key, std::string(allowed.size() == 1 ? "expected " : "expected one of ") +
                   joined(allowed, true) + ", got " + describeJson(v));

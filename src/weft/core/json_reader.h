@@ -20,6 +20,7 @@
 #include <initializer_list>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -118,6 +119,7 @@ class JsonObjectReader {
     std::string string(std::string_view key) const;
     // A string among `allowed`; returns its index.
     size_t oneOf(std::string_view key, std::initializer_list<std::string_view> allowed) const;
+    size_t oneOf(std::string_view key, std::span<const std::string_view> allowed) const;
     // An array of exactly `count` finite numbers in `range`; `what` names the
     // elements in messages ("(r, g, b)").
     std::vector<double> numbers(std::string_view key, size_t count, const NumberRange& range = {},

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
@@ -17,8 +18,9 @@
 #include "weft/core/json_message.h"
 #include "weft/core/math.h"
 #include "weft/render/camera.h"
-#include "weft/render/lights.h"
+#include "weft/render/environment_light.h"
 #include "weft/render/scene.h"
+#include "weft/render/sphere_light.h"
 #include "weft/yarn/yarn_model.h"
 
 namespace weft::eval {
@@ -74,30 +76,26 @@ Bounds3 padded(Bounds3 box, double pad) {
 Vec3 boxCentre(const Bounds3& box) { return 0.5 * (box.lo + box.hi); }
 
 // Sky (or envmap) plus the key and fill spheres around the camera's view.
-std::vector<render::LightDesc> paperLights(const render::CameraDesc& camera,
-                                           const std::string& envmap) {
-    std::vector<render::LightDesc> lights;
-    render::LightDesc env;
+std::vector<std::shared_ptr<const render::LightDesc>> paperLights(
+    const render::CameraDesc& camera, const std::string& envmap) {
+    std::vector<std::shared_ptr<const render::LightDesc>> lights;
     if (envmap.empty()) {
-        env.type = render::LightDesc::Type::Sky;
+        lights.push_back(std::make_shared<render::SkyLightDesc>());
     } else {
-        env.type = render::LightDesc::Type::Envmap;
-        env.file = absolutePath(envmap);
+        auto env = std::make_shared<render::EnvmapLightDesc>();
+        env->file = absolutePath(envmap);
+        lights.push_back(env);
     }
-    lights.push_back(env);
 
     const Vec3 toCentre = camera.to - camera.from;
     const double distance = length(toCentre);
     const render::ViewAxes axes = render::viewAxes(toCentre, camera.up);
     const Vec3 &forward = axes.forward, &right = axes.right, &up = axes.up;
     const auto sphere = [&](double side, const Rgb& radiance) {
-        render::LightDesc l;
-        l.type = render::LightDesc::Type::Sphere;
-        l.center = camera.to +
-                   distance * normalize(side * kLightSide * (right + up) - kLightFront * forward);
-        l.radius = kLightRadius * distance;
-        l.radiance = radiance;
-        return l;
+        return std::make_shared<render::SphereLightDesc>(
+            camera.to +
+                distance * normalize(side * kLightSide * (right + up) - kLightFront * forward),
+            kLightRadius * distance, radiance);
     };
     lights.push_back(sphere(+1, kKeyRadiance));
     lights.push_back(sphere(-1, kFillRadiance));

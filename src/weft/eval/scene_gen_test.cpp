@@ -17,7 +17,9 @@
 #include "weft/core/file.h"
 #include "weft/core/math.h"
 #include "weft/core/test_util.h"
+#include "weft/render/environment_light.h"
 #include "weft/render/scene.h"
+#include "weft/render/sphere_light.h"
 
 namespace weft::eval {
 namespace {
@@ -336,11 +338,11 @@ TEST(SceneGen, LightsAreTheSkyAndTwoSpheresOutOfView) {
     const GeneratedScene g = weaveScene(options(3));
     const render::SceneDesc& s = g.scene;
     ASSERT_EQ(s.lights.size(), 3u);
-    EXPECT_EQ(s.lights[0].type, render::LightDesc::Type::Sky);
+    EXPECT_STREQ(s.lights[0]->type(), "sky");
     const double distance = length(s.camera.to - s.camera.from);
     for (int i : {1, 2}) {
-        const render::LightDesc& l = s.lights[i];
-        ASSERT_EQ(l.type, render::LightDesc::Type::Sphere);
+        ASSERT_STREQ(s.lights[i]->type(), "sphere");
+        const auto& l = s.lights[i]->as<render::SphereLightDesc>();
         // Bright enough for highlights: brighter than the sky (order 1).
         EXPECT_GT(l.radiance.maxComponent(), 10);
         // Neither encloses the camera nor any yarn.
@@ -351,13 +353,15 @@ TEST(SceneGen, LightsAreTheSkyAndTwoSpheresOutOfView) {
         EXPECT_TRUE(fp.depth < 0 || fp.px < 0 || fp.px > 512 || fp.py < 0 || fp.py > 512);
     }
     // Key top-right, fill bottom-left of the view.
-    const FilmPoint key = project(s.camera, 512, 512, s.lights[1].center);
-    const FilmPoint fill = project(s.camera, 512, 512, s.lights[2].center);
+    const auto& keyLight = s.lights[1]->as<render::SphereLightDesc>();
+    const auto& fillLight = s.lights[2]->as<render::SphereLightDesc>();
+    const FilmPoint key = project(s.camera, 512, 512, keyLight.center);
+    const FilmPoint fill = project(s.camera, 512, 512, fillLight.center);
     EXPECT_GT(key.px, 512);
     EXPECT_LT(key.py, 0);
     EXPECT_LT(fill.px, 0);
     EXPECT_GT(fill.py, 512);
-    EXPECT_GT(s.lights[1].radiance.average(), s.lights[2].radiance.average());
+    EXPECT_GT(keyLight.radiance.average(), fillLight.radiance.average());
 }
 
 class SceneGenFiles : public testing::TempDirTest {};
@@ -453,8 +457,8 @@ TEST_F(SceneGenFiles, EnvmapReplacesTheSky) {
     o.envmap = path("studio.HDR");
     const GeneratedScene g = knitScene(o);
     ASSERT_EQ(g.scene.lights.size(), 3u);
-    EXPECT_EQ(g.scene.lights[0].type, render::LightDesc::Type::Envmap);
-    EXPECT_EQ(g.scene.lights[0].file, path("studio.HDR"));
+    EXPECT_STREQ(g.scene.lights[0]->type(), "envmap");
+    EXPECT_EQ(g.scene.lights[0]->as<render::EnvmapLightDesc>().file, path("studio.HDR"));
     o.envmap = path("missing.exr");
     expectInputError([&] { knitScene(o); }, {"--envmap", "missing.exr"});
     // The map is loaded as the renderer will load it: a header alone fails now.

@@ -1,4 +1,6 @@
-#include "weft/render/lights.h"
+#include "weft/render/constant_light.h"
+#include "weft/render/environment_light.h"
+#include "weft/render/sphere_light.h"
 
 #include <gtest/gtest.h>
 

@@ -78,6 +78,13 @@ class RenderTest : public weft::testing::TempDirTest {
     }
 };
 
+// Every yarn drawn in `mode` (yarn_mode.h), quietly.
+SceneOptions inMode(const std::string& mode) {
+    SceneOptions options;
+    options.mode = mode;
+    return options;
+}
+
 struct Estimate {
     double mean = 0, standardError = 0;
 };
@@ -123,7 +130,7 @@ TEST_F(RenderTest, WhiteFurnaceOfLosslessFibers) {
     // scattering), with next-event estimation on and off.
     const SceneDesc desc =
         scene(writeLosslessModel(), R"([{"type": "constant", "radiance": [1, 1, 1]}])");
-    const Scene s(desc, RenderMode::Fiber);
+    const Scene s(desc, inMode("fiber"));
     const auto rays = raysOnYarn(s, 6);
     ASSERT_EQ(rays.size(), 6u);
     for (const SamplerKind sampler : {SamplerKind::Independent, SamplerKind::Sobol}) {
@@ -191,7 +198,7 @@ TEST_F(RenderTest, PathsCutAtMaxDepthAreCountedAndAreTheMissingLight) {
     // the counter is checked against the light it says is missing.
     const SceneDesc desc =
         scene(writeLosslessModel(), R"([{"type": "constant", "radiance": [1, 1, 1]}])");
-    const Scene s(desc, RenderMode::Fiber);
+    const Scene s(desc, inMode("fiber"));
     RenderOptions options;
     options.spp = 64;
     options.quiet = true;
@@ -234,16 +241,16 @@ TEST_F(RenderTest, NextEventEstimationAgreesWithBsdfSamplingOnly) {
                                      "radiance": [4, 3, 2]},
                                     {"type": "constant", "radiance": [0.2, 0.25, 0.3]}])";
     // The sobol sampler (sample_stream.h) in neural mode as well.
-    const std::pair<RenderMode, SamplerKind> cases[] = {
-        {RenderMode::Neural, SamplerKind::Independent},
-        {RenderMode::Fiber, SamplerKind::Independent},
-        {RenderMode::Dual, SamplerKind::Independent},
-        {RenderMode::Neural, SamplerKind::Sobol}};
+    const std::pair<std::string, SamplerKind> cases[] = {
+        {"neural", SamplerKind::Independent},
+        {"fiber", SamplerKind::Independent},
+        {"dual", SamplerKind::Independent},
+        {"neural", SamplerKind::Sobol}};
     for (const auto& [mode, sampler] : cases) {
-        const Scene s(scene(kFleece, lights), mode);
+        const Scene s(scene(kFleece, lights), inMode(mode));
         const auto rays = raysOnYarn(s, 5);
         ASSERT_EQ(rays.size(), 5u);
-        const int samples = static_cast<int>(scaled(mode == RenderMode::Fiber ? 6000 : 20000));
+        const int samples = static_cast<int>(scaled(mode == "fiber" ? 6000 : 20000));
         for (size_t r = 0; r < rays.size(); ++r) {
             const Estimate a =
                 estimate(s, rays[r].first, rays[r].second, samples, true, r, sampler);
@@ -252,7 +259,7 @@ TEST_F(RenderTest, NextEventEstimationAgreesWithBsdfSamplingOnly) {
             const double se =
                 std::sqrt(a.standardError * a.standardError + b.standardError * b.standardError);
             EXPECT_NEAR(a.mean, b.mean, 4.5 * se + 1e-4)
-                << renderModeName(mode) << " " << samplerKindName(sampler) << " ray " << r
+                << mode << " " << samplerKindName(sampler) << " ray " << r
                 << ": NEE " << a.mean << " +- " << a.standardError << ", BSDF only " << b.mean
                 << " +- " << b.standardError;
             // NEE + MIS should not be noisier than BSDF sampling alone here,
@@ -261,7 +268,7 @@ TEST_F(RenderTest, NextEventEstimationAgreesWithBsdfSamplingOnly) {
             // paths that cross the ply by T).
             EXPECT_LT(a.standardError,
                       std::max(1.5 * b.standardError, 0.3 * a.mean / std::sqrt(samples)))
-                << renderModeName(mode) << " ray " << r;
+                << mode << " ray " << r;
             EXPECT_GT(a.mean, 0.0);
         }
     }
@@ -277,7 +284,7 @@ TEST_F(RenderTest, NextEventEstimationAgreesWithBsdfSamplingOnly) {
 TEST_F(RenderTest, NearWhiteYarnVarianceFallsAsOneOverSpp) {
     const std::string cotton = std::string(WEFT_SOURCE_DIR) + "/models/cotton.json";
     const std::string lights = R"([{"type": "constant", "radiance": [1, 1, 1]}])";
-    const Scene s(scene(cotton, lights), RenderMode::Neural, true);
+    const Scene s(scene(cotton, lights), inMode("neural"));
     const auto rays = raysOnYarn(s, 3);
     ASSERT_EQ(rays.size(), 3u);
     const int repeats = static_cast<int>(scaled(240)), n = 4;
@@ -330,7 +337,7 @@ TEST_F(RenderTest, CameraSeesTheEnvironmentMapAlongEachPixelsRay) {
         "film": {"width": 48, "height": 32},
         "lights": [{"type": "envmap", "file": "map.exr"}]
     })";
-    const Scene s(parseSceneText(text, path("scene.json"), dir_.string()), RenderMode::Neural);
+    const Scene s(parseSceneText(text, path("scene.json"), dir_.string()), inMode("neural"));
     RenderOptions options;
     options.spp = 4;
     options.quiet = true;
@@ -367,8 +374,8 @@ TEST_F(RenderTest, ImagesAreFiniteAndDoNotDependOnTheThreadCount) {
     const std::string lights = R"([{"type": "sky"},
                                     {"type": "sphere", "center": [0.5, 0.5, 0.5], "radius": 0.1,
                                      "radiance": [20, 20, 20]}])";
-    for (const RenderMode mode : {RenderMode::Neural, RenderMode::Fiber, RenderMode::Dual}) {
-        const Scene s(scene(kFleece, lights, 10, 8), mode);
+    for (const std::string mode : {"neural", "fiber", "dual"}) {
+        const Scene s(scene(kFleece, lights, 10, 8), inMode(mode));
         RenderOptions options;
         options.spp = 3;
         options.seed = 5;
@@ -377,18 +384,18 @@ TEST_F(RenderTest, ImagesAreFiniteAndDoNotDependOnTheThreadCount) {
         options.threads = 1;
         const RenderResult oneSobol = render(s, options);
         options.threads = 2;
-        EXPECT_EQ(render(s, options).image.pixels, oneSobol.image.pixels) << renderModeName(mode);
+        EXPECT_EQ(render(s, options).image.pixels, oneSobol.image.pixels) << mode;
         options.sampler = SamplerKind::Independent;
         options.threads = 1;
         const RenderResult one = render(s, options);
         options.threads = 2;
         const RenderResult two = render(s, options);
-        EXPECT_EQ(one.image.pixels, two.image.pixels) << renderModeName(mode);
-        EXPECT_NE(one.image.pixels, oneSobol.image.pixels) << renderModeName(mode);
+        EXPECT_EQ(one.image.pixels, two.image.pixels) << mode;
+        EXPECT_NE(one.image.pixels, oneSobol.image.pixels) << mode;
         EXPECT_EQ(one.stats.nonFiniteSamples, 0);
         double total = 0;
         for (float v : one.image.pixels) {
-            ASSERT_TRUE(std::isfinite(v)) << renderModeName(mode);
+            ASSERT_TRUE(std::isfinite(v)) << mode;
             ASSERT_GE(v, 0.0f);
             total += v;
         }
@@ -399,11 +406,76 @@ TEST_F(RenderTest, ImagesAreFiniteAndDoNotDependOnTheThreadCount) {
         // Neural: 3 plies on the open curve; on the closed loop the rounded
         // ply twist (11 thirds of a turn) joins the 3 plies into one closed
         // ply of three loops (yarn_geometry.h); dual the same. Fiber: 300 fibers per ply.
-        EXPECT_EQ(one.stats.scene.tubes, mode == RenderMode::Fiber ? 1200 : 4);
+        EXPECT_EQ(one.stats.scene.tubes, mode == "fiber" ? 1200 : 4);
         EXPECT_GT(one.stats.scene.embreeBytes, 0);
         // A different seed gives a different image.
         options.seed = 6;
         EXPECT_NE(render(s, options).image.pixels, one.image.pixels);
+    }
+}
+
+// One scene, two yarns in different drawing modes (yarn_mode.h): the left
+// yarn drawn as fibers, the right one as neural plies. Each yarn must look as
+// it does in a scene drawn wholly in its own mode: a pixel's path that never
+// reaches the other yarn traces exactly the same rays and BSDFs (the same
+// random numbers per pixel, the same fibers, seeded by the yarn's place), so
+// most pixels of each yarn equal the single-mode render bit for bit, and none
+// equals the other mode's. --mode (SceneOptions::mode) still overrides both.
+TEST_F(RenderTest, OneSceneMixesDrawingModesPerYarn) {
+    writeFileAtomic(path("left.txt"), "-0.2 -0.5 0\n-0.2 0.5 0\n");
+    writeFileAtomic(path("right.txt"), "0.2 -0.5 0\n0.2 0.5 0\n");
+    const auto sceneWith = [&](const std::string& left, const std::string& right) {
+        const auto yarn = [&](const std::string& curves, const std::string& mode) {
+            return R"({"curves": ")" + curves +
+                   R"(", "radius": 0.08, "plies": 3, "ply_twist": 0.3, "model": ")" + kFleece +
+                   R"(")" + (mode.empty() ? "" : R"(, "mode": ")" + mode + "\"") + "}";
+        };
+        return parseSceneText(R"({
+            "camera": {"from": [0, 0, 2], "to": [0, 0, 0], "fov_deg": 20},
+            "film": {"width": 32, "height": 16},
+            "lights": [{"type": "constant", "radiance": [1, 1, 1]}],
+            "yarns": [)" + yarn("left.txt", left) + ", " +
+                                  yarn("right.txt", right) + "]}",
+                              path("scene.json"), dir_.string());
+    };
+    const Scene mixed(sceneWith("fiber", ""));
+    EXPECT_EQ(mixed.modeName(), "mixed");
+    EXPECT_EQ(mixed.stats().materials, 2);
+    EXPECT_EQ(mixed.stats().tubes, 3 * 300 + 3);  // fleece-small: 300 fibers per ply
+    const Scene fiber(sceneWith("fiber", "fiber"));
+    const Scene neural(sceneWith("", "neural"));
+    EXPECT_EQ(fiber.modeName(), "fiber");
+    EXPECT_EQ(neural.modeName(), "neural");
+    const Scene overridden(sceneWith("fiber", ""), inMode("neural"));
+    EXPECT_EQ(overridden.modeName(), "neural");
+    EXPECT_EQ(overridden.stats().tubes, 6);
+    EXPECT_EQ(overridden.stats().materials, 1);
+
+    RenderOptions options;
+    options.spp = 4;
+    options.seed = 9;
+    options.quiet = true;
+    const Image m = render(mixed, options).image, f = render(fiber, options).image,
+                n = render(neural, options).image;
+    // Per half of the film: yarn pixels (those where the two modes differ),
+    // and how many of them equal each single-mode render.
+    for (const bool left : {true, false}) {
+        int yarnPixels = 0, sameAsOwn = 0, sameAsOther = 0;
+        for (int y = 0; y < m.height; ++y)
+            for (int x = left ? 0 : m.width / 2; x < (left ? m.width / 2 : m.width); ++x) {
+                if (f.get(x, y) == n.get(x, y)) continue;
+                ++yarnPixels;
+                const Rgb own = left ? f.get(x, y) : n.get(x, y);
+                const Rgb other = left ? n.get(x, y) : f.get(x, y);
+                sameAsOwn += m.get(x, y) == own;
+                sameAsOther += m.get(x, y) == other;
+            }
+        SCOPED_TRACE(left ? "left (fiber) yarn" : "right (neural) yarn");
+        std::printf("%s yarn: %d pixels, %d as in its own mode's render, %d as in the other's\n",
+                    left ? "fiber" : "neural", yarnPixels, sameAsOwn, sameAsOther);
+        EXPECT_GT(yarnPixels, 20);
+        EXPECT_GT(sameAsOwn, yarnPixels / 2);
+        EXPECT_EQ(sameAsOther, 0);
     }
 }
 
@@ -416,12 +488,12 @@ TEST_F(RenderTest, FiberGeometryBeyondTheLimitIsRefusedBeforeItIsBuilt) {
                              kFleece + R"("}]
     })";
     const SceneDesc desc = parseSceneText(text, path("scene.json"), dir_.string());
-    weft::testing::expectInputError([&] { Scene s(desc, RenderMode::Fiber); },
+    weft::testing::expectInputError([&] { Scene s(desc, inMode("fiber")); },
                                     {"scene.json", "yarns[0]", "long.txt", "segments"});
 }
 
 TEST_F(RenderTest, TimeBudgetRendersAtLeastOnePass) {
-    const Scene s(scene(kFleece, "[]", 6, 6), RenderMode::Neural);
+    const Scene s(scene(kFleece, "[]", 6, 6), inMode("neural"));
     RenderOptions options;
     options.seconds = 0.3;
     options.quiet = true;
@@ -435,10 +507,11 @@ TEST_F(RenderTest, TimeBudgetRendersAtLeastOnePass) {
 // to the unsharded render (the same samples, summed in another order).
 TEST_F(RenderTest, ShardsAreTheUnshardedRenderSplitBySample) {
     const std::string lights = R"([{"type": "sky"}])";
-    for (const auto& [mode, sampler] : {std::pair{RenderMode::Neural, SamplerKind::Independent},
-                                        std::pair{RenderMode::Fiber, SamplerKind::Independent},
-                                        std::pair{RenderMode::Neural, SamplerKind::Sobol}}) {
-        const Scene s(scene(kFleece, lights, 10, 8), mode);
+    for (const auto& [mode, sampler] :
+         {std::pair<std::string, SamplerKind>{"neural", SamplerKind::Independent},
+          std::pair<std::string, SamplerKind>{"fiber", SamplerKind::Independent},
+          std::pair<std::string, SamplerKind>{"neural", SamplerKind::Sobol}}) {
+        const Scene s(scene(kFleece, lights, 10, 8), inMode(mode));
         RenderOptions options;
         options.spp = 7;
         options.seed = 3;
@@ -460,7 +533,7 @@ TEST_F(RenderTest, ShardsAreTheUnshardedRenderSplitBySample) {
         EXPECT_EQ(samples, 7);
         for (size_t i = 0; i < sum.size(); ++i)
             ASSERT_NEAR(sum[i] / 7, whole.image.pixels[i], 1e-6 * whole.image.pixels[i] + 1e-12)
-                << renderModeName(mode) << " element " << i;
+                << mode << " element " << i;
     }
 }
 

@@ -80,7 +80,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
         options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
     const bool timed = options.spp == 0;
-    Progress progress(std::string("render ") + renderModeName(scene.mode()),
+    Progress progress("render " + scene.modeName(),
                       timed ? 0 : static_cast<uint64_t>(tiles), options.quiet);
 
     // Samples [first, last) of every pixel.
@@ -157,7 +157,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
         result.image.pixels[i] = static_cast<float>(sum[i] * inv);
 
     RenderStats& st = result.stats;
-    st.mode = renderModeName(scene.mode());
+    st.mode = scene.modeName();
     st.width = width, st.height = height;
     st.spp = done, st.passes = passes;
     st.seconds = seconds;

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
+#include <tuple>
 
 #include "weft/core/error.h"
 #include "weft/core/json_message.h"
@@ -14,49 +15,14 @@
 #include "weft/core/math.h"
 #include "weft/core/progress.h"
 #include "weft/core/rng.h"
-#include "weft/fiber/fiber_bcsdf.h"
 #include "weft/render/curves.h"
 #include "weft/render/yarn_geometry.h"
-#include "weft/yarn/dual_scattering.h"
+#include "weft/render/environment_light.h"
 #include "weft/yarn/yarn_model.h"
 
 namespace weft::render {
 
-const char* renderModeName(RenderMode mode) {
-    switch (mode) {
-        case RenderMode::Neural:
-            return "neural";
-        case RenderMode::Fiber:
-            return "fiber";
-        case RenderMode::Dual:
-            return "dual";
-    }
-    return "unknown";
-}
-
-RenderMode parseRenderMode(const std::string& name, const std::string& field) {
-    if (name == "neural") return RenderMode::Neural;
-    if (name == "fiber") return RenderMode::Fiber;
-    if (name == "dual") return RenderMode::Dual;
-    throw InputError(field + " \"" + name + "\" is not a render mode: allowed neural, fiber, dual");
-}
-
 namespace {
-
-std::unique_ptr<Light> makeLight(const LightDesc& desc) {
-    switch (desc.type) {
-        case LightDesc::Type::Sky:
-            return std::make_unique<EnvironmentLight>(skyLight(desc.scale));
-        case LightDesc::Type::Envmap:
-            return std::make_unique<EnvironmentLight>(
-                EnvironmentLight::load(desc.file, desc.scale, desc.rotateDeg));
-        case LightDesc::Type::Sphere:
-            return std::make_unique<SphereLight>(desc.center, desc.radius, desc.radiance);
-        case LightDesc::Type::Constant:
-            return std::make_unique<ConstantLight>(desc.radiance);
-    }
-    throw std::logic_error("unknown light type");
-}
 
 // The largest radius a yarn curve is drawn with (for the sampling step).
 double largestRadius(const Curve& curve, const YarnDesc& yarn) {
@@ -70,10 +36,10 @@ double largestRadius(const Curve& curve, const YarnDesc& yarn) {
 // bytes), the tube's own copy and the framed curve it came from.
 constexpr double kBytesPerSegment = 160;
 
-std::string geometryName(const SceneDesc& desc, size_t yarn, RenderMode mode) {
+std::string geometryName(const SceneDesc& desc, size_t yarn, const YarnMode& mode) {
     return (desc.path.empty() ? std::string("scene") : desc.path) + ": yarns[" +
-           std::to_string(yarn) + "] (" + desc.yarns[yarn].curves + "): the " +
-           renderModeName(mode) + " geometry up to this yarn";
+           std::to_string(yarn) + "] (" + desc.yarns[yarn].curves + "): the " + mode.name() +
+           " geometry up to this yarn";
 }
 
 // Every curve point, times the yarn's scale, within kMaxSceneCoordinate
@@ -98,10 +64,10 @@ void checkCurveExtent(const CurveSet& set, const SceneDesc& desc, size_t yarn) {
     }
 }
 
-[[noreturn]] void tooMuchGeometry(const SceneDesc& desc, size_t yarn, RenderMode mode) {
+[[noreturn]] void tooMuchGeometry(const SceneDesc& desc, size_t yarn, const YarnMode& mode) {
     throw InputError((desc.path.empty() ? std::string("scene") : desc.path) + ": yarns[" +
                      std::to_string(yarn) + "] (" + desc.yarns[yarn].curves + "): the " +
-                     renderModeName(mode) + " geometry would exceed " +
+                     mode.name() + " geometry would exceed " +
                      std::to_string(kMaxSceneSegments) +
                      " curve segments (about 60 bytes each in Embree); use fewer or shorter "
                      "curves, or a larger radius");
@@ -122,14 +88,15 @@ std::optional<double> overlapRadius(const YarnDesc& yarn, const CurveSet& set) {
     return yarn.scale * sum / static_cast<double>(count);
 }
 
-// The materials of a scene: one BSDF per distinct model file and colour,
-// built the first time a yarn asks for it (a vertex-coloured yarn asks for
-// each of its colours, yarn_geometry.h kColourSteps).
+// The materials of a scene: one BSDF per distinct model file, colour and
+// drawing mode, built the first time a yarn asks for it (a vertex-coloured
+// yarn asks for each of its colours, yarn_geometry.h kColourSteps).
 class SceneMaterials {
   public:
-    SceneMaterials(const SceneDesc& desc, RenderMode mode, const YarnBsdfOptions& options,
-                   std::vector<std::unique_ptr<Bsdf>>* bsdfs)
-        : desc_(desc), mode_(mode), options_(options), bsdfs_(bsdfs) {}
+    SceneMaterials(const SceneDesc& desc, const std::vector<const YarnMode*>& modes,
+                   const YarnBsdfOptions& options, std::vector<std::unique_ptr<Bsdf>>* bsdfs,
+                   std::vector<uint8_t>* plyFrame)
+        : desc_(desc), modes_(modes), options_(options), bsdfs_(bsdfs), plyFrame_(plyFrame) {}
 
     // The model of yarn entry y as its file holds it (each file loaded once).
     const YarnModel& model(size_t y) {
@@ -142,31 +109,21 @@ class SceneMaterials {
     // The material of yarn entry y in `colour` (none: the model's own).
     int material(size_t y, const std::optional<Rgb>& colour) {
         const YarnDesc& yarn = desc_.yarns[y];
+        const YarnMode& mode = *modes_[y];
         if (colour && last_ && last_->y == y && last_->colour == *colour) return last_->material;
         const std::vector<double> colourKey =
             colour ? std::vector<double>{colour->r, colour->g, colour->b} : std::vector<double>{};
-        auto [it, inserted] = index_.try_emplace({yarn.model, colourKey}, 0);
+        auto [it, inserted] = index_.try_emplace({yarn.model, colourKey, mode.name()}, 0);
         if (inserted) {
             if (bsdfs_->size() >= static_cast<size_t>(kMaxSceneMaterials))
                 throw InputError(entryName(y) + ": more than " + std::to_string(kMaxSceneMaterials) +
-                                 " materials (distinct models and colours) in the scene; give "
-                                 "fewer distinct colours");
+                                 " materials (distinct models, colours and modes) in the scene; "
+                                 "give fewer distinct colours");
             it->second = static_cast<int>(bsdfs_->size());
-            YarnModel m = model(y);
-            if (colour) {
-                const std::string what =
-                    entryName(y) + (yarn.vertexColours.empty() ? ".colour" : ".vertex_colours");
-                // Neural mode: the conditioned model of that colour; fiber and
-                // dual mode: the fiber itself, whatever the model.
-                if (mode_ == RenderMode::Neural) m = m.forColour(*colour, what);
-                else m.fiber.cTT = *colour;
-            }
-            if (mode_ == RenderMode::Neural)
-                bsdfs_->push_back(std::make_unique<YarnBsdf>(m, yarn.model, options_));
-            else if (mode_ == RenderMode::Dual)
-                bsdfs_->push_back(std::make_unique<DualScatteringBsdf>(m.fiber, m.ply));
-            else
-                bsdfs_->push_back(std::make_unique<FiberBcsdf>(m.fiber));
+            const std::string what =
+                entryName(y) + (yarn.vertexColours.empty() ? ".colour" : ".vertex_colours");
+            bsdfs_->push_back(mode.makeBsdf(model(y), colour, yarn.model, what, options_));
+            plyFrame_->push_back(mode.drawsPlies());
         }
         if (colour) last_ = Last{y, *colour, it->second};
         return it->second;
@@ -179,11 +136,12 @@ class SceneMaterials {
     }
 
     const SceneDesc& desc_;
-    RenderMode mode_;
+    const std::vector<const YarnMode*>& modes_;
     YarnBsdfOptions options_;
     std::vector<std::unique_ptr<Bsdf>>* bsdfs_;
+    std::vector<uint8_t>* plyFrame_;
     std::map<std::string, YarnModel> models_;
-    std::map<std::pair<std::string, std::vector<double>>, int> index_;
+    std::map<std::tuple<std::string, std::vector<double>, std::string>, int> index_;
     // The last coloured lookup: neighbouring segments mostly share a colour.
     struct Last {
         size_t y;
@@ -192,6 +150,26 @@ class SceneMaterials {
     };
     std::optional<Last> last_;
 };
+
+// The drawing mode of each yarn entry: the override, else its own, else the default.
+std::vector<const YarnMode*> entryModes(const SceneDesc& desc, const std::string& override) {
+    std::vector<const YarnMode*> modes;
+    const YarnMode* all = override.empty() ? nullptr : &yarnModeNamed(override);
+    for (const YarnDesc& yarn : desc.yarns)
+        modes.push_back(all                  ? all
+                        : yarn.mode.empty()  ? &defaultYarnMode()
+                                             : &yarnModeNamed(yarn.mode, "yarns[].mode"));
+    return modes;
+}
+
+// One name for the scene's modes: the override, the one every yarn has, or "mixed".
+std::string modesName(const std::vector<const YarnMode*>& modes, const std::string& override) {
+    if (!override.empty()) return yarnModeNamed(override).name();
+    if (modes.empty()) return defaultYarnMode().name();
+    for (const YarnMode* m : modes)
+        if (m != modes.front()) return "mixed";
+    return modes.front()->name();
+}
 
 }  // namespace
 
@@ -228,9 +206,8 @@ nlohmann::json yarnOverlapJson(const std::vector<YarnEntryOverlap>& overlaps) {
     return list;
 }
 
-Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfOptions& yarnOptions)
-    : mode_(mode),
-      camera_(desc.camera, desc.film.width, desc.film.height),
+Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
+    : camera_(desc.camera, desc.film.width, desc.film.height),
       width_(desc.film.width),
       height_(desc.film.height),
       accel_(std::make_unique<TubeAccel>()) {
@@ -240,11 +217,13 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
     checkMemoryBudget(static_cast<double>(width_) * height_ * 56.0,
                       (desc.path.empty() ? std::string("scene") : desc.path) + ": the film (" +
                           std::to_string(width_) + " x " + std::to_string(height_) + ")");
-    for (const LightDesc& light : desc.lights) lights_.push_back(makeLight(light));
+    for (const auto& light : desc.lights) lights_.push_back(light->create());
     if (lights_.empty()) lights_.push_back(std::make_unique<EnvironmentLight>(skyLight()));
 
-    // One material per distinct model file and colour (SceneMaterials).
-    SceneMaterials materials(desc, mode, yarnOptions, &bsdfs_);
+    // One material per distinct model file, colour and mode (SceneMaterials).
+    const std::vector<const YarnMode*> modes = entryModes(desc, options.mode);
+    modeName_ = modesName(modes, options.mode);
+    SceneMaterials materials(desc, modes, options.yarn, &bsdfs_, &plyFrame_);
     std::vector<CurveSet> curveSets;
     std::vector<int> entryMaterial(desc.yarns.size(), -1);  // -1: vertex-coloured
     for (size_t y = 0; y < desc.yarns.size(); ++y) {
@@ -263,11 +242,12 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
     // Before the geometry: what the render will draw inside other yarns.
     stats_.yarnOverlap = checkYarnOverlap(desc, curveSets);
 
-    Progress progress("build " + std::string(renderModeName(mode)) + " geometry",
-                      static_cast<uint64_t>(stats_.curves), quiet);
+    Progress progress("build " + modeName_ + " geometry", static_cast<uint64_t>(stats_.curves),
+                      options.quiet);
     int64_t planned = 0;
     for (size_t y = 0; y < desc.yarns.size(); ++y) {
         const YarnDesc& yarn = desc.yarns[y];
+        const YarnMode& mode = *modes[y];
         const bool vertexColoured = !yarn.vertexColours.empty();
         const int material = entryMaterial[y];
         const PlyParams& fibers = materials.model(y).ply;
@@ -275,7 +255,7 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
         for (size_t c = 0; c < curves.size(); ++c) {
             const double radius = largestRadius(curves[c], yarn);
             const double step = sampleStep(radius > 0 ? radius : 1.0, yarn.plies, yarn.plyTwist,
-                                           mode == RenderMode::Fiber ? &fibers : nullptr);
+                                           mode.drawsPlies() ? nullptr : &fibers);
             // The control polygon's length bounds the samples frameCurve will
             // make (to within the spline's bulge): refuse before allocating them.
             double chord = 0;
@@ -283,7 +263,7 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
             for (size_t k = 0; k + 1 < cp.size(); ++k) chord += length(cp[k + 1] - cp[k]);
             if (curves[c].closed && cp.size() > 1) chord += length(cp.front() - cp.back());
             const double estimate = (chord * yarn.scale / step + 1) * yarn.plies *
-                                    (drawsPlies(mode) ? 1 : fibers.fibers);
+                                    (mode.drawsPlies() ? 1 : fibers.fibers);
             if (static_cast<double>(planned) + estimate > static_cast<double>(kMaxSceneSegments))
                 tooMuchGeometry(desc, y, mode);
             checkMemoryBudget((static_cast<double>(planned) + estimate) * kBytesPerSegment,
@@ -293,7 +273,7 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
             const std::vector<FramedCurve> plies = plyCurves(centre, yarn.plies, yarn.plyTwist);
             for (size_t j = 0; j < plies.size(); ++j) {
                 // Refuse before allocating: a fiber-mode scene costs fibers x samples segments.
-                const int64_t tubes = drawsPlies(mode) ? 1 : fibers.fibers;
+                const int64_t tubes = mode.drawsPlies() ? 1 : fibers.fibers;
                 planned += tubes * static_cast<int64_t>(plies[j].size());
                 if (planned > kMaxSceneSegments) tooMuchGeometry(desc, y, mode);
                 // A colour per segment: its first sample's (the ply's fibers
@@ -306,7 +286,7 @@ Scene::Scene(const SceneDesc& desc, RenderMode mode, bool quiet, const YarnBsdfO
                         along[k] = materials.material(y, plies[j].colours[k]);
                 }
                 const int first = vertexColoured ? along.front() : material;
-                if (drawsPlies(mode)) {
+                if (mode.drawsPlies()) {
                     accel_->addGeometry({toTube(plies[j])}, first, std::move(along));
                 } else {
                     // Seeded by where the ply is, not by the render seed.

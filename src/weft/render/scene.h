@@ -1,19 +1,21 @@
 // weft/render/scene.h — a scene file turned into what the path tracer needs (issue 7).
 //
-// Scene builds, from a SceneDesc (scene_file.h) and a mode:
+// Scene builds, from a SceneDesc (scene_file.h) and SceneOptions:
 //   - the camera (camera.h: a pinhole, pbrt's perspective camera);
-//   - the lights (lights.h; none given: the procedural sky);
-//   - the geometry (tube_accel.h) from each yarn's curves (yarn_geometry.h):
-//       neural mode: one tube per ply, shaded with the YarnBsdf of the
-//         yarn's model (docs/design.md 7);
-//       fiber mode: the plies filled with the model's fibers (N, rho, alpha
-//         from its "ply" block; generatePly seeded per ply by the yarn,
+//   - the lights (light.h, each made by its registered type; none given: the
+//     procedural sky);
+//   - the geometry (tube_accel.h) from each yarn's curves (yarn_geometry.h),
+//     as the yarn's drawing mode (yarn_mode.h) says:
+//       plies (neural, dual): one tube per ply, shaded in the yarn frame;
+//       fibers (fiber): the plies filled with the model's fibers (N, rho,
+//         alpha from its "ply" block; generatePly seeded per ply by the yarn,
 //         curve and ply index, so the fibers do not change with the render
-//         seed), shaded with the model's FiberBcsdf;
-//   - the materials, one per distinct model file and colour (a yarn's
+//         seed), each shaded in its fiber frame;
+//   - the materials, one per distinct model file, colour and mode (a yarn's
 //     "colour", or each colour along a yarn with "vertex_colours": a segment
-//     then carries its material, tube_accel.h); in neural mode YarnBsdfs
-//     built with `yarnOptions` (the sampling ablation of paper Fig. 5).
+//     then carries its material, tube_accel.h), each with the BSDF its mode
+//     makes; neural ones built with `options.yarn` (the sampling ablation of
+//     paper Fig. 5).
 // Fiber geometry is generated ply by ply and handed to Embree at once, so the
 // peak memory is Embree's copy plus one ply's fibers.
 #pragma once
@@ -28,19 +30,13 @@
 #include "weft/render/camera.h"
 #include "weft/render/curve_report.h"
 #include "weft/render/curves.h"
-#include "weft/render/lights.h"
+#include "weft/render/light.h"
 #include "weft/render/scene_file.h"
 #include "weft/render/tube_accel.h"
+#include "weft/render/yarn_mode.h"
 #include "weft/yarn/yarn_bsdf.h"
 
 namespace weft::render {
-
-// How yarns are drawn and shaded: neural (plies as curves, the fitted yarn
-// BSDF), fiber (every fiber, the fiber BCSDF: the ground truth) or dual (plies
-// as curves, the dual-scattering baseline after ZMA23, yarn/dual_scattering.h).
-enum class RenderMode { Neural, Fiber, Dual };
-// Whether the mode draws each ply as one curve (neural, dual) rather than its fibers.
-constexpr bool drawsPlies(RenderMode mode) { return mode != RenderMode::Fiber; }
 
 // Largest number of curve segments a scene may hand to Embree (about 60
 // bytes each with the BVH): an InputError naming the yarn beyond it.
@@ -49,9 +45,6 @@ inline constexpr int64_t kMaxSceneSegments = int64_t{200} * 1000 * 1000;
 // have: an InputError naming the yarn entry beyond it. A neural material
 // costs about 0.4 s and 0.5 MB to build (its energy guard and sampling table).
 inline constexpr int kMaxSceneMaterials = 256;
-const char* renderModeName(RenderMode mode);
-// "neural", "fiber" or "dual"; otherwise an InputError naming `field`.
-RenderMode parseRenderMode(const std::string& name, const std::string& field = "--mode");
 
 // The overlap check of one yarn entry (curve_report.h): its curves file, as
 // the scene names it, and how much of it lies inside the scene's yarns.
@@ -89,12 +82,21 @@ struct SceneBuildStats {
     std::vector<YarnEntryOverlap> yarnOverlap;
 };
 
+struct SceneOptions {
+    // A drawing mode for every yarn (a registered name, yarn_mode.h), over
+    // the yarns' own "mode"; empty: each yarn's own (neural where it has none).
+    std::string mode;
+    bool quiet = true;     // no progress bar
+    YarnBsdfOptions yarn;  // the neural mode's yarn BSDF
+};
+
 class Scene {
   public:
-    Scene(const SceneDesc& desc, RenderMode mode, bool quiet = true,
-          const YarnBsdfOptions& yarnOptions = {});
+    explicit Scene(const SceneDesc& desc, const SceneOptions& options = {});
 
-    RenderMode mode() const { return mode_; }
+    // The drawing mode of every yarn, or "mixed" when they differ (neural for
+    // a scene without yarns).
+    const std::string& modeName() const { return modeName_; }
     const Camera& camera() const { return camera_; }
     int width() const { return width_; }
     int height() const { return height_; }
@@ -102,23 +104,26 @@ class Scene {
     const std::vector<std::unique_ptr<Light>>& lights() const { return lights_; }
     const SceneBuildStats& stats() const { return stats_; }
 
-    // BSDF of a hit's material (TubeHit::material): the YarnBsdf (neural
-    // mode) or the FiberBcsdf (fiber mode) of its model.
+    // BSDF of a hit's material (TubeHit::material), as its yarn's mode made
+    // it: the YarnBsdf (neural), DualScatteringBsdf (dual) or FiberBcsdf
+    // (fiber) of its model.
     const Bsdf& bsdf(int material) const { return *bsdfs_[material]; }
-    // The local frame of that BSDF at a hit: in neural mode the yarn frame
-    // (t, t x n, n) of docs/design.md 2, in fiber mode the fiber frame with the
-    // tangent as +x (fiber_bcsdf.h).
+    // The local frame of that BSDF at a hit: for plies the yarn frame (t, t x
+    // n, n) of docs/design.md 2, for fibers the fiber frame with the tangent as
+    // +x (fiber_bcsdf.h).
     Frame shadingFrame(const TubeHit& hit) const {
-        return drawsPlies(mode_) ? yarnFrame(hit.tangent, hit.normal) : Frame::fromX(hit.tangent);
+        return plyFrame_[hit.material] ? yarnFrame(hit.tangent, hit.normal)
+                                       : Frame::fromX(hit.tangent);
     }
 
   private:
-    RenderMode mode_;
+    std::string modeName_;
     Camera camera_;
     int width_, height_;
     std::unique_ptr<TubeAccel> accel_;
     std::vector<std::unique_ptr<Light>> lights_;
     std::vector<std::unique_ptr<Bsdf>> bsdfs_;  // one per material
+    std::vector<uint8_t> plyFrame_;             // per material: its mode draws plies
     SceneBuildStats stats_;
 };
 

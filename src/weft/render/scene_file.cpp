@@ -17,6 +17,8 @@
 #include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/json_reader.h"
+#include "weft/render/scene_reader.h"
+#include "weft/render/yarn_mode.h"
 
 namespace weft::render {
 
@@ -33,61 +35,12 @@ constexpr double kMaxPlyTwist = 100;
 // the camera frame built from cross(dir, up) would be numerically meaningless.
 constexpr double kMinUpSine = 1e-6;
 
-std::string joinNames(std::initializer_list<const char*> names) {
-    std::string out;
-    for (const char* n : names) out += (out.empty() ? "" : ", ") + std::string(n);
-    return out;
-}
-
-// Scene value kinds over the shared strict reader (core/json_reader.h).
-
-// Lengths and scales: Embree works in float, so a scene is kept within
-// kMaxSceneCoordinate and its lengths within a factor 1e12 of each other.
-const NumberRange lengthRange =
-    NumberRange::closed(kMinSceneLength, kMaxSceneCoordinate).with("scene units");
-
-// A point or vector, each coordinate within kMaxSceneCoordinate.
-Vec3 readVec3(const JsonObjectReader& r, std::string_view key) {
-    const std::vector<double> v = r.numbers(
-        key, 3, NumberRange::closed(-kMaxSceneCoordinate, kMaxSceneCoordinate).with("scene units"));
-    return {v[0], v[1], v[2]};
-}
-
-// Linear RGB radiance, each channel in [0, kMaxRadiance].
-Rgb readRadiance(const JsonObjectReader& r, std::string_view key) {
-    const std::vector<double> v =
-        r.numbers(key, 3, NumberRange::closed(0, kMaxRadiance), "(r, g, b)");
-    return {v[0], v[1], v[2]};
-}
-
-// A file name, resolved against baseDir unless absolute; `extensions`
-// (lowercase, with the dot) lists the accepted ones, empty: any.
-std::string readFileName(const JsonObjectReader& r, std::string_view key,
-                         const std::string& baseDir,
-                         std::initializer_list<const char*> extensions) {
-    const json& v = r.value(key);
-    if (!v.is_string()) r.fail(key, "expected a file name, got " + describeJson(v));
-    const std::string& name = v.get_ref<const std::string&>();
-    if (name.empty()) r.fail(key, "expected a file name, got the empty string");
-    // The C library would stop at the NUL and open some other file.
-    if (name.find('\0') != std::string::npos)
-        r.fail(key, "a file name cannot contain a NUL character");
-    if (extensions.size() != 0) {
-        const std::string ext = lowercaseExtension(name);
-        if (std::none_of(extensions.begin(), extensions.end(),
-                         [&](const char* e) { return ext == e; }))
-            r.fail(key, jsonString(name) + " has an unsupported extension (allowed: " +
-                            joinNames(extensions) + ")");
-    }
-    return (std::filesystem::path(baseDir) / name).string();
-}
-
 CameraDesc readCamera(const JsonObjectReader& scene) {
     const JsonObjectReader r = scene.object("camera", {"from", "to", "up", "fov_deg"});
     CameraDesc c;
-    c.from = readVec3(r, "from");
-    c.to = readVec3(r, "to");
-    if (r.has("up")) c.up = readVec3(r, "up");
+    c.from = readSceneVec3(r, "from");
+    c.to = readSceneVec3(r, "to");
+    if (r.has("up")) c.up = readSceneVec3(r, "up");
     if (r.has("fov_deg")) c.fovDeg = r.number("fov_deg", NumberRange::open(0, 180));
 
     const auto vectorText = [](const Vec3& v) {
@@ -129,62 +82,14 @@ RenderDesc readRender(const JsonObjectReader& scene) {
     return d;
 }
 
-const char* typeName(LightDesc::Type t) {
-    switch (t) {
-        case LightDesc::Type::Sky:
-            return "sky";
-        case LightDesc::Type::Envmap:
-            return "envmap";
-        case LightDesc::Type::Sphere:
-            return "sphere";
-        case LightDesc::Type::Constant:
-            return "constant";
-    }
-    return "sky";
-}
-
-// The type decides the other keys: it is read before they are checked.
-LightDesc readLight(JsonObjectReader r, const std::string& baseDir) {
-    using Type = LightDesc::Type;
-    constexpr Type kTypes[] = {Type::Sky, Type::Envmap, Type::Sphere, Type::Constant};
-    LightDesc l;
-    l.type = kTypes[r.oneOf("type", {typeName(kTypes[0]), typeName(kTypes[1]), typeName(kTypes[2]),
-                                     typeName(kTypes[3])})];
-    const NumberRange scale = NumberRange::closed(0, kMaxRadiance);
-    switch (l.type) {
-        case Type::Sky:
-            r.allowKeys({"type", "scale"});
-            if (r.has("scale")) l.scale = r.number("scale", scale);
-            break;
-        case Type::Envmap:
-            r.allowKeys({"type", "file", "scale", "rotate_deg"});
-            l.file = readFileName(r, "file", baseDir, {".exr", ".hdr"});
-            if (r.has("rotate_deg"))
-                l.rotateDeg = r.number("rotate_deg", NumberRange::closed(-3600, 3600));
-            if (r.has("scale")) l.scale = r.number("scale", scale);
-            break;
-        case Type::Sphere:
-            r.allowKeys({"type", "center", "radius", "radiance"});
-            l.center = readVec3(r, "center");
-            l.radius = r.number("radius", lengthRange);
-            l.radiance = readRadiance(r, "radiance");
-            break;
-        case Type::Constant:
-            r.allowKeys({"type", "radiance"});
-            l.radiance = readRadiance(r, "radiance");
-            break;
-    }
-    return l;
-}
-
 YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
-    r.allowKeys(
-        {"curves", "scale", "radius", "plies", "ply_twist", "model", "colour", "vertex_colours"});
+    r.allowKeys({"curves", "scale", "radius", "plies", "ply_twist", "model", "colour",
+                 "vertex_colours", "mode"});
     YarnDesc y;
     y.curves = readFileName(r, "curves", baseDir, {".bcc", ".txt", ".obj"});
     y.model = readFileName(r, "model", baseDir, {});
-    if (r.has("scale")) y.scale = r.number("scale", lengthRange);
-    if (r.has("radius")) y.radius = r.number("radius", lengthRange);
+    if (r.has("scale")) y.scale = r.number("scale", sceneLengthRange());
+    if (r.has("radius")) y.radius = r.number("radius", sceneLengthRange());
     if (r.has("plies")) y.plies = static_cast<int>(r.integer("plies", {1, kMaxPlies}));
     if (r.has("ply_twist"))
         y.plyTwist = r.number("ply_twist", NumberRange::closed(-kMaxPlyTwist, kMaxPlyTwist));
@@ -199,10 +104,9 @@ YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
                    "per curve point), not both");
         y.vertexColours = readFileName(r, "vertex_colours", baseDir, {".txt"});
     }
+    if (r.has("mode")) y.mode = readYarnModeName(r, "mode");
     return y;
 }
-
-json vecJson(const Vec3& v) { return json::array({v.x, v.y, v.z}); }
 
 // FNV-1a, 64 bit.
 uint64_t fnv1a(std::string_view bytes) {
@@ -270,28 +174,7 @@ json toJson(const SceneDesc& scene) {
                    {"seed", scene.render.seed},
                    {"sampler", samplerKindName(scene.render.sampler)}};
     json lights = json::array();
-    for (const LightDesc& l : scene.lights) {
-        json lj = {{"type", typeName(l.type)}};
-        switch (l.type) {
-            case LightDesc::Type::Sky:
-                lj["scale"] = l.scale;
-                break;
-            case LightDesc::Type::Envmap:
-                lj["file"] = l.file;
-                lj["scale"] = l.scale;
-                lj["rotate_deg"] = l.rotateDeg;
-                break;
-            case LightDesc::Type::Sphere:
-                lj["center"] = vecJson(l.center);
-                lj["radius"] = l.radius;
-                lj["radiance"] = rgbJson(l.radiance);
-                break;
-            case LightDesc::Type::Constant:
-                lj["radiance"] = rgbJson(l.radiance);
-                break;
-        }
-        lights.push_back(std::move(lj));
-    }
+    for (const auto& light : scene.lights) lights.push_back(render::toJson(*light));
     j["lights"] = std::move(lights);
     json yarns = json::array();
     for (const YarnDesc& y : scene.yarns) {
@@ -303,6 +186,8 @@ json toJson(const SceneDesc& scene) {
         if (y.radius) yj["radius"] = *y.radius;
         if (y.colour) yj["colour"] = rgbJson(*y.colour);
         if (!y.vertexColours.empty()) yj["vertex_colours"] = y.vertexColours;
+        // Written only when given, so that a scene without modes keeps its hash.
+        if (!y.mode.empty()) yj["mode"] = y.mode;
         yarns.push_back(std::move(yj));
     }
     j["yarns"] = std::move(yarns);
@@ -313,9 +198,8 @@ std::vector<CommandPath> sceneInputs(const SceneDesc& scene, const std::string& 
     std::vector<CommandPath> inputs;
     if (!scenePath.empty()) inputs.push_back({"the scene file", scenePath});
     for (size_t i = 0; i < scene.lights.size(); ++i)
-        if (scene.lights[i].type == LightDesc::Type::Envmap)
-            inputs.push_back(
-                {"the scene's lights[" + std::to_string(i) + "].file", scene.lights[i].file});
+        for (const auto& [key, file] : scene.lights[i]->files())
+            inputs.push_back({"the scene's lights[" + std::to_string(i) + "]." + key, file});
     for (size_t i = 0; i < scene.yarns.size(); ++i) {
         const std::string yarn = "the scene's yarns[" + std::to_string(i) + "].";
         inputs.push_back({yarn + "curves", scene.yarns[i].curves});
@@ -350,8 +234,8 @@ std::string sceneHash(const SceneDesc& scene) {
         value = it->second;
     };
     for (size_t i = 0; i < scene.lights.size(); ++i)
-        if (scene.lights[i].type == LightDesc::Type::Envmap)
-            digest(j["lights"][i]["file"], jsonIndexPath("lights", i) + ".file");
+        for (const auto& [key, file] : scene.lights[i]->files())
+            digest(j["lights"][i][key], jsonIndexPath("lights", i) + "." + key);
     for (size_t i = 0; i < scene.yarns.size(); ++i) {
         digest(j["yarns"][i]["curves"], jsonIndexPath("yarns", i) + ".curves");
         digest(j["yarns"][i]["model"], jsonIndexPath("yarns", i) + ".model");

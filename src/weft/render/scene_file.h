@@ -10,10 +10,11 @@
 //                 {"type": "sphere", "center": [x,y,z], "radius": r, "radiance": [r,g,b]},
 //                 {"type": "constant", "radiance": [r,g,b]} ],
 //     "yarns":  [ {"curves": "knit.bcc", "scale": 1.0, "radius": 0.02, "plies": 3,
-//                  "ply_twist": 0.3, "model": "fleece.json"} ]
+//                  "ply_twist": 0.3, "model": "fleece.json", "mode": "neural"} ]
 //   }
-// Parsing validates everything once: a missing required key, an unknown key,
-// a key repeated in one object, a wrong type, a value out of range or a NaN
+// Lights are read by their registered type (light.h), yarn modes by name
+// (yarn_mode.h). Parsing validates everything once: a missing required key,
+// an unknown key, a key repeated in one object, a wrong type, a value out of range or a NaN
 // is an InputError that names the scene file and the JSON path of the key
 // (e.g. `scene.json: yarns[1].plies = 0 is out of range: allowed [1, 16]`).
 // Relative file paths ("curves", "model", "file") are resolved against the
@@ -22,6 +23,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
@@ -32,6 +34,7 @@
 #include "weft/core/rgb.h"
 #include "weft/core/sample_stream.h"
 #include "weft/core/vec.h"
+#include "weft/render/light.h"
 #include "weft/render/scene_limits.h"
 
 namespace weft::render {
@@ -53,17 +56,6 @@ struct RenderDesc {
     SamplerKind sampler = SamplerKind::Independent;  // "independent" or "sobol"
 };
 
-struct LightDesc {
-    enum class Type { Sky, Envmap, Sphere, Constant };
-    Type type = Type::Sky;
-    std::string file;      // envmap: resolved path
-    double scale = 1;      // sky, envmap: finite, >= 0
-    double rotateDeg = 0;  // envmap: finite
-    Vec3 center;           // sphere: finite
-    double radius = 0;     // sphere: finite, > 0
-    Rgb radiance;          // sphere, constant: finite, >= 0 (required for both)
-};
-
 struct YarnDesc {
     std::string curves;            // resolved path of a .bcc, .txt or .obj file (required)
     double scale = 1;              // multiplies positions; finite, > 0
@@ -81,6 +73,10 @@ struct YarnDesc {
     // C_TT per control point, interpolated along the curve (dyed and
     // space-dyed yarns); "" when absent. Excludes "colour".
     std::string vertexColours;
+    // How the yarn is drawn and shaded: a registered drawing mode
+    // (yarn_mode.h: "neural", "fiber", "dual"); "" when absent, which renders
+    // neural. `weft render --mode` overrides every yarn's.
+    std::string mode;
 };
 
 struct SceneDesc {
@@ -89,7 +85,7 @@ struct SceneDesc {
     CameraDesc camera;
     FilmDesc film;
     RenderDesc render;
-    std::vector<LightDesc> lights;  // empty: the procedural sky
+    std::vector<std::shared_ptr<const LightDesc>> lights;  // empty: the procedural sky
     std::vector<YarnDesc> yarns;    // may be empty (an environment-only scene)
 };
 

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -21,6 +22,10 @@
 #include "weft/core/file.h"
 #include "weft/core/rng.h"
 #include "weft/core/test_util.h"
+#include "weft/render/constant_light.h"
+#include "weft/render/environment_light.h"
+#include "weft/render/sphere_light.h"
+#include "weft/render/yarn_mode.h"
 
 namespace weft::render {
 namespace {
@@ -42,12 +47,20 @@ const std::string kFullScene = R"({
   ],
   "yarns": [
     {"curves": "knit.bcc", "scale": 0.01, "radius": 0.02, "plies": 3, "ply_twist": -0.3,
-     "model": "../models/fleece.json"},
+     "model": "../models/fleece.json", "mode": "dual"},
     {"curves": "/abs/rib.OBJ", "model": "fleece.json"}
   ]
 })";
 
 const std::string kMinimalScene = R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0]}})";
+
+// Replaces light i of s by a copy of it (of type T) changed by `edit`.
+template <typename T, typename Edit>
+void editLight(SceneDesc& s, size_t i, Edit edit) {
+    auto light = std::make_shared<T>(s.lights[i]->as<T>());
+    edit(*light);
+    s.lights[i] = light;
+}
 
 // Names of the fields in which a and b differ (empty: the same scene).
 std::vector<std::string> differences(const SceneDesc& a, const SceneDesc& b) {
@@ -69,15 +82,12 @@ std::vector<std::string> differences(const SceneDesc& a, const SceneDesc& b) {
     check(a.render.sampler == b.render.sampler, "render.sampler");
     check(a.lights.size() == b.lights.size(), "lights.size");
     for (size_t i = 0; i < std::min(a.lights.size(), b.lights.size()); ++i) {
-        const LightDesc &x = a.lights[i], &y = b.lights[i];
+        const LightDesc &x = *a.lights[i], &y = *b.lights[i];
         const std::string p = "lights[" + std::to_string(i) + "].";
-        check(x.type == y.type, p + "type");
-        check(x.file == y.file, p + "file");
-        check(x.scale == y.scale, p + "scale");
-        check(x.rotateDeg == y.rotateDeg, p + "rotate_deg");
-        check(x.center == y.center, p + "center");
-        check(x.radius == y.radius, p + "radius");
-        check(x.radiance == y.radiance, p + "radiance");
+        check(std::string(x.type()) == y.type(), p + "type");
+        // Every key of the type, compared as the numbers and strings it holds.
+        check(x.params() == y.params(), p + "params");
+        check(x.files() == y.files(), p + "files");
     }
     check(a.yarns.size() == b.yarns.size(), "yarns.size");
     for (size_t i = 0; i < std::min(a.yarns.size(), b.yarns.size()); ++i) {
@@ -89,6 +99,7 @@ std::vector<std::string> differences(const SceneDesc& a, const SceneDesc& b) {
         check(x.plies == y.plies, p + "plies");
         check(x.plyTwist == y.plyTwist, p + "ply_twist");
         check(x.model == y.model, p + "model");
+        check(x.mode == y.mode, p + "mode");
     }
     return d;
 }
@@ -144,18 +155,21 @@ TEST(SceneFile, FullSceneParsesEveryKey) {
     EXPECT_EQ(s.render.sampler, SamplerKind::Sobol);
 
     ASSERT_EQ(s.lights.size(), 4u);
-    EXPECT_EQ(s.lights[0].type, LightDesc::Type::Sky);
-    EXPECT_EQ(s.lights[0].scale, 0.5);
-    EXPECT_EQ(s.lights[1].type, LightDesc::Type::Envmap);
-    EXPECT_EQ(s.lights[1].file, "/data/scenes/maps/studio.exr");
-    EXPECT_EQ(s.lights[1].scale, 2);
-    EXPECT_EQ(s.lights[1].rotateDeg, -90);
-    EXPECT_EQ(s.lights[2].type, LightDesc::Type::Sphere);
-    EXPECT_EQ(s.lights[2].center, Vec3(1, 2, 3));
-    EXPECT_EQ(s.lights[2].radius, 0.25);
-    EXPECT_EQ(s.lights[2].radiance, Rgb(10, 9, 8));
-    EXPECT_EQ(s.lights[3].type, LightDesc::Type::Constant);
-    EXPECT_EQ(s.lights[3].radiance, Rgb(0.1, 0.2, 0.3));
+    EXPECT_STREQ(s.lights[0]->type(), "sky");
+    EXPECT_EQ(s.lights[0]->as<SkyLightDesc>().scale, 0.5);
+    EXPECT_STREQ(s.lights[1]->type(), "envmap");
+    const auto& envmap = s.lights[1]->as<EnvmapLightDesc>();
+    EXPECT_EQ(envmap.file, "/data/scenes/maps/studio.exr");
+    EXPECT_EQ(envmap.scale, 2);
+    EXPECT_EQ(envmap.rotateDeg, -90);
+    EXPECT_STREQ(s.lights[2]->type(), "sphere");
+    const auto& sphere = s.lights[2]->as<SphereLightDesc>();
+    EXPECT_EQ(sphere.center, Vec3(1, 2, 3));
+    EXPECT_EQ(sphere.radius, 0.25);
+    EXPECT_EQ(sphere.radiance, Rgb(10, 9, 8));
+    EXPECT_STREQ(s.lights[3]->type(), "constant");
+    EXPECT_EQ(s.lights[3]->as<ConstantLightDesc>().radiance, Rgb(0.1, 0.2, 0.3));
+    EXPECT_THROW(s.lights[3]->as<SphereLightDesc>(), std::logic_error);
 
     ASSERT_EQ(s.yarns.size(), 2u);
     const YarnDesc& y = s.yarns[0];
@@ -166,9 +180,35 @@ TEST(SceneFile, FullSceneParsesEveryKey) {
     EXPECT_EQ(y.plies, 3);
     EXPECT_EQ(y.plyTwist, -0.3);
     EXPECT_EQ(y.model, "/data/scenes/../models/fleece.json");
+    EXPECT_EQ(y.mode, "dual");
+    EXPECT_EQ(s.yarns[1].mode, "");  // absent: neural, and not written back
     // Absolute paths stay; the extension check ignores case.
     EXPECT_EQ(s.yarns[1].curves, "/abs/rib.OBJ");
     EXPECT_EQ(s.yarns[1].model, "/data/scenes/fleece.json");
+}
+
+// The registries (light.h, yarn_mode.h) are what the reader accepts: a new
+// light type or drawing mode must appear in kFullScene, so that the round
+// trip and the range checks below cover it.
+TEST(SceneFile, EveryRegisteredLightTypeIsInTheFullScene) {
+    const SceneDesc s = parseSceneText(kFullScene, "scene.json", "/data/scenes");
+    std::vector<std::string> read;
+    for (const auto& light : s.lights) read.push_back(light->type());
+    std::vector<std::string> names;
+    for (const LightType& type : lightTypes()) {
+        names.push_back(type.name);
+        EXPECT_NE(std::find(read.begin(), read.end(), type.name), read.end()) << type.name;
+    }
+    EXPECT_EQ(names, (std::vector<std::string>{"sky", "envmap", "sphere", "constant"}));
+    // Each description writes itself under its own type name.
+    for (const auto& light : s.lights) EXPECT_EQ(toJson(*light).at("type"), light->type());
+    // The modes the scene names are the registered ones.
+    std::vector<std::string> modes;
+    for (const YarnMode* mode : yarnModes()) modes.push_back(mode->name());
+    EXPECT_EQ(modes, (std::vector<std::string>{"neural", "fiber", "dual"}));
+    EXPECT_EQ(&yarnModeNamed("fiber"), yarnModes()[1]);
+    expectInputError([] { yarnModeNamed("fibre", "--mode"); },
+                     {"--mode \"fibre\" is not a render mode: allowed neural, fiber, dual"});
 }
 
 TEST(SceneFile, DefaultsFillEveryOptionalKey) {
@@ -195,10 +235,11 @@ TEST(SceneFile, DefaultsFillEveryOptionalKey) {
     EXPECT_EQ(t.film.width, 512);
     EXPECT_EQ(t.render.spp, 64);
     ASSERT_EQ(t.lights.size(), 2u);
-    EXPECT_EQ(t.lights[0].scale, 1);
-    EXPECT_EQ(t.lights[1].file, "a.HDR");  // no base folder: the name as written
-    EXPECT_EQ(t.lights[1].scale, 1);
-    EXPECT_EQ(t.lights[1].rotateDeg, 0);
+    EXPECT_EQ(t.lights[0]->as<SkyLightDesc>().scale, 1);
+    const auto& envmap = t.lights[1]->as<EnvmapLightDesc>();
+    EXPECT_EQ(envmap.file, "a.HDR");  // no base folder: the name as written
+    EXPECT_EQ(envmap.scale, 1);
+    EXPECT_EQ(envmap.rotateDeg, 0);
     ASSERT_EQ(t.yarns.size(), 1u);
     EXPECT_EQ(t.yarns[0].scale, 1);
     EXPECT_FALSE(t.yarns[0].radius.has_value());
@@ -248,7 +289,7 @@ TEST(SceneFile, UnknownKeysAreNamedWithTheirPath) {
     expectInputError(
         [] { parseJson(fullWith("/yarns/1/twist", 1)); },
         {"yarns[1]: unknown key \"twist\" (allowed: curves, scale, radius, plies, ply_twist, "
-         "model, colour, vertex_colours)"});
+         "model, colour, vertex_colours, mode)"});
     // A scene parsed from memory without a name is called "scene".
     expectInputError([] { parseScene(fullWith("/film/depth", 8), "", ""); },
                      {"scene: film: unknown key \"depth\""});
@@ -389,6 +430,12 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
           "[-100, 100]"},
          100},
         {"/yarns/0/ply_twist", -100.5, {"yarns[0].ply_twist = -100.5 is out of range"}, -100},
+        {"/yarns/0/mode",
+         "fibers",
+         {"yarns[0].mode: expected one of \"neural\", \"fiber\", \"dual\", got the string "
+          "\"fibers\""},
+         "fiber"},
+        {"/yarns/1/mode", 1, {"yarns[1].mode: expected one of \"neural\""}, "neural"},
     };
     for (const RangeCase& c : cases) {
         SCOPED_TRACE(c.pointer + " = " + c.bad.dump());
@@ -535,7 +582,7 @@ TEST(SceneFile, RelativePathsResolveAgainstTheBaseDir) {
         "lights": [{"type": "envmap", "file": "/maps/sky.exr"}],
         "yarns": [{"curves": "sub/knit.bcc", "model": "../m.json"}]})";
     const SceneDesc a = parseSceneText(text, "a.json", "/data/scenes");
-    EXPECT_EQ(a.lights[0].file, "/maps/sky.exr");
+    EXPECT_EQ(a.lights[0]->as<EnvmapLightDesc>().file, "/maps/sky.exr");
     EXPECT_EQ(a.yarns[0].curves, "/data/scenes/sub/knit.bcc");
     EXPECT_EQ(a.yarns[0].model, "/data/scenes/../m.json");
     const SceneDesc b = parseSceneText(text, "b.json", "relative/dir");
@@ -610,8 +657,8 @@ TEST(SceneFile, ToJsonRoundTripsFieldByField) {
     // Values that a lossy number format would change.
     SceneDesc s = parseSceneText(kFullScene, "scene.json", "/data/scenes");
     s.camera.fovDeg = 0.1 + 0.2;
-    s.lights[2].radius = std::nextafter(1e-6, 1.0);
-    s.lights[1].rotateDeg = -1.0 / 3.0;
+    editLight<SphereLightDesc>(s, 2, [](auto& l) { l.radius = std::nextafter(1e-6, 1.0); });
+    editLight<EnvmapLightDesc>(s, 1, [](auto& l) { l.rotateDeg = -1.0 / 3.0; });
     s.render.seed = std::numeric_limits<uint64_t>::max();
     s.yarns[1].radius = 1.0 / 3e5;
     const SceneDesc back = parseScene(json::parse(toJson(s).dump()), "scene.json", "/data/scenes");
@@ -682,8 +729,12 @@ TEST_F(SceneHashTest, StableAcrossFoldersAndSensitiveToEveryInput) {
     variant("width", [](SceneDesc& s) { s.film.width = 511; });
     variant("fov", [](SceneDesc& s) { s.camera.fovDeg = std::nextafter(30.0, 31.0); });
     variant("up", [](SceneDesc& s) { s.camera.up = {0, 1, 1e-9}; });
-    variant("envmap scale", [](SceneDesc& s) { s.lights[0].scale = 2; });
-    variant("sky scale", [](SceneDesc& s) { s.lights[1].scale = 0.5; });
+    variant("envmap scale", [](SceneDesc& s) {
+        editLight<EnvmapLightDesc>(s, 0, [](auto& l) { l.scale = 2; });
+    });
+    variant("sky scale", [](SceneDesc& s) {
+        editLight<SkyLightDesc>(s, 1, [](auto& l) { l.scale = 0.5; });
+    });
     variant("light order", [](SceneDesc& s) { std::swap(s.lights[0], s.lights[1]); });
     variant("no lights", [](SceneDesc& s) { s.lights.clear(); });
     variant("plies", [](SceneDesc& s) { s.yarns[0].plies = 2; });
@@ -691,6 +742,7 @@ TEST_F(SceneHashTest, StableAcrossFoldersAndSensitiveToEveryInput) {
     variant("radius", [](SceneDesc& s) { s.yarns[1].radius = 0.01; });
     variant("scale", [](SceneDesc& s) { s.yarns[1].scale = 2; });
     variant("one yarn", [](SceneDesc& s) { s.yarns.pop_back(); });
+    variant("mode", [](SceneDesc& s) { s.yarns[0].mode = "fiber"; });
     for (const auto& [name, s] : variants) EXPECT_NE(sceneHash(s), h) << name;
     // Where the scene file is and what it is called are not part of it.
     SceneDesc renamed = base;
@@ -971,14 +1023,23 @@ void checkAccepted(const SceneDesc& s, bool roundTrip, std::vector<std::string>*
     check(s.film.height >= 1 && s.film.height <= 16384, "height");
     check(s.render.spp >= 1 && s.render.spp <= 1 << 20, "spp");
     check(s.render.maxDepth >= 1 && s.render.maxDepth <= 10000, "max_depth");
-    for (const LightDesc& l : s.lights) {
-        check(std::isfinite(l.scale) && l.scale >= 0, "light scale");
-        check(std::isfinite(l.rotateDeg), "rotate_deg");
-        check(l.type != LightDesc::Type::Sphere || (std::isfinite(l.radius) && l.radius > 0),
-              "sphere radius");
-        check(l.radiance.isFinite() && l.radiance.r >= 0 && l.radiance.g >= 0 && l.radiance.b >= 0,
-              "radiance");
-        check(l.type != LightDesc::Type::Envmap || !l.file.empty(), "file");
+    const auto nonNegative = [](const Rgb& c) {
+        return c.isFinite() && c.r >= 0 && c.g >= 0 && c.b >= 0;
+    };
+    for (const auto& light : s.lights) {
+        if (const auto* sky = dynamic_cast<const SkyLightDesc*>(light.get())) {
+            check(std::isfinite(sky->scale) && sky->scale >= 0, "light scale");
+        } else if (const auto* env = dynamic_cast<const EnvmapLightDesc*>(light.get())) {
+            check(std::isfinite(env->scale) && env->scale >= 0, "light scale");
+            check(std::isfinite(env->rotateDeg), "rotate_deg");
+            check(!env->file.empty(), "file");
+        } else if (const auto* sphere = dynamic_cast<const SphereLightDesc*>(light.get())) {
+            check(std::isfinite(sphere->radius) && sphere->radius > 0, "sphere radius");
+            check(isFinite(sphere->center), "sphere center");
+            check(nonNegative(sphere->radiance), "radiance");
+        } else {
+            check(nonNegative(light->as<ConstantLightDesc>().radiance), "radiance");
+        }
     }
     for (const YarnDesc& y : s.yarns) {
         check(!y.curves.empty() && !y.model.empty(), "yarn files");
@@ -986,6 +1047,8 @@ void checkAccepted(const SceneDesc& s, bool roundTrip, std::vector<std::string>*
         check(!y.radius || (std::isfinite(*y.radius) && *y.radius > 0), "yarn radius");
         check(y.plies >= 1 && y.plies <= 16, "plies");
         check(std::isfinite(y.plyTwist) && std::fabs(y.plyTwist) <= 100, "ply_twist");
+        check(y.mode.empty() || y.mode == "neural" || y.mode == "fiber" || y.mode == "dual",
+              "mode");
     }
     // Outside the caller's catch: an accepted scene whose JSON is rejected fails.
     if (roundTrip) {

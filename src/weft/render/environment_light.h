@@ -1,17 +1,18 @@
-// weft/render/lights.h — the light sources of a cloth scene (issue 7, docs/design.md 8).
+// weft/render/environment_light.h — light from every direction, from an image
+// or the procedural sky. Scene types:
+//   {"type": "envmap", "file": "sky.exr", "scale": 1, "rotate_deg": 0}
+//       a lat-long RGB image (OpenEXR or Radiance .hdr; "file" required,
+//       relative to the scene file) times `scale` ([0, 1e6]), rotated by
+//       `rotate_deg` ([-3600, 3600]) about +y;
+//   {"type": "sky", "scale": 1}
+//       the procedural sky (skyLight() below), the scene's light when it names none.
 //
-// Four kinds, all behind one interface so that the path tracer can do
-// next-event estimation (sample) and multiple importance sampling (pdf) the
-// same way for each:
-//   ConstantLight     radiance L from every direction; uniform sphere sampling
-//                     (pdf 1 / 4 pi).
-//   EnvironmentLight  a lat-long RGB image (OpenEXR or Radiance .hdr) times
-//                     `scale`, rotated by `rotate_deg` about +y; importance
-//                     sampled with a piecewise-constant 2D distribution over
-//                     the texels (luminance times sin theta of the row), whose
-//                     density is exactly what pdf() returns. Radiance is
-//                     piecewise constant (nearest texel), so sampling and
-//                     lookup agree.
+//   EnvironmentLight  a lat-long RGB image times `scale`, rotated about +y;
+//                     importance sampled with a piecewise-constant 2D
+//                     distribution over the texels (luminance times sin
+//                     theta of the row), whose density is exactly what pdf()
+//                     returns. Radiance is piecewise constant (nearest
+//                     texel), so sampling and lookup agree.
 //   The procedural sky (skyLight()) is an EnvironmentLight over an image
 //                     computed from a documented analytic formula (docs/scene-format.md,
 //                     "Procedural sky"; see skyRadiance below). It is importance
@@ -19,10 +20,6 @@
 //                     radiance is the formula itself at the exact direction, so
 //                     it is smooth (a nearest-texel lookup shows bands) and the
 //                     pdf stays exactly what sample() draws from.
-//   SphereLight       a sphere of uniform emitted radiance; sampled uniformly
-//                     in the cone of directions it subtends (pbrt-v3
-//                     Sphere::Sample(ref)), pdf 1 / (2 pi (1 - cos theta_max));
-//                     points inside the sphere get no samples (pdf 0).
 //
 // Lat-long convention (Mitsuba 3's envmap, world +y up): a unit direction d
 // (pointing away from the scene, towards the light) has, before the rotation,
@@ -34,66 +31,15 @@
 //   R_y(a) (x, y, z) = (x cos a + z sin a, y, -x sin a + z cos a)
 // (right-handed: a = 90 degrees turns +z into +x, so rotate_deg = 90 shows
 // the centre column of the image, unrotated at +z, at +x).
-//
-// All directions are world-space unit vectors; LightSample::wi points from
-// the shading point towards the light.
 #pragma once
 
-#include <array>
-#include <cstdint>
-#include <memory>
 #include <string>
 #include <vector>
 
 #include "weft/core/image.h"
-#include "weft/core/rgb.h"
-#include "weft/core/vec.h"
+#include "weft/render/light.h"
 
 namespace weft::render {
-
-struct LightSample {
-    Vec3 wi;              // unit direction from the shading point to the light
-    Rgb radiance;         // emitted radiance arriving along -wi (not divided by pdf)
-    double pdf = 0;       // solid-angle density of wi at the shading point; 0: no sample
-    double distance = 0;  // to the light's surface; +infinity for infinite lights
-
-    bool valid() const { return pdf > 0; }
-};
-
-class Light {
-  public:
-    virtual ~Light() = default;
-
-    // Infinite lights (constant, envmap, sky) are seen by rays that escape the
-    // scene; finite ones (spheres) by rays that hit them.
-    virtual bool isInfinite() const = 0;
-    // A direction towards the light from point p, with u uniform in [0, 1)^2.
-    virtual LightSample sample(const Vec3& p, const std::array<double, 2>& u) const = 0;
-    // Solid-angle density with which sample(p, .) returns wi (0 if it never does).
-    virtual double pdf(const Vec3& p, const Vec3& wi) const = 0;
-    // Infinite lights: radiance arriving from direction d (unit, pointing
-    // away from the scene). Finite lights: the radiance of their surface
-    // (the same everywhere).
-    virtual Rgb radiance(const Vec3& d) const = 0;
-    // For finite lights: distance along the ray (org, unit dir) to the first
-    // intersection with the light's surface in (0, tMax), or a negative
-    // value. Infinite lights return a negative value.
-    virtual double intersect(const Vec3& org, const Vec3& dir, double tMax) const = 0;
-};
-
-class ConstantLight final : public Light {
-  public:
-    // InputError unless every channel is finite and >= 0.
-    explicit ConstantLight(const Rgb& radiance);
-    bool isInfinite() const override { return true; }
-    LightSample sample(const Vec3& p, const std::array<double, 2>& u) const override;
-    double pdf(const Vec3& p, const Vec3& wi) const override;
-    Rgb radiance(const Vec3& d) const override;
-    double intersect(const Vec3&, const Vec3&, double) const override { return -1.0; }
-
-  private:
-    Rgb radiance_;
-};
 
 class EnvironmentLight final : public Light {
   public:
@@ -155,27 +101,28 @@ Image skyImage(int width, int height);
 // (the scene default when no light is given); InputError for a bad scale.
 EnvironmentLight skyLight(double scale = 1.0, int width = 256, int height = 128);
 
-class SphereLight final : public Light {
-  public:
-    // intersect() ignores hits at t <= kIntersectEpsilon (|org - center| +
-    // radius), so that a ray leaving the sphere's surface does not hit it again.
-    static constexpr double kIntersectEpsilon = 1e-9;
+struct EnvmapLightDesc final : LightDesc {
+    std::string file;  // resolved path
+    double scale = 1, rotateDeg = 0;
 
-    // InputError unless center is finite, radius finite and > 0, radiance finite and >= 0.
-    SphereLight(const Vec3& center, double radius, const Rgb& radiance);
-    bool isInfinite() const override { return false; }
-    LightSample sample(const Vec3& p, const std::array<double, 2>& u) const override;
-    double pdf(const Vec3& p, const Vec3& wi) const override;
-    Rgb radiance(const Vec3& d) const override;
-    double intersect(const Vec3& org, const Vec3& dir, double tMax) const override;
-
-    const Vec3& center() const { return center_; }
-    double radius() const { return radius_; }
-
-  private:
-    Vec3 center_;
-    double radius_;
-    Rgb radiance_;
+    const char* type() const override { return "envmap"; }
+    nlohmann::json params() const override;
+    std::vector<std::pair<std::string, std::string>> files() const override {
+        return {{"file", file}};
+    }
+    std::unique_ptr<Light> create() const override;
 };
+
+struct SkyLightDesc final : LightDesc {
+    double scale = 1;
+
+    const char* type() const override { return "sky"; }
+    nlohmann::json params() const override;
+    std::unique_ptr<Light> create() const override;
+};
+
+// Their registrations (light_types.cpp).
+LightType envmapLightType();
+LightType skyLightType();
 
 }  // namespace weft::render

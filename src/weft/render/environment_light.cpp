@@ -1,4 +1,4 @@
-#include "weft/render/lights.h"
+#include "weft/render/environment_light.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,15 +8,14 @@
 #include "weft/core/error.h"
 #include "weft/core/image_io.h"
 #include "weft/core/math.h"
-#include "weft/core/sampling.h"
 #include "weft/render/scene_limits.h"
+#include "weft/render/scene_reader.h"
 
 namespace weft::render {
 
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// The largest u below 1, so that a sample u = 1 - ulp stays in the last cell.
 
 template <typename T>
 std::string format(const T& value) {
@@ -24,8 +23,6 @@ std::string format(const T& value) {
     s << value;
     return s.str();
 }
-
-bool finiteNonNegative(const Rgb& c) { return c.isFinite() && c.r >= 0 && c.g >= 0 && c.b >= 0; }
 
 // The cell of t in [0, 1] on a grid of n cells; NaN and out-of-range values clamp.
 int cellIndex(double t, int n) {
@@ -57,23 +54,6 @@ double sampleContinuous(const double* cdf, int n, double u, int* cell) {
 }
 
 }  // namespace
-
-// ---------------------------------------------------------------------------
-// ConstantLight
-
-ConstantLight::ConstantLight(const Rgb& radiance) : radiance_(radiance) {
-    if (!finiteNonNegative(radiance))
-        throw InputError("constant light: radiance " + format(radiance) +
-                         " must be finite and >= 0 in every channel");
-}
-
-LightSample ConstantLight::sample(const Vec3&, const std::array<double, 2>& u) const {
-    return {sampleUniformSphere(u[0], u[1]), radiance_, uniformSpherePdf(), kInf};
-}
-
-double ConstantLight::pdf(const Vec3&, const Vec3&) const { return uniformSpherePdf(); }
-
-Rgb ConstantLight::radiance(const Vec3&) const { return radiance_; }
 
 // ---------------------------------------------------------------------------
 // EnvironmentLight
@@ -230,78 +210,41 @@ EnvironmentLight skyLight(double scale, int width, int height) {
 }
 
 // ---------------------------------------------------------------------------
-// SphereLight
+// The scene types
 
-SphereLight::SphereLight(const Vec3& center, double radius, const Rgb& radiance)
-    : center_(center), radius_(radius), radiance_(radiance) {
-    if (!isFinite(center))
-        throw InputError("sphere light: center " + format(center) + " must be finite");
-    if (!(std::isfinite(radius) && radius > 0))
-        throw InputError("sphere light: radius = " + format(radius) + " must be finite and > 0");
-    if (!finiteNonNegative(radiance))
-        throw InputError("sphere light: radiance " + format(radiance) +
-                         " must be finite and >= 0 in every channel");
+nlohmann::json EnvmapLightDesc::params() const {
+    return {{"file", file}, {"scale", scale}, {"rotate_deg", rotateDeg}};
 }
 
-LightSample SphereLight::sample(const Vec3& p, const std::array<double, 2>& u) const {
-    const Vec3 toCenter = center_ - p;
-    const double dc2 = dot(toCenter, toCenter), r2 = radius_ * radius_;
-    if (!(dc2 > r2)) return {};  // inside or on the sphere (or p is NaN)
-    const double dc = std::sqrt(dc2);
-    // pbrt-v3 Sphere::Sample(ref, u): uniform in the cone of half-angle
-    // theta_max, sin^2 theta_max = r^2 / dc^2. 1 - cos theta is sampled
-    // directly to keep the precision of small, distant spheres.
-    const double sin2Max = r2 / dc2;
-    const double oneMinusCosMax = sin2Max / (1.0 + safeSqrt(1.0 - sin2Max));
-    const double t = std::clamp(u[0], 0.0, 1.0) * oneMinusCosMax;
-    const double cosTheta = 1.0 - t, sinTheta = safeSqrt(t * (2.0 - t));
-    const double phi = kTwoPi * u[1];
-    const Frame frame = Frame::fromZ(toCenter / dc);
-    LightSample s;
-    s.wi = frame.fromLocal({sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta});
-    // Nearer root of |p + t wi - c|^2 = r^2 in the cancellation-free form
-    // (dc^2 - r^2) / (b + sqrt(disc)), b = dc cos theta.
-    const double b = dc * cosTheta;
-    s.distance = (dc - radius_) * (dc + radius_) / (b + safeSqrt(r2 - dc2 * t * (2.0 - t)));
-    s.radiance = radiance_;
-    s.pdf = 1.0 / (kTwoPi * oneMinusCosMax);
-    return s;
+std::unique_ptr<Light> EnvmapLightDesc::create() const {
+    return std::make_unique<EnvironmentLight>(EnvironmentLight::load(file, scale, rotateDeg));
 }
 
-double SphereLight::pdf(const Vec3& p, const Vec3& wi) const {
-    const Vec3 toCenter = center_ - p;
-    const double dc2 = dot(toCenter, toCenter), r2 = radius_ * radius_;
-    if (!(dc2 > r2)) return 0;
-    // wi is in the cone iff the ray p + t wi (t > 0) meets the sphere: the
-    // same test as intersect()'s discriminant.
-    const double b = dot(toCenter, wi);
-    if (!(b > 0)) return 0;
-    const Vec3 perp = toCenter - wi * b;
-    if (dot(perp, perp) > r2) return 0;
-    const double sin2Max = r2 / dc2;
-    return 1.0 / (kTwoPi * sin2Max / (1.0 + safeSqrt(1.0 - sin2Max)));
+nlohmann::json SkyLightDesc::params() const { return {{"scale", scale}}; }
+
+std::unique_ptr<Light> SkyLightDesc::create() const {
+    return std::make_unique<EnvironmentLight>(skyLight(scale));
 }
 
-Rgb SphereLight::radiance(const Vec3&) const { return radiance_; }
+LightType envmapLightType() {
+    return {"envmap", [](JsonObjectReader& r, const std::string& baseDir) {
+                r.allowKeys({"type", "file", "scale", "rotate_deg"});
+                auto l = std::make_shared<EnvmapLightDesc>();
+                l->file = readFileName(r, "file", baseDir, {".exr", ".hdr"});
+                if (r.has("rotate_deg"))
+                    l->rotateDeg = r.number("rotate_deg", NumberRange::closed(-3600, 3600));
+                if (r.has("scale")) l->scale = r.number("scale", NumberRange::closed(0, kMaxRadiance));
+                return std::shared_ptr<const LightDesc>(l);
+            }};
+}
 
-double SphereLight::intersect(const Vec3& org, const Vec3& dir, double tMax) const {
-    // Roots of t^2 + 2 hb t + c = 0 computed without cancellation (Haines et
-    // al., "Precision Improvements for Ray/Sphere Intersection", Ray Tracing
-    // Gems ch. 7): the discriminant from the closest-approach vector.
-    const Vec3 f = org - center_;
-    const double hb = dot(f, dir);
-    const Vec3 closest = f - dir * hb;
-    const double r2 = radius_ * radius_;
-    const double disc = r2 - dot(closest, closest);
-    if (!(disc >= 0)) return -1.0;
-    const double c = dot(f, f) - r2;
-    const double q = -(hb + std::copysign(std::sqrt(disc), hb));
-    if (q == 0) return -1.0;  // grazing at the origin
-    const double t0 = std::min(q, c / q), t1 = std::max(q, c / q);
-    const double tMin = kIntersectEpsilon * (std::sqrt(dot(f, f)) + radius_);
-    if (t0 > tMin && t0 < tMax) return t0;
-    if (t1 > tMin && t1 < tMax) return t1;
-    return -1.0;
+LightType skyLightType() {
+    return {"sky", [](JsonObjectReader& r, const std::string&) {
+                r.allowKeys({"type", "scale"});
+                auto l = std::make_shared<SkyLightDesc>();
+                if (r.has("scale")) l->scale = r.number("scale", NumberRange::closed(0, kMaxRadiance));
+                return std::shared_ptr<const LightDesc>(l);
+            }};
 }
 
 }  // namespace weft::render

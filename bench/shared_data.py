@@ -38,7 +38,7 @@ SCALE = 0.01  # file units (yarn radius 1) -> scene units (yarn radius 0.01)
 
 
 def bcc_bounds(path):
-    """Bounding box of a BCC file's points (the format of core/curve_io.h)."""
+    """Bounding box of a BCC file's points (the format of core/curves.h)."""
     with open(path, "rb") as f:
         data = f.read()
     curves = struct.unpack_from("<Q", data, 8)[0]

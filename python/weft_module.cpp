@@ -43,7 +43,7 @@
 #include "weft/gather/gather_merge.h"
 #include "weft/gather/rdm_io.h"
 #include "weft/render/curve_report.h"
-#include "weft/render/curves.h"
+#include "weft/core/curves.h"
 #include "weft/render/render_merge.h"
 #include "weft/render/renderer.h"
 #include "weft/eval/scene_gen.h"
@@ -804,7 +804,7 @@ py::object pyCurvesInfo(const py::object& pathArg, const py::object& radiusArg) 
     json report;
     {
         py::gil_scoped_release release;
-        report = render::toJson(render::curveReport(render::readCurves(path), radius));
+        report = render::toJson(render::curveReport(readCurves(path), radius));
     }
     report["file"] = path;
     return pyFromJson(report);

@@ -8,10 +8,10 @@
 #include <string>
 
 #include "cli_test_util.h"
+#include "weft/core/curves.h"
 #include "weft/core/file.h"
 #include "weft/core/image.h"
 #include "weft/core/image_io.h"
-#include "weft/render/curves.h"
 #include "weft/render/scene_file.h"
 
 namespace weft {

@@ -23,8 +23,4 @@ namespace weft::render {
 void readVertexColours(const std::string& path, CurveSet* set);
 void parseVertexColours(std::string_view text, const std::string& pathForErrors, CurveSet* set);
 
-// Until python/weft_module.cpp calls readCurves without the render:: it
-// named the renderer's reader by (the one reader is weft::readCurves now).
-using weft::readCurves;
-
 }  // namespace weft::render

@@ -2,10 +2,12 @@
 #include <pthread.h>
 #include <signal.h>
 
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <exception>
 #include <new>
+#include <string>
 #include <thread>
 
 #include "commands.h"
@@ -34,10 +36,27 @@ void removeTemporaryOutputsOnSignals() {
     }).detach();
 }
 
+// The summary line on stdout, flushed while an error can still be reported:
+// stdout redirected into a file over the file-size limit (SIGXFSZ is
+// ignored) or on a full disk must not end in status 0 with the line cut.
+void flushStandardOutput() {
+    errno = 0;
+    if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+        const int err = errno;
+        throw weft::InputError("cannot write the standard output: " +
+                               (err != 0 ? weft::writeErrorText(err) : std::string("write error")));
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     removeTemporaryOutputsOnSignals();
+    // Past the file-size limit (RLIMIT_FSIZE: ulimit -f, prlimit --fsize) a
+    // write then fails with EFBIG, reported as "file too large" and cleaned up
+    // like a full disk, instead of SIGXFSZ killing the process (status 153)
+    // with its temporary outputs in place.
+    std::signal(SIGXFSZ, SIG_IGN);
     CLI::App app{
         "weft: fiber and ply models, RDM gathering, neural yarn fitting and cloth rendering.\n"
         "Run 'weft <command> --help' for the flags of one command.",
@@ -56,6 +75,7 @@ int main(int argc, char** argv) {
     weft::cmd::addCurvesCommands(app);
     try {
         app.parse(argc, argv);
+        flushStandardOutput();
     } catch (const CLI::CallForHelp& e) {
         return app.exit(e);
     } catch (const CLI::CallForAllHelp& e) {

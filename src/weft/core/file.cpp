@@ -1,6 +1,7 @@
 #include "weft/core/file.h"
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -57,12 +58,25 @@ std::string recordedPath(const std::string& path) {
     return recordedPath(path, cwd.string());
 }
 
+std::string writeErrorText(int err, uint64_t bytes) {
+    const std::string size = bytes > 0 ? byteText(static_cast<double>(bytes)) + ", " : "";
+    if (err == EFBIG) {
+        struct rlimit limit {};
+        if (::getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY)
+            return "file too large: " + size + "over this process's file-size limit of " +
+                   std::to_string(limit.rlim_cur) + " bytes (ulimit -f; RLIMIT_FSIZE)";
+        return "file too large: " + size + "over what the file system takes in one file";
+    }
+    if (err == EDQUOT)
+        return "file too large for the disk quota: " + size +
+               "over what this user may still write there (" + std::strerror(err) + ")";
+    return std::strerror(err);
+}
+
 namespace {
 
-std::string errnoText(int err) { return std::strerror(err); }
-
 [[noreturn]] void fail(const std::string& what, const std::string& path, int err) {
-    throw InputError(what + " '" + path + "': " + errnoText(err));
+    throw InputError(what + " '" + path + "': " + std::strerror(err));
 }
 
 // Splits "a/b/c.npy" into ("a/b/", "c.npy"); "c.npy" into ("", "c.npy").
@@ -107,6 +121,24 @@ void unlistTemporary(const std::string& path) {
     r.isDirectory.erase(path);
 }
 
+// `path` as the user will know it: a file inside a TempDirCommit's
+// DIR.tmp.<pid>/ by its name in DIR/ ("g.tmp.42/rdm_m.npy" -> "g/rdm_m.npy").
+std::string finalName(const std::string& path) {
+    TemporaryOutputs& r = temporaryOutputs();
+    const std::lock_guard<std::mutex> lock(r.mutex);
+    for (const auto& [temp, isDirectory] : r.isDirectory)
+        if (isDirectory && path.size() > temp.size() && path[temp.size()] == '/' &&
+            path.compare(0, temp.size(), temp) == 0)
+            return temp.substr(0, temp.rfind(".tmp.")) + path.substr(temp.size());
+    return path;
+}
+
+// Writing the `bytes` bytes of `path` failed: InputError naming the file as
+// the user will find it (finalName).
+[[noreturn]] void failWrite(const std::string& path, int err, size_t bytes) {
+    throw InputError("cannot write '" + finalName(path) + "': " + writeErrorText(err, bytes));
+}
+
 std::string stripTrailingSlashes(std::string p) {
     while (p.size() > 1 && p.back() == '/') p.pop_back();
     return p;
@@ -129,6 +161,9 @@ std::string writeTemporarySibling(const std::string& path, std::string_view byte
     if (fd < 0) fail("cannot write", path, errno);
     listTemporary(tempPath, false);
 
+    // A write over the file-size limit (RLIMIT_FSIZE) fails with EFBIG where
+    // SIGXFSZ is ignored (the CLI does, src/cmd/main.cpp; so does Python);
+    // otherwise the kernel's SIGXFSZ ends the process here.
     size_t done = 0;
     while (done < bytes.size()) {
         const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
@@ -136,7 +171,7 @@ std::string writeTemporarySibling(const std::string& path, std::string_view byte
             if (errno == EINTR) continue;
             const int err = errno;
             discardTemp(fd, tempPath);
-            fail("cannot write", path, err);
+            failWrite(path, err, bytes.size());
         }
         done += static_cast<size_t>(n);
     }
@@ -145,12 +180,12 @@ std::string writeTemporarySibling(const std::string& path, std::string_view byte
     if (::fsync(fd) != 0 && errno != EINVAL && errno != EROFS) {
         const int err = errno;
         discardTemp(fd, tempPath);
-        fail("cannot write", path, err);
+        failWrite(path, err, bytes.size());
     }
     if (::close(fd) != 0) {
         const int err = errno;
         discardTemp(-1, tempPath);
-        fail("cannot write", path, err);
+        failWrite(path, err, bytes.size());
     }
     return tempPath;
 }

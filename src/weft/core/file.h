@@ -4,9 +4,12 @@
 // a temporary sibling file which is then renamed over the target, so a reader
 // (or a crash) sees either the old file or the complete new one, never a torn
 // one. TempDirCommit does the same for a whole output directory. Every failure
-// throws InputError naming the path and the system's reason (strerror).
+// throws InputError naming the path and the system's reason (strerror); a file
+// over the file-size limit (RLIMIT_FSIZE, `ulimit -f`: EFBIG) or a disk quota
+// (EDQUOT) says "file too large" with the size and the limit (writeErrorText).
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -17,7 +20,8 @@ namespace weft {
 // Writes `bytes` to `path` atomically: writes and fsyncs a temporary file
 // `<dir>/.<basename>.tmp.<pid>.<counter>` and renames it over `path`. On failure
 // the temporary file is removed and InputError names `path` and the reason
-// (missing or unwritable directory, disk full, `path` is a directory...).
+// (missing or unwritable directory, disk full, over the file-size limit or a
+// disk quota, `path` is a directory...).
 void writeFileAtomic(const std::string& path, std::string_view bytes);
 
 // Several files that belong together (an image, its PNG and its statistics):
@@ -32,6 +36,13 @@ void writeFilesAtomic(const std::vector<std::pair<std::string, std::string>>& fi
 // thread (the CLI's SIGINT / SIGTERM, src/cmd/main.cpp), so that an
 // interrupted command leaves no DIR.tmp.<pid>/ or .NAME.tmp.* behind.
 void removeTemporaryOutputs();
+
+// Why a write failed, for a message after "cannot write 'PATH': ": for EFBIG
+// "file too large: SIZE, over this process's file-size limit of N bytes (ulimit
+// -f; RLIMIT_FSIZE)" (or "... over what the file system takes in one file"
+// without a limit), for EDQUOT "file too large for the disk quota ...", else
+// strerror(err). `bytes` is the size being written, 0 if unknown.
+std::string writeErrorText(int err, uint64_t bytes = 0);
 
 // A path a command reads or writes, and what it is in messages ("--in", "the
 // scene's yarns[0].curves", "--out's PNG").

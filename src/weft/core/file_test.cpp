@@ -1,9 +1,11 @@
 #include "weft/core/file.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -194,6 +196,78 @@ TEST_F(FileTest, RemoveTemporaryOutputsDeletesWhatIsBeingWritten) {
     writeFileAtomic(path("kept.txt"), "done");  // finished files are not listed
     removeTemporaryOutputs();
     EXPECT_EQ(readFile(path("kept.txt")), "done");
+}
+
+// A file-size limit (RLIMIT_FSIZE) on this process, with SIGXFSZ ignored as
+// the CLI and Python run: what is written past it fails with EFBIG.
+class FileSizeLimit {
+  public:
+    explicit FileSizeLimit(rlim_t bytes) {
+        ::getrlimit(RLIMIT_FSIZE, &saved_);
+        handler_ = std::signal(SIGXFSZ, SIG_IGN);
+        rlimit limit = saved_;
+        limit.rlim_cur = bytes;
+        ::setrlimit(RLIMIT_FSIZE, &limit);
+    }
+    ~FileSizeLimit() {
+        ::setrlimit(RLIMIT_FSIZE, &saved_);
+        std::signal(SIGXFSZ, handler_);
+    }
+    FileSizeLimit(const FileSizeLimit&) = delete;
+    FileSizeLimit& operator=(const FileSizeLimit&) = delete;
+
+  private:
+    rlimit saved_{};
+    void (*handler_)(int) = SIG_DFL;
+};
+
+// The message of the InputError that `write` throws ("" if none).
+std::string inputErrorOf(const std::function<void()>& write) {
+    try {
+        write();
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+// Issue 41, item 1: over the file-size limit a write is an InputError saying
+// "file too large", naming the file (inside an output directory by its final
+// name) and the limit, and nothing is left: no temporary file or directory,
+// and no file of an all-or-nothing set.
+TEST_F(FileTest, OverTheFileSizeLimitIsFileTooLargeAndLeavesNothing) {
+    writeFileAtomic(path("old.exr"), "old");
+    const std::string big(5000, 'x');
+    std::string file, dir, several, quota;
+    {
+        const FileSizeLimit limit(1000);  // messages are checked after, without the limit
+        file = inputErrorOf([&] { writeFileAtomic(path("big.npy"), big); });
+        dir = inputErrorOf([&] {
+            TempDirCommit out(path("g"));
+            writeFileAtomic(out.path() + "/count.npy", "fits");
+            writeFileAtomic(out.path() + "/rdm_m.npy", big);
+            out.commit();
+        });
+        several = inputErrorOf([&] {
+            writeFilesAtomic({{path("old.exr"), "new"}, {path("a.png"), big}, {path("a.json"), "{}"}});
+        });
+    }
+    EXPECT_EQ(file, "cannot write '" + path("big.npy") +
+                        "': file too large: 5.0 KB, over this process's file-size limit of 1000 "
+                        "bytes (ulimit -f; RLIMIT_FSIZE)");
+    EXPECT_EQ(dir, "cannot write '" + path("g/rdm_m.npy") +
+                       "': file too large: 5.0 KB, over this process's file-size limit of 1000 "
+                       "bytes (ulimit -f; RLIMIT_FSIZE)");
+    EXPECT_NE(several.find("cannot write '" + path("a.png") + "': file too large"),
+              std::string::npos)
+        << several;
+    EXPECT_EQ(readFile(path("old.exr")), "old");
+    EXPECT_EQ(entries(dir_), std::vector<std::string>{"old.exr"});
+    // A quota says so; the other reasons are the system's words.
+    EXPECT_EQ(writeErrorText(EDQUOT, 5000),
+              "file too large for the disk quota: 5.0 KB, over what this user may still write "
+              "there (Disk quota exceeded)");
+    EXPECT_EQ(writeErrorText(ENOSPC, 5000), "No space left on device");
 }
 
 TEST_F(FileTest, ConcurrentWritersNeverTearTheFile) {

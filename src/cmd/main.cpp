@@ -1,40 +1,16 @@
 // weft — neural appearance model for cloth: command-line entry point.
-#include <pthread.h>
-#include <signal.h>
-
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <exception>
 #include <new>
 #include <string>
-#include <thread>
 
 #include "commands.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 
 namespace {
-
-// SIGINT, SIGTERM and SIGHUP are blocked in every thread (TBB's workers
-// inherit the mask) and taken by one thread, which deletes the temporary
-// outputs being written (a gather's DIR.tmp.<pid>/, a file's .NAME.tmp.*)
-// and then dies of the same signal: the exit status a shell expects (130
-// for Ctrl-C). Cleaning up there, not in a handler, may use any function.
-void removeTemporaryOutputsOnSignals() {
-    sigset_t signals;
-    sigemptyset(&signals);
-    for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, s);
-    if (pthread_sigmask(SIG_BLOCK, &signals, nullptr) != 0) return;
-    std::thread([signals] {
-        int received = 0;
-        if (sigwait(&signals, &received) != 0) return;
-        weft::removeTemporaryOutputs();
-        std::signal(received, SIG_DFL);
-        pthread_sigmask(SIG_UNBLOCK, &signals, nullptr);  // this thread only
-        std::raise(received);
-    }).detach();
-}
 
 // The summary line on stdout, flushed while an error can still be reported:
 // stdout redirected into a file over the file-size limit (SIGXFSZ is
@@ -51,7 +27,10 @@ void flushStandardOutput() {
 }  // namespace
 
 int main(int argc, char** argv) {
-    removeTemporaryOutputsOnSignals();
+    // SIGINT, SIGTERM and SIGHUP delete the temporary outputs being written
+    // and end the process by the same signal (core/file.h); first thing, so
+    // that every thread inherits the blocked mask.
+    weft::removeTemporaryOutputsOnSignals();
     // Past the file-size limit (RLIMIT_FSIZE: ulimit -f, prlimit --fsize) a
     // write then fails with EFBIG, reported as "file too large" and cleaned up
     // like a full disk, instead of SIGXFSZ killing the process (status 153)

@@ -1,6 +1,8 @@
 #include "weft/core/file.h"
 
 #include <fcntl.h>
+#include <pthread.h>
+#include <signal.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -8,11 +10,13 @@
 #include <atomic>
 #include <cctype>
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <map>
 #include <mutex>
 #include <system_error>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -90,43 +94,33 @@ std::pair<std::string, std::string> splitPath(const std::string& path) {
 // temporary name.
 std::atomic<uint64_t> tempCounter{0};
 
-void unlistTemporary(const std::string& path);
-
-// Closes fd (if open) and unlinks the temporary file; keeps errno intact.
-void discardTemp(int fd, const std::string& tempPath) {
-    const int saved = errno;
-    if (fd >= 0) ::close(fd);
-    ::unlink(tempPath.c_str());
-    unlistTemporary(tempPath);
-    errno = saved;
-}
-
-// The temporary outputs that exist now (core/file.h: removeTemporaryOutputs).
+// The temporary outputs that exist now, and the lock that orders every change
+// to their directory entries against the clean-up on signals (core/file.h).
 struct TemporaryOutputs {
     std::mutex mutex;
     std::map<std::string, bool> isDirectory;
 };
 TemporaryOutputs& temporaryOutputs() {
-    static TemporaryOutputs registry;
-    return registry;
+    // Never destroyed: the clean-up thread may take it while exit() runs the
+    // static destructors.
+    static TemporaryOutputs* const registry = new TemporaryOutputs;
+    return *registry;
 }
-void listTemporary(const std::string& path, bool isDirectory) {
-    TemporaryOutputs& r = temporaryOutputs();
-    const std::lock_guard<std::mutex> lock(r.mutex);
-    r.isDirectory[path] = isDirectory;
+using RegistryLock = std::unique_lock<std::mutex>;
+RegistryLock lockTemporaries() { return RegistryLock(temporaryOutputs().mutex); }
+// Both with the lock held (the argument is its proof).
+void listTemporary(const RegistryLock&, const std::string& path, bool isDirectory) {
+    temporaryOutputs().isDirectory[path] = isDirectory;
 }
-void unlistTemporary(const std::string& path) {
-    TemporaryOutputs& r = temporaryOutputs();
-    const std::lock_guard<std::mutex> lock(r.mutex);
-    r.isDirectory.erase(path);
+void unlistTemporary(const RegistryLock&, const std::string& path) {
+    temporaryOutputs().isDirectory.erase(path);
 }
 
 // `path` as the user will know it: a file inside a TempDirCommit's
 // DIR.tmp.<pid>/ by its name in DIR/ ("g.tmp.42/rdm_m.npy" -> "g/rdm_m.npy").
 std::string finalName(const std::string& path) {
-    TemporaryOutputs& r = temporaryOutputs();
-    const std::lock_guard<std::mutex> lock(r.mutex);
-    for (const auto& [temp, isDirectory] : r.isDirectory)
+    const RegistryLock lock = lockTemporaries();
+    for (const auto& [temp, isDirectory] : temporaryOutputs().isDirectory)
         if (isDirectory && path.size() > temp.size() && path[temp.size()] == '/' &&
             path.compare(0, temp.size(), temp) == 0)
             return temp.substr(0, temp.rfind(".tmp.")) + path.substr(temp.size());
@@ -137,6 +131,35 @@ std::string finalName(const std::string& path) {
 // the user will find it (finalName).
 [[noreturn]] void failWrite(const std::string& path, int err, size_t bytes) {
     throw InputError("cannot write '" + finalName(path) + "': " + writeErrorText(err, bytes));
+}
+
+// Closes fd (if open), unlinks and unlists the temporary file; keeps errno intact.
+void discardTemp(int fd, const std::string& tempPath) {
+    const int saved = errno;
+    if (fd >= 0) ::close(fd);
+    {
+        const RegistryLock lock = lockTemporaries();
+        ::unlink(tempPath.c_str());
+        unlistTemporary(lock, tempPath);
+    }
+    errno = saved;
+}
+
+// Removes the file or directory `path`, whatever is removed beside it
+// meanwhile; the clean-up's removal.
+void removeTemporary(const std::string& path, bool isDirectory) {
+    if (!isDirectory) {
+        ::unlink(path.c_str());
+        return;
+    }
+    // With the lock held nothing is created in `path` any more, so one pass
+    // removes it; the retries only bound what a writer outside the registry
+    // (a test making sub-directories) could add.
+    std::error_code ec;
+    for (int attempt = 0; attempt < 100; ++attempt) {
+        std::filesystem::remove_all(path, ec);
+        if (!std::filesystem::exists(std::filesystem::symlink_status(path, ec))) return;
+    }
 }
 
 std::string stripTrailingSlashes(std::string p) {
@@ -157,9 +180,14 @@ std::string writeTemporarySibling(const std::string& path, std::string_view byte
     const std::string tempPath = dir + "." + base + ".tmp." + std::to_string(::getpid()) + "." +
                                  std::to_string(tempCounter.fetch_add(1));
 
-    const int fd = ::open(tempPath.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd < 0) fail("cannot write", path, errno);
-    listTemporary(tempPath, false);
+    int fd = -1;
+    {
+        // Created and listed at once (core/file.h, clean-up on signals).
+        const RegistryLock lock = lockTemporaries();
+        fd = ::open(tempPath.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        if (fd < 0) fail("cannot write", path, errno);
+        listTemporary(lock, tempPath, false);
+    }
 
     // A write over the file-size limit (RLIMIT_FSIZE) fails with EFBIG where
     // SIGXFSZ is ignored (the CLI does, src/cmd/main.cpp; so does Python);
@@ -190,19 +218,24 @@ std::string writeTemporarySibling(const std::string& path, std::string_view byte
     return tempPath;
 }
 
-void renameTemporary(const std::string& tempPath, const std::string& path) {
+// Renames the temporary file into place and unlists it; the caller holds the lock.
+void renameTemporary(const RegistryLock& lock, const std::string& tempPath,
+                     const std::string& path) {
     if (::rename(tempPath.c_str(), path.c_str()) != 0) {
         const int err = errno;
-        discardTemp(-1, tempPath);
+        ::unlink(tempPath.c_str());
+        unlistTemporary(lock, tempPath);
         fail("cannot write", path, err);
     }
-    unlistTemporary(tempPath);
+    unlistTemporary(lock, tempPath);
 }
 
 }  // namespace
 
 void writeFileAtomic(const std::string& path, std::string_view bytes) {
-    renameTemporary(writeTemporarySibling(path, bytes), path);
+    const std::string tempPath = writeTemporarySibling(path, bytes);
+    const RegistryLock lock = lockTemporaries();
+    renameTemporary(lock, tempPath, path);
 }
 
 void writeFilesAtomic(const std::vector<std::pair<std::string, std::string>>& files) {
@@ -219,12 +252,17 @@ void writeFilesAtomic(const std::vector<std::pair<std::string, std::string>>& fi
         for (const std::string& t : temps) discardTemp(-1, t);
         throw;
     }
-    // Every file is complete on disk: the renames are all that is left.
+    // Every file is complete on disk: the renames are all that is left, under
+    // one hold of the lock, so that a signal sees all of them or none done.
+    const RegistryLock lock = lockTemporaries();
     for (size_t k = 0; k < files.size(); ++k) {
         try {
-            renameTemporary(temps[k], files[k].first);
+            renameTemporary(lock, temps[k], files[k].first);
         } catch (...) {
-            for (size_t j = k + 1; j < temps.size(); ++j) discardTemp(-1, temps[j]);
+            for (size_t j = k + 1; j < temps.size(); ++j) {
+                ::unlink(temps[j].c_str());
+                unlistTemporary(lock, temps[j]);
+            }
             throw;
         }
     }
@@ -297,16 +335,30 @@ void checkOutputsSpareInputs(const std::vector<CommandPath>& inputFiles,
 }
 
 void removeTemporaryOutputs() {
-    TemporaryOutputs& r = temporaryOutputs();
-    const std::lock_guard<std::mutex> lock(r.mutex);
-    for (const auto& [path, isDirectory] : r.isDirectory) {
-        std::error_code ec;
-        if (isDirectory)
-            std::filesystem::remove_all(path, ec);
-        else
-            ::unlink(path.c_str());
-    }
-    r.isDirectory.clear();
+    const RegistryLock lock = lockTemporaries();
+    for (const auto& [path, isDirectory] : temporaryOutputs().isDirectory)
+        removeTemporary(path, isDirectory);
+    temporaryOutputs().isDirectory.clear();
+}
+
+void removeTemporaryOutputsOnSignals() {
+    sigset_t signals;
+    sigemptyset(&signals);
+    for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, s);
+    if (pthread_sigmask(SIG_BLOCK, &signals, nullptr) != 0) return;
+    std::thread([signals] {
+        int received = 0;
+        if (sigwait(&signals, &received) != 0) return;
+        // Taken for good: no writer creates, renames or lists a temporary
+        // output from now on, so what is removed here stays removed.
+        temporaryOutputs().mutex.lock();
+        for (const auto& [path, isDirectory] : temporaryOutputs().isDirectory)
+            removeTemporary(path, isDirectory);
+        std::signal(received, SIG_DFL);
+        pthread_sigmask(SIG_UNBLOCK, &signals, nullptr);  // this thread only
+        std::raise(received);
+        ::_exit(128 + received);  // not reached: the default action ends the process
+    }).detach();
 }
 
 std::string readFile(const std::string& path) {
@@ -380,15 +432,17 @@ TempDirCommit::TempDirCommit(std::string finalPath)
     std::error_code ec;
     std::filesystem::remove_all(tempPath_, ec);
     if (ec) throw InputError("cannot remove stale directory '" + tempPath_ + "': " + ec.message());
+    const RegistryLock lock = lockTemporaries();  // made and listed at once
     if (::mkdir(tempPath_.c_str(), 0777) != 0) fail("cannot create directory", tempPath_, errno);
-    listTemporary(tempPath_, true);
+    listTemporary(lock, tempPath_, true);
 }
 
 TempDirCommit::~TempDirCommit() {
     if (committed_) return;
+    const RegistryLock lock = lockTemporaries();
     std::error_code ec;  // Never throw from a destructor; a leftover is harmless.
     std::filesystem::remove_all(tempPath_, ec);
-    unlistTemporary(tempPath_);
+    unlistTemporary(lock, tempPath_);
 }
 
 void TempDirCommit::commit() {
@@ -401,6 +455,10 @@ void TempDirCommit::commit() {
         throw InputError("cannot replace '" + finalPath_ + "': it exists and is not a directory");
 
     std::string oldPath;
+    // Under the lock to the end: a signal sees the old directory in place and
+    // the new one temporary, or the new one in place and no old copy; never
+    // the old one moved aside.
+    const RegistryLock lock = lockTemporaries();
     if (exists) {
         // Move the old directory aside rather than deleting it first, so that
         // a failed rename below can put it back.
@@ -414,7 +472,7 @@ void TempDirCommit::commit() {
         if (!oldPath.empty()) ::rename(oldPath.c_str(), finalPath_.c_str());
         fail("cannot rename '" + tempPath_ + "' to", finalPath_, err);
     }
-    unlistTemporary(tempPath_);
+    unlistTemporary(lock, tempPath_);
     committed_ = true;
     if (!oldPath.empty()) {
         fs::remove_all(oldPath, ec);

@@ -7,6 +7,22 @@
 // throws InputError naming the path and the system's reason (strerror); a file
 // over the file-size limit (RLIMIT_FSIZE, `ulimit -f`: EFBIG) or a disk quota
 // (EDQUOT) says "file too large" with the size and the limit (writeErrorText).
+//
+// Clean-up on signals (removeTemporaryOutputsOnSignals). The temporary outputs
+// that exist now are listed in a registry, guarded by one lock. Every change to
+// the directory entries of a listed output happens under that lock: creating a
+// temporary file or directory together with listing it, renaming a file into
+// place together with unlisting it, removing one, and TempDirCommit::commit's
+// renames. The clean-up takes the lock and keeps it until the process has died
+// of the signal. So when it removes a temporary directory, no writer can create
+// a file inside it behind its back (which made the removal fail with ENOTEMPTY
+// and left DIR.tmp.<pid>/), no temporary exists unlisted (created, not yet
+// listed), and a commit is seen either not begun or finished (the clean-up
+// waits for the removal of the directory it replaces). A writer that comes to
+// the lock afterwards waits there until the process ends. Writing the bytes of
+// an open temporary file needs no lock: it adds no entry. The clean-up runs in
+// an ordinary thread woken by sigwait, not in an asynchronous signal handler,
+// so taking a mutex and allocating there are safe.
 #pragma once
 
 #include <cstdint>
@@ -32,10 +48,21 @@ void writeFileAtomic(const std::string& path, std::string_view bytes);
 void writeFilesAtomic(const std::vector<std::pair<std::string, std::string>>& files);
 
 // Deletes every temporary file or directory that writeFileAtomic,
-// writeFilesAtomic or TempDirCommit is writing now; for a signal handler's
-// thread (the CLI's SIGINT / SIGTERM, src/cmd/main.cpp), so that an
-// interrupted command leaves no DIR.tmp.<pid>/ or .NAME.tmp.* behind.
+// writeFilesAtomic or TempDirCommit is writing now, and forgets them (the
+// writers' later removals or renames of them then fail harmlessly). For tests;
+// a program uses removeTemporaryOutputsOnSignals.
 void removeTemporaryOutputs();
+
+// The clean-up on signals of a command-line program (src/cmd/main.cpp): blocks
+// SIGINT, SIGTERM and SIGHUP in the calling thread and starts a thread that
+// waits for one of them (sigwait), takes the registry's lock for good (see the
+// top of this file), deletes every temporary output being written and ends
+// the process by the same signal (the exit status a shell expects: 130 for
+// Ctrl-C). Call it first thing in main(), before any other thread exists, so
+// that every thread (TBB's workers too) inherits the blocked mask. Not for a
+// library inside another program (the Python module): it takes those signals
+// from the host.
+void removeTemporaryOutputsOnSignals();
 
 // Why a write failed, for a message after "cannot write 'PATH': ": for EFBIG
 // "file too large: SIZE, over this process's file-size limit of N bytes (ulimit

@@ -1,10 +1,12 @@
 #include "weft/core/file.h"
 
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -268,6 +270,67 @@ TEST_F(FileTest, OverTheFileSizeLimitIsFileTooLargeAndLeavesNothing) {
               "file too large for the disk quota: 5.0 KB, over what this user may still write "
               "there (Disk quota exceeded)");
     EXPECT_EQ(writeErrorText(ENOSPC, 5000), "No space left on device");
+}
+
+// Issue 41, item 5: the clean-up on signals against writers that keep
+// creating, renaming and committing. In a child process (a death test,
+// forked), the clean-up is set up as the CLI does it; two threads write files
+// into output directories (5 files, then a commit that replaces the previous
+// round's directory) and files beside them, and a third sends the process
+// `signal` after `delay`. The process must die of the signal and leave only
+// complete outputs: no DIR.tmp.<pid>/, no .NAME.tmp.*, no DIR.old.<pid>/, and
+// every DIR holding its 5 files.
+void writeUntilSignalled(const std::string& dir, int signal, std::chrono::microseconds delay) {
+    removeTemporaryOutputsOnSignals();
+    std::thread([signal, delay] {
+        std::this_thread::sleep_for(delay);
+        ::kill(::getpid(), signal);
+    }).detach();
+    auto writer = [&dir](int id) {
+        try {
+            for (;;) {
+                TempDirCommit out(dir + "/g" + std::to_string(id));
+                for (int k = 0; k < 5; ++k)
+                    writeFileAtomic(out.path() + "/" + std::to_string(k) + ".npy", "x");
+                writeFileAtomic(dir + "/f" + std::to_string(id), "y");
+                out.commit();
+            }
+        } catch (...) {
+            // Only the signal may end this process; a writer that fails waits for it.
+        }
+        for (;;) ::pause();
+    };
+    std::thread second(writer, 1);
+    writer(0);
+}
+
+// Before, about half of these runs left a temporary: the clean-up's removal of
+// DIR.tmp.<pid>/ failed (ENOTEMPTY) when a writer created a file in it
+// meanwhile, or it ran between a commit's two renames (DIR.old.<pid>/), or
+// between a file's creation and its listing (.NAME.tmp.*).
+TEST_F(FileTest, SignalsAtAnyMomentOfWritingLeaveNoTemporaryOutput) {
+    const auto start = std::chrono::steady_clock::now();
+    const int runs = 40;
+    int spoilt = 0;
+    // Delays from 0 to 58.5 ms: the set-up, the first files, commits, later rounds.
+    for (int k = 0; k < runs; ++k) {
+        const int signal = (k % 3 == 0) ? SIGINT : (k % 3 == 1) ? SIGHUP : SIGTERM;
+        const std::chrono::microseconds delay(k * 1500);
+        const std::string run = path("run" + std::to_string(k));
+        fs::create_directory(run);
+        EXPECT_EXIT(writeUntilSignalled(run, signal, delay), ::testing::KilledBySignal(signal), "");
+        bool whole = true;
+        for (const std::string& name : entries(run)) {
+            const bool output = name == "g0" || name == "g1" || name == "f0" || name == "f1";
+            const bool partial = output && name[0] == 'g' && entries(run + "/" + name).size() != 5;
+            EXPECT_TRUE(output && !partial) << "signal " << signal << " after " << delay.count()
+                                            << " us left " << name << (partial ? " partial" : "");
+            whole = whole && output && !partial;
+        }
+        spoilt += !whole;
+    }
+    EXPECT_EQ(spoilt, 0) << "of " << runs << " runs left a temporary or partial output";
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(60));
 }
 
 TEST_F(FileTest, ConcurrentWritersNeverTearTheFile) {

@@ -11,10 +11,12 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "weft/core/curves.h"
@@ -332,6 +334,150 @@ TEST_F(GatherCliTest, AnyColourGatherRecoloursToAnyCTT) {
     expectUserError(run("gather recolour ac --c-tt 0.5,0.5,0.5 --out bad"),
                     {"ac/paths_weight.npy"});
     for (const std::string& name : listing()) EXPECT_TRUE(name.rfind("bad", 0) != 0) << name;
+}
+
+// ---------------------------------------------------------------------------
+// Hostile gather files (issue 41, items 3 and 9): each reproducer ends in exit
+// status 2, a message naming the file and the field or row, and nothing written.
+
+// The elements of the array in `file`, rewritten after `change`.
+template <typename T>
+void rewriteNpy(const std::string& file, const std::function<void(std::vector<T>&)>& change) {
+    const NpyArray a = readNpy(file);
+    std::vector<T> v = values<T>(a);
+    change(v);
+    writeNpy(file, v.data(), a.shape);
+}
+
+// Item 3: a record's weight of 3e38 gave rdm_m.npy values of -13,664,891 with exit 0.
+TEST_F(GatherCliTest, RecolourAndMergeRefuseWeightsTheFixedPointSumsCannotHold) {
+    gatherOk("--preset fleece " + kSmall + " --seed 3 --any-colour --out ac");
+    rewriteNpy<float>(path("ac/paths_weight.npy"), [](std::vector<float>& w) { w[3 * 5 + 1] = 3e38f; });
+    expectUserError(run("gather recolour ac --c-tt 0.5,0.5,0.5 --out bad"),
+                    {"ac/paths_weight.npy", "row 5", "channel 1", "3e+38", "< 2^31"});
+    // (A short fit, should the check ever be lost.)
+    writeText("tiny.json", R"({"t_net": {"steps": 20, "restarts": 1, "batch": 64},
+                               "m_net": {"hidden": [8], "steps": 20, "batch": 64}})");
+    expectUserError(run("fit --rdm ac --out bad.json --config tiny.json --no-report "
+                        "--colour-range 0.3,0.9 --quiet"),
+                    {"ac/paths_weight.npy", "row 5"});
+    for (int k = 0; k < 2; ++k)
+        gatherOk("--preset fleece " + kSmall + " --seed 3 --any-colour --shard " +
+                 std::to_string(k) + "/2 --out part" + std::to_string(k));
+    rewriteNpy<float>(path("part1/paths_weight.npy"), [](std::vector<float>& w) { w[0] = 3e38f; });
+    expectUserError(run("gather merge part0 part1 --out bad"),
+                    {"part1/paths_weight.npy", "row 0", "< 2^31"});
+    for (const std::string& name : listing()) EXPECT_TRUE(name.rfind("bad", 0) != 0) << name;
+}
+
+// Item 9: parts that disagree about the ply, lack their any_colour flag or
+// their ply.txt, or share a file, were merged with exit 0.
+TEST_F(GatherCliTest, MergeRefusesPartsThatAreNotShardsOfOneTracedGather) {
+    for (int k = 0; k < 2; ++k)
+        gatherOk("--preset fleece " + kSmall + " --seed 3 --shard " + std::to_string(k) +
+                 "/2 --out p" + std::to_string(k));
+    const std::string meta = readFile(path("p1/meta.json"));
+    const auto merge = [&] { return run("gather merge p0 p1 --out bad"); };
+    // Each field with one of the damages (gather_merge_test.cpp tries them all).
+    for (const auto& [field, how] : std::initializer_list<std::pair<const char*, const char*>>{
+             {"radius", "0"},
+             {"segments", "-1"},
+             {"period", "1e30"},
+             {"fiber_radius", "removed"},
+             {"radius", "string"}}) {
+        nlohmann::json m = nlohmann::json::parse(meta);
+        nlohmann::json& v = m.at("ply").at(field);
+        if (how == std::string("removed"))
+            m.at("ply").erase(field);
+        else if (how == std::string("string"))
+            v = v.dump();
+        else
+            v = v.get<double>() * std::stod(how);
+        writeText("p1/meta.json", m.dump(2));
+        SCOPED_TRACE(std::string(field) + " " + how);
+        expectUserError(merge(), {"p1/meta.json", field});
+    }
+    writeText("p1/meta.json", meta);
+    // ply.txt missing, or one digit of it changed.
+    const std::string ply = readFile(path("p1/ply.txt"));
+    fs::remove(path("p1/ply.txt"));
+    expectUserError(merge(), {"p1/ply.txt"});
+    std::string changed = ply;
+    const size_t digit = changed.find_first_of("12345678", changed.size() / 3);
+    changed[digit] = static_cast<char>(changed[digit] + 1);
+    writeText("p1/ply.txt", changed);
+    expectUserError(merge(), {"p1/ply.txt", "differs"});
+    writeText("p1/ply.txt", ply);
+    // p1/sum_m.npy a symbolic link to p0's.
+    fs::rename(path("p1/sum_m.npy"), path("sum_m.npy"));
+    fs::create_symlink("../p0/sum_m.npy", path("p1/sum_m.npy"));
+    expectUserError(merge(), {"p1/sum_m.npy", "p0/sum_m.npy", "one file"});
+    fs::remove(path("p1/sum_m.npy"));
+    fs::rename(path("sum_m.npy"), path("p1/sum_m.npy"));
+    // any_colour removed from every part of an any-colour gather.
+    for (int k = 0; k < 2; ++k) {
+        const std::string dir = "ac" + std::to_string(k);
+        gatherOk("--preset fleece " + kSmall + " --seed 3 --any-colour --shard " +
+                 std::to_string(k) + "/2 --out " + dir);
+        nlohmann::json m = nlohmann::json::parse(readFile(path(dir + "/meta.json")));
+        m.erase("any_colour");
+        writeText(dir + "/meta.json", m.dump(2));
+    }
+    expectUserError(run("gather merge ac0 ac1 --out bad"), {"ac0/meta.json", "\"any_colour\""});
+    for (const std::string& name : listing()) EXPECT_TRUE(name.rfind("bad", 0) != 0) << name;
+    // The parts themselves merge.
+    ASSERT_EQ(merge().status, 0);
+}
+
+// Item 9: weft fit read a gather with a damaged truncated.npy or depth.npy
+// and succeeded.
+TEST_F(GatherCliTest, FitRefusesADamagedTruncatedOrDepthArray) {
+    gatherOk("--preset fleece " + kSmall + " --seed 3 --out g");
+    writeText("tiny.json", R"({"t_net": {"steps": 20, "restarts": 1, "batch": 64},
+                               "m_net": {"hidden": [8], "steps": 20, "batch": 64}})");
+    const auto fit = [&] { return run("fit --rdm g --out m.json --config tiny.json --no-report --quiet"); };
+    const std::string truncated = readFile(path("g/truncated.npy")),
+                      depth = readFile(path("g/depth.npy"));
+    rewriteNpy<double>(path("g/truncated.npy"), [](std::vector<double>& t) { t[4] = NAN; });
+    expectUserError(fit(), {"g/truncated.npy", "element 4 (0, 1, 1) is nan"});
+    rewriteNpy<double>(path("g/truncated.npy"), [](std::vector<double>& t) { t[4] = -1; });
+    expectUserError(fit(), {"g/truncated.npy", "element 4 (0, 1, 1) is -1"});
+    writeText("g/truncated.npy", truncated.substr(0, truncated.size() - 8));
+    expectUserError(fit(), {"g/truncated.npy", "truncated"});
+    writeText("g/truncated.npy", truncated);
+    rewriteNpy<int64_t>(path("g/depth.npy"), [](std::vector<int64_t>& d) { d[2] = -5; });
+    expectUserError(fit(), {"g/depth.npy", "element 2 is -5"});
+    writeText("g/depth.npy", depth);
+    rewriteNpy<int64_t>(path("g/depth.npy"), [](std::vector<int64_t>& d) { d[2] += 1; });
+    expectUserError(fit(), {"g/depth.npy", "3000 paths"});
+    // A declared shape of 2^40 elements.
+    std::string huge = depth;
+    const size_t shape = huge.find("(1002,)");
+    ASSERT_NE(shape, std::string::npos);
+    huge.replace(shape, 7, "(1099511627776,)");
+    huge.erase(huge.find('\n') - 9, 9);  // from the header's padding: its length stays
+    writeText("g/depth.npy", huge);
+    expectUserError(fit(), {"g/depth.npy", "1099511627776"});
+    writeText("g/depth.npy", depth.substr(0, depth.size() - 8));
+    expectUserError(fit(), {"g/depth.npy", "truncated"});
+    writeText("g/depth.npy", depth);
+    EXPECT_FALSE(fs::exists(path("m.json")));
+    const RunResult ok = fit();
+    EXPECT_EQ(ok.status, 0) << ok.err;
+}
+
+// A twist whose margin is many periods long needs more control points per
+// fiber than an int holds (twist 1e6: 4e12): refused, not wrapped around.
+TEST_F(GatherCliTest, ATwistTooLargeOrTooSmallForTheTracedPlyIsRefused) {
+    writeText("fiber.json", kLosslessFiber);
+    for (const char* twist : {"1e6", "1e300"})
+        expectUserError(gather("--params fiber.json --fibers 5 --density 0.3 --twist " +
+                               std::string(twist) + " " + kSmall + " --out x"),
+                        {"points"});
+    expectUserError(gather("--params fiber.json --fibers 5 --density 0.3 --twist 1e-310 " +
+                           kSmall + " --out x"),
+                    {"twist", "no finite twist period"});
+    EXPECT_EQ(listing(), std::vector<std::string>{"fiber.json"});
 }
 
 TEST_F(GatherCliTest, SeedDeterminesTheResult) {

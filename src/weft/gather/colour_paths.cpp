@@ -1,12 +1,14 @@
 #include "weft/gather/colour_paths.h"
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <limits>
 #include <numeric>
+#include <unordered_map>
 
 #include "weft/core/error.h"
 #include "weft/core/json_file.h"
@@ -14,7 +16,6 @@
 #include "weft/core/npy.h"
 #include "weft/core/text_parse.h"
 #include "weft/gather/gather_merge.h"
-#include "weft/gather/rdm_io.h"
 
 namespace weft {
 
@@ -33,6 +34,13 @@ NpyArray readShaped(const std::string& path, const char* descr, size_t columns) 
                          (columns == 0 ? "(N,)" : "(N, " + std::to_string(columns) + ")") +
                          ", got " + a.descr + " " + npyShapeString(a.shape));
     return a;
+}
+
+// A recorded float32 weight as short as it reads back ("3e+38", "nan").
+std::string formatWeight(float w) {
+    char text[32];
+    const auto end = std::to_chars(text, text + sizeof text, w).ptr;
+    return std::string(text, end);
 }
 
 template <typename T>
@@ -85,27 +93,75 @@ void writeColourPaths(const std::string& dir, const std::vector<ColourPath>& pat
     writeNpy(inDir(dir, "paths_weight.npy"), c.weights.data(), {n, 3});
 }
 
-std::vector<ColourPath> readColourPaths(const std::string& dir, const GatherOptions& o,
-                                        int64_t maxRows) {
-    const std::string binsPath = inDir(dir, "paths_bins.npy"),
-                      kindPath = inDir(dir, "paths_kind.npy"),
-                      weightPath = inDir(dir, "paths_weight.npy");
+namespace {
+
+// The fixed-point sums of every colour hold the records: a record adds
+// toFixed(W0 C_TT^k) <= toFixed(W0) for C_TT in [0, 1] (fiber.validate), so
+// where the sums of W0 fit in int64, those of any colour do. Per channel, the
+// total over all records bounds every cell; only when it does not fit are the
+// cells summed one by one, to name the record that overflows one.
+void checkRecordSums(const std::vector<ColourPath>& paths, const RdmBins& bins,
+                     const std::string& weightPath) {
+    constexpr int64_t kMax = std::numeric_limits<int64_t>::max();
+    unsigned __int128 total[3] = {0, 0, 0};
+    for (const ColourPath& p : paths)
+        for (int c = 0; c < 3; ++c)
+            total[c] += static_cast<uint64_t>(GatherSums::toFixed(p.weight[c]));
+    if (total[0] <= kMax && total[1] <= kMax && total[2] <= kMax) return;
+    static const char* const kKind[] = {"R", "M", "truncated"};
+    const size_t nOut = bins.outgoingCount();
+    std::unordered_map<uint64_t, int64_t> cells;
+    for (size_t k = 0; k < paths.size(); ++k) {
+        const ColourPath& p = paths[k];
+        const uint64_t cell = p.kind == ColourPath::Truncated
+                                  ? static_cast<uint64_t>(p.incidentBin)
+                                  : static_cast<uint64_t>(p.incidentBin) * nOut + p.outgoingBin;
+        for (int c = 0; c < 3; ++c) {
+            int64_t& sum = cells[(cell * 3 + c) * 3 + p.kind];
+            if (__builtin_add_overflow(sum, GatherSums::toFixed(p.weight[c]), &sum))
+                throw InputError(
+                    weightPath + ": row " + std::to_string(k) + ": weight " +
+                    formatWeight(p.weight[c]) + " in channel " + std::to_string(c) +
+                    " takes the summed " + kKind[p.kind] + " weight of incident bin " +
+                    std::to_string(p.incidentBin) +
+                    (p.kind == ColourPath::Truncated
+                         ? std::string()
+                         : ", outgoing bin " + std::to_string(p.outgoingBin)) +
+                    " beyond what the fixed-point sums hold (2^31 in 2^-32 units: "
+                    "GatherSums, docs/limits.md)");
+        }
+    }
+}
+
+}  // namespace
+
+std::vector<ColourPath> readColourPaths(const GatherFolder& f, const GatherCounts& counts) {
+    const GatherOptions& o = f.options;
+    const std::string binsPath = f.file("paths_bins.npy"), kindPath = f.file("paths_kind.npy"),
+                      weightPath = f.file("paths_weight.npy");
     const NpyArray bins = readShaped(binsPath, "<i4", 3);
     const NpyArray kinds = readShaped(kindPath, "|u1", 0);
     const NpyArray weights = readShaped(weightPath, "<f4", 3);
     const size_t n = bins.shape[0];
     if (kinds.shape[0] != n || weights.shape[0] != n)
-        throw InputError(dir + ": paths_bins.npy, paths_kind.npy and paths_weight.npy have " +
+        throw InputError(f.dir + ": paths_bins.npy, paths_kind.npy and paths_weight.npy have " +
                          std::to_string(n) + ", " + std::to_string(kinds.shape[0]) + " and " +
                          std::to_string(weights.shape[0]) + " rows (must be equal)");
-    if (static_cast<int64_t>(n) > maxRows)
-        throw InputError(binsPath + ": " + std::to_string(n) + " recorded paths, more than the " +
-                         std::to_string(maxRows) + " paths walked");
+    // Records are kept for paths that met a fiber: at most count - count_t per incident bin.
+    const int64_t interacting = std::accumulate(counts.count.begin(), counts.count.end(),
+                                                int64_t{0}) -
+                                std::accumulate(counts.countT.begin(), counts.countT.end(),
+                                                int64_t{0});
+    if (static_cast<int64_t>(n) > interacting)
+        throw InputError(binsPath + ": " + std::to_string(n) +
+                         " recorded paths, more than the " + std::to_string(interacting) +
+                         " paths that met a fiber (count.npy - count_t.npy)");
     const int64_t nIn = static_cast<int64_t>(o.bins.incidentCount()),
                   nOut = static_cast<int64_t>(o.bins.outgoingCount());
     const auto bad = [](const std::string& path, size_t row, const std::string& what) {
         return InputError(path + ": row " + std::to_string(row) + ": " + what);
     };
+    std::vector<int64_t> perBin(static_cast<size_t>(nIn), 0);
     std::vector<ColourPath> paths(n);
     for (size_t k = 0; k < n; ++k) {
         ColourPath& p = paths[k];
@@ -121,6 +177,11 @@ std::vector<ColourPath> readColourPaths(const std::string& dir, const GatherOpti
             throw bad(binsPath, k,
                       "incident bin " + std::to_string(p.incidentBin) + " (allowed: 0.." +
                           std::to_string(nIn - 1) + ")");
+        if (++perBin[p.incidentBin] > counts.interacting(p.incidentBin))
+            throw bad(binsPath, k,
+                      "incident bin " + std::to_string(p.incidentBin) + " has more records than " +
+                          "its " + std::to_string(counts.interacting(p.incidentBin)) +
+                          " paths that met a fiber (count.npy - count_t.npy)");
         if (p.kind == ColourPath::Truncated ? p.outgoingBin != -1
                                             : p.outgoingBin < 0 || p.outgoingBin >= nOut)
             throw bad(binsPath, k,
@@ -136,68 +197,58 @@ std::vector<ColourPath> readColourPaths(const std::string& dir, const GatherOpti
                           (p.kind == ColourPath::R ? " for an R path)" : ", max_depth)"));
         for (int c = 0; c < 3; ++c) {
             p.weight[c] = element<float>(weights, 3 * k + c);
-            if (!std::isfinite(p.weight[c]) || p.weight[c] < 0)
+            // W0 2^32 must be an int64 (GatherSums::toFixed).
+            if (!(p.weight[c] >= 0 && p.weight[c] < kMaxRecordWeight))
                 throw bad(weightPath, k,
-                          "weight " + std::to_string(p.weight[c]) + " (must be finite and >= 0)");
+                          "weight " + formatWeight(p.weight[c]) + " in channel " +
+                              std::to_string(c) +
+                              " (allowed: finite, >= 0 and < 2^31: the fixed-point sums of a "
+                              "gather add weights in units of 2^-32 as int64)");
         }
     }
+    checkRecordSums(paths, o.bins, weightPath);
     return paths;
 }
 
 namespace {
 
-// The options of the any-colour gather `dir` from its meta.json.
-GatherOptions anyColourGatherOptions(const std::string& dir, nlohmann::json* metaOut) {
-    const std::string metaPath = inDir(dir, "meta.json");
-    nlohmann::json meta = readJsonFile(metaPath);
-    checkGatherMeta(meta, metaPath);
-    GatherOptions o = gatherOptionsFromJson(meta, metaPath);
-    if (!o.anyColour)
-        throw InputError(metaPath +
+// The any-colour gather `dir`, its meta.json, counts and ply checked.
+GatherFolder readAnyColourGather(const std::string& dir) {
+    GatherFolder f = readGatherFolder(dir, GatherFolderKind::Gather);
+    if (!f.options.anyColour)
+        throw InputError(f.metaPath +
                          ": not an any-colour gather (\"any_colour\" is false or missing): its "
                          "paths were not recorded; gather again with weft gather --any-colour");
-    if (metaOut) *metaOut = std::move(meta);
-    return o;
+    checkDistinctFiles(f.files());
+    return f;
 }
 
 }  // namespace
 
 std::vector<ColourPath> loadColourPaths(const std::string& dir, GatherOptions* options) {
-    const GatherOptions o = anyColourGatherOptions(dir, nullptr);
-    if (options) *options = o;
-    return readColourPaths(dir, o, o.paths);
+    const GatherFolder f = readAnyColourGather(dir);
+    if (options) *options = f.options;
+    return readColourPaths(f, readGatherCounts(f));
 }
 
 RecolouredGather recolourGather(const std::string& dir, const Rgb& cTT) {
     const auto start = std::chrono::steady_clock::now();
-    nlohmann::json meta;
-    GatherOptions o = anyColourGatherOptions(dir, &meta);
-    const JsonObjectReader r(meta, inDir(dir, "meta.json"));
+    const GatherFolder f = readAnyColourGather(dir);
+    GatherOptions o = f.options;
+    const JsonObjectReader r(f.meta, f.metaPath);
     RecolouredGather result;
     result.gatheredCTT = o.fiber.cTT;
     GatherSums& sums = result.sums;
     sums = emptyGatherSums(o);
+    // The recolouring writes the ply that the options give: the gather's must be it.
+    checkTracedPly(f, sums);
     // The records do not keep where paths left the ply: no exit distances.
     sums.sumExitDistance.clear();
-    const RdmBins& b = o.bins;
-    const size_t ti = b.thetaI, pi = b.phiI;
-    addInt64Npy(inDir(dir, "count.npy"), {ti, pi}, sums.count);
-    addInt64Npy(inDir(dir, "count_t.npy"), {ti, pi}, sums.countT);
-    addInt64Npy(inDir(dir, "depth.npy"), {sums.depth.size()}, sums.depth);
-    const int64_t counted = std::accumulate(sums.count.begin(), sums.count.end(), int64_t{0});
-    const int64_t byDepth = std::accumulate(sums.depth.begin(), sums.depth.end(), int64_t{0});
-    if (counted != o.paths || byDepth != o.paths)
-        throw InputError(dir + ": count.npy and depth.npy must each sum to the gather's " +
-                         std::to_string(o.paths) + " paths, got " + std::to_string(counted) +
-                         " and " + std::to_string(byDepth));
-    for (size_t i = 0; i < sums.count.size(); ++i)
-        if (sums.countT[i] > sums.count[i])
-            throw InputError(inDir(dir, "count_t.npy") + ": incident bin " + std::to_string(i) +
-                             " has " + std::to_string(sums.countT[i]) + " T paths of " +
-                             std::to_string(sums.count[i]));
-    // The interacting paths: those not counted as T.
-    const int64_t interacting = o.paths - sums.depth[0];
-    const std::vector<ColourPath> paths = readColourPaths(dir, o, interacting);
+    const GatherCounts counts = readGatherCounts(f);
+    sums.count = counts.count;
+    sums.countT = counts.countT;
+    sums.depth = counts.depth;
+    const std::vector<ColourPath> paths = readColourPaths(f, counts);
     o.fiber.cTT = cTT;
     o.fiber.validate("--c-tt");
     for (const ColourPath& p : paths)

@@ -36,6 +36,7 @@
 
 #include "weft/core/rgb.h"
 #include "weft/gather/gather.h"
+#include "weft/gather/gather_folder.h"
 
 namespace weft {
 
@@ -76,11 +77,15 @@ struct ColourPathColumns {
 ColourPathColumns colourPathColumns(const std::vector<ColourPath>& paths);
 // Writes the three paths_*.npy arrays into `dir`.
 void writeColourPaths(const std::string& dir, const std::vector<ColourPath>& paths);
-// Reads them back from a gather or part directory and checks every row
-// against `options` (bins, max depth; at most `maxRows` rows): InputError
-// naming the file, the row and the allowed range.
-std::vector<ColourPath> readColourPaths(const std::string& dir, const GatherOptions& options,
-                                        int64_t maxRows);
+// The largest W0 a record may hold: W0 2^32 is an int64 (GatherSums::toFixed).
+inline constexpr float kMaxRecordWeight = 2147483648.0f;  // 2^31, excluded
+// Reads them back from a gather or part folder (gather_folder.h) and checks
+// every row against its options (bins, max depth) and counts (at most
+// count - count_t records per incident bin), each weight in [0, 2^31), and
+// that the fixed-point sums of every colour hold them (no cell's summed W0
+// beyond 2^31, in 2^-32 units): InputError naming the file, the row and the
+// allowed range.
+std::vector<ColourPath> readColourPaths(const GatherFolder& folder, const GatherCounts& counts);
 
 // The recorded paths of the any-colour gather directory `dir`, and its
 // options; InputError naming meta.json when the gather is not one (made

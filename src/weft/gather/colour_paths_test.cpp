@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -214,7 +215,17 @@ TEST(AnyColourGather, RecolouredToWhiteIsAWhiteFurnace) {
     std::printf("white furnace: largest |z| %.2f over %zu bins x 3 channels\n", worst, nIn);
 }
 
-class ColourPathsFileTest : public testing::TempDirTest {};
+class ColourPathsFileTest : public testing::TempDirTest {
+  protected:
+    // A gather of `o` with 2000 paths, written to path("g").
+    GatherResult writeSmallGather(GatherOptions& o) {
+        o.paths = 2000;
+        GatherResult g = gatherRdm(o);
+        TempDirCommit out(path("g"));
+        writeGather(g, o, out);
+        return g;
+    }
+};
 
 TEST_F(ColourPathsFileTest, RecolourOfTheDirectoryReproducesItAndMergesShardsInPathOrder) {
     GatherOptions o = anyColourOptions();
@@ -250,13 +261,8 @@ TEST_F(ColourPathsFileTest, RecolourOfTheDirectoryReproducesItAndMergesShardsInP
 
 TEST_F(ColourPathsFileTest, DamagedRecordsAndOrdinaryGathersAreRefused) {
     GatherOptions o = anyColourOptions();
-    o.paths = 2000;
-    const GatherResult g = gatherRdm(o);
+    const GatherResult g = writeSmallGather(o);
     const std::string dir = path("g");
-    {
-        TempDirCommit out(dir);
-        writeGather(g, o, out);
-    }
     const auto file = [&](const char* name) {
         return (std::filesystem::path(dir) / name).string();
     };
@@ -295,7 +301,8 @@ TEST_F(ColourPathsFileTest, DamagedRecordsAndOrdinaryGathersAreRefused) {
     badWeights[3 * 11 + 1] = std::nanf("");
     writeNpy(file("paths_weight.npy"), badWeights.data(), {rows, 3});
     testing::expectInputError([&] { recolourGather(dir, colour); },
-                              {"paths_weight.npy", "row 11", "finite and >= 0"});
+                              {"paths_weight.npy", "row 11", "weight nan in channel 1",
+                               "finite, >= 0 and < 2^31"});
     writeNpy(file("paths_weight.npy"), weights.data(), {rows, 3});
     std::filesystem::remove(file("paths_bins.npy"));
     testing::expectInputError([&] { recolourGather(dir, colour); }, {"paths_bins.npy"});
@@ -311,6 +318,81 @@ TEST_F(ColourPathsFileTest, DamagedRecordsAndOrdinaryGathersAreRefused) {
     EXPECT_FALSE(std::filesystem::exists(path("plain") + "/paths_bins.npy"));
     testing::expectInputError([&] { recolourGather(path("plain"), colour); },
                               {"meta.json", "not an any-colour gather", "--any-colour"});
+}
+
+// Issue 41, item 3: a record of W0 = 3e38 gave rdm_m.npy values of
+// -13,664,891: its fixed-point weight overflowed int64. Records whose sums
+// the accumulators cannot hold are refused where they are read (recolour,
+// merge, the colour fit, Python); those they can hold are recoloured.
+TEST_F(ColourPathsFileTest, WeightsTheFixedPointSumsCannotHoldAreRefused) {
+    GatherOptions o = anyColourOptions();
+    const GatherResult g = writeSmallGather(o);
+    const std::string dir = path("g");
+    const std::string weightPath = dir + "/paths_weight.npy";
+    const ColourPathColumns columns = colourPathColumns(g.colourPaths);
+    const size_t rows = g.colourPaths.size();
+    const Rgb colour(0.5, 0.5, 0.5);
+    std::vector<float> w = columns.weights;
+    for (const float huge : {3e38f, kMaxRecordWeight, std::numeric_limits<float>::infinity()}) {
+        w[3 * 7 + 1] = huge;
+        writeNpy(weightPath, w.data(), {rows, 3});
+        testing::expectInputError([&] { recolourGather(dir, colour); },
+                                  {weightPath, "row 7", "channel 1", "< 2^31"});
+        testing::expectInputError([&] { loadColourPaths(dir); }, {weightPath, "row 7"});
+    }
+    // The largest weight one record may hold: recoloured, positive and finite.
+    w[3 * 7 + 1] = std::nextafter(kMaxRecordWeight, 0.0f);
+    writeNpy(weightPath, w.data(), {rows, 3});
+    {
+        RecolouredGather r = recolourGather(dir, Rgb(1.0));
+        const ColourPath& p = g.colourPaths[7];
+        const GatherResult n = normaliseGather(std::move(r.sums), r.options);
+        const std::vector<float>& map = p.kind == ColourPath::R ? n.rdmR : n.rdmM;
+        if (p.kind != ColourPath::Truncated) {
+            const float v = map[(p.incidentBin * o.bins.outgoingCount() + p.outgoingBin) * 3 + 1];
+            EXPECT_TRUE(std::isfinite(v) && v > 1e3f) << v;
+        }
+    }
+    // Three records of one cell, each within the limit, whose sum is not.
+    w = columns.weights;
+    std::vector<int32_t> bins = columns.bins;
+    std::vector<size_t> same;
+    for (size_t k = 0; k < rows && same.size() < 3; ++k)
+        if (g.colourPaths[k].kind == ColourPath::M &&
+            g.colourPaths[k].incidentBin == g.colourPaths[0].incidentBin)
+            same.push_back(k);
+    ASSERT_EQ(same.size(), 3u);
+    for (size_t k : same) {
+        bins[3 * k + 1] = g.colourPaths[same[0]].outgoingBin;
+        w[3 * k] = 1073741824.0f;  // 2^30
+    }
+    writeNpy(weightPath, w.data(), {rows, 3});
+    writeNpy(dir + "/paths_bins.npy", bins.data(), {rows, 3});
+    testing::expectInputError([&] { recolourGather(dir, colour); },
+                              {weightPath, "row " + std::to_string(same[1]), "channel 0",
+                               "summed M weight of incident bin", "fixed-point sums"});
+    writeNpy(weightPath, columns.weights.data(), {rows, 3});
+    writeNpy(dir + "/paths_bins.npy", columns.bins.data(), {rows, 3});
+    EXPECT_NO_THROW(recolourGather(dir, colour));
+}
+
+TEST_F(ColourPathsFileTest, MoreRecordsThanPathsOfTheirBinAreRefused) {
+    GatherOptions o = anyColourOptions();
+    const GatherResult g = writeSmallGather(o);
+    const std::string dir = path("g");
+    // The incident bin with the fewest paths that met a fiber gets one record more.
+    size_t fewest = 0;
+    for (size_t i = 0; i < g.count.size(); ++i)
+        if (g.count[i] - g.countT[i] < g.count[fewest] - g.countT[fewest]) fewest = i;
+    const int64_t interacting = g.count[fewest] - g.countT[fewest];
+    const size_t rows = g.colourPaths.size();
+    ASSERT_LT(interacting + 1, static_cast<int64_t>(rows));
+    std::vector<int32_t> bins = colourPathColumns(g.colourPaths).bins;
+    for (int64_t k = 0; k <= interacting; ++k) bins[3 * k] = static_cast<int32_t>(fewest);
+    writeNpy(dir + "/paths_bins.npy", bins.data(), {rows, 3});
+    testing::expectInputError([&] { recolourGather(dir, Rgb(0.5)); },
+                              {dir + "/paths_bins.npy", "row " + std::to_string(interacting),
+                               "incident bin " + std::to_string(fewest), "met a fiber"});
 }
 
 TEST(ParseColour, AcceptsThreeValuesInTheUnitIntervalOnly) {

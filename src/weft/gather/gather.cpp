@@ -80,6 +80,10 @@ void GatherOptions::validate() const {
     PeriodicPlyTracer::validateSegmentsPerTwist(segmentsPerTwist);
     fiber.validate();
     ply.validate();
+    // The explicit ply within the memory budget before its fibers are placed
+    // (a million fibers take seconds): radius R = 1, r = R sqrt(rho / N) (generatePly).
+    PeriodicPlyTracer::layout(ply, 1.0, std::sqrt(ply.density / ply.fibers), segmentsPerTwist,
+                              static_cast<size_t>(ply.fibers));
     bins.validate();
     if (anyColour)
         checkMemoryBudget(static_cast<double>(shard.end(paths) - shard.begin(paths)) *
@@ -356,15 +360,20 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
     out.commit();
 }
 
-void writePlyLines(const std::string& path, const std::vector<std::vector<Vec3>>& lines,
-                   double fiberRadius) {
+std::string formatPlyLines(const std::vector<std::vector<Vec3>>& lines, double fiberRadius,
+                           const std::string& path) {
     CurveSet set;
     for (const std::vector<Vec3>& line : lines) {
         Curve& fiber = set.curves.emplace_back();
         fiber.points = line;
         fiber.radii.assign(line.size(), fiberRadius);
     }
-    writeCurveText(path, set);
+    return formatCurveText(set, path);
+}
+
+void writePlyLines(const std::string& path, const std::vector<std::vector<Vec3>>& lines,
+                   double fiberRadius) {
+    writeFileAtomic(path, formatPlyLines(lines, fiberRadius, path));
 }
 
 nlohmann::json gatherInputs(const GatherOptions& o, double fiberRadius, double period,

@@ -188,6 +188,9 @@ void writeGather(const GatherResult& result, const GatherOptions& options, TempD
 // ply.txt: the traced fiber centre lines as a curve file (core/curves.h).
 void writePlyLines(const std::string& path, const std::vector<std::vector<Vec3>>& lines,
                    double fiberRadius);
+// The text writePlyLines writes (`path` names it in errors).
+std::string formatPlyLines(const std::vector<std::vector<Vec3>>& lines, double fiberRadius,
+                           const std::string& path);
 // The content of meta.json: inputs, bins, statistics, versions, array descriptions.
 nlohmann::json gatherMetadata(const GatherResult& result, const GatherOptions& options);
 // The part of meta.json that says what was gathered (material, fiber, ply,

@@ -43,17 +43,20 @@ struct MergedGather {
 };
 
 // Reads the part directories and adds them. They must be the N shards of one
-// gather: each a "weft-gather-part" of the same material, fiber and ply
-// parameters, ply seed, seed, paths, bins, max depth, segments per twist and
-// weft version, with shard indices 0..N-1 each exactly once, and arrays of
-// the shapes the bins say. Anything else is an InputError naming the part's
-// file and the field (a duplicate or missing shard names the shard and the
-// parts given).
+// gather: each a "weft-gather-part" checked on its own (gather_folder.h:
+// meta.json, counts, arrays, records), agreeing on every field of
+// sharedPartFields() (material, fiber, ply and its description, bins, paths,
+// seeds, max depth, any_colour, shard count, weft version), with shard
+// indices 0..N-1 each exactly once, no file of one part a link to another
+// file of any part, and each meta.json's ply description and ply.txt exactly
+// those of the ply that the options give (the merge writes that ply).
+// Anything else is an InputError naming the part's file and the field, row or
+// element (a duplicate or missing shard names the shard and the parts given).
 MergedGather mergeGatherParts(const std::vector<std::string>& partDirs);
 
 // Adds the int64 array in the .npy file `path` to `into` element by element;
-// InputError naming the file unless it is <i8 of `shape`, every element is
-// >= 0 (counts and weights) and the sums fit in int64.
+// InputError naming the file and the element unless it is <i8 of `shape`,
+// every element is >= 0 (counts and weights) and the sums fit in int64.
 void addInt64Npy(const std::string& path, const std::vector<size_t>& shape,
                  std::vector<int64_t>& into);
 

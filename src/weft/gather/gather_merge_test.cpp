@@ -5,15 +5,20 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/npy.h"
 #include "weft/core/test_util.h"
+#include "weft/gather/gather_folder.h"
 
 namespace weft {
 namespace {
@@ -188,7 +193,195 @@ TEST_F(GatherMergeTest, DamagedArraysAreRejected) {
     std::memcpy(sums.data(), r.bytes.data(), r.bytes.size());
     sums[5] = -1;
     writeNpy(parts[0] + "/sum_r.npy", sums.data(), r.shape);
-    EXPECT_NE(mergeError(parts).find("sum_r.npy: element 5 is -1"), std::string::npos);
+    const std::string negative = mergeError(parts);
+    EXPECT_NE(negative.find("sum_r.npy: element 5 (0, 0, 0, 1, 2) is -1"), std::string::npos)
+        << negative;
+    EXPECT_NE(negative.find(">= 0"), std::string::npos) << negative;
+}
+
+// Item 9 of issue 41: a part's meta.json must describe the ply it was traced
+// on, every part must say the same, and every file must be its own.
+class GatherPartDamageTest : public GatherMergeTest {
+  protected:
+    static nlohmann::json readMeta(const std::string& dir) {
+        return nlohmann::json::parse(readFile(dir + "/meta.json"));
+    }
+    static void writeMeta(const std::string& dir, const nlohmann::json& meta) {
+        writeFileAtomic(dir + "/meta.json", meta.dump(2));
+    }
+    // mergeError(dirs) contains each of `words`.
+    void expectRefused(const std::vector<std::string>& dirs,
+                       std::initializer_list<std::string> words) const {
+        const std::string message = mergeError(dirs);
+        for (const std::string& w : words)
+            EXPECT_NE(message.find(w), std::string::npos) << "\"" << w << "\" in: " << message;
+    }
+};
+
+TEST_F(GatherPartDamageTest, PlyDescriptionsThatAreNotTheTracedPlyAreRefused) {
+    const std::vector<std::string> one = writeParts(1, "one"), two = writeParts(2, "two");
+    // Scaled by 0, -1 and 1e30, off by one unit in the last place, removed, retyped.
+    const std::vector<std::pair<std::string, std::function<void(nlohmann::json&)>>> damage = {
+        {"times 0", [](nlohmann::json& v) { v = v.get<double>() * 0; }},
+        {"times -1", [](nlohmann::json& v) { v = -v.get<double>(); }},
+        {"times 1e30", [](nlohmann::json& v) { v = v.get<double>() * 1e30; }},
+        {"next double", [](nlohmann::json& v) { v = std::nextafter(v.get<double>(), 1e300); }},
+        {"removed", [](nlohmann::json& v) { v = nullptr; }},
+        {"a string", [](nlohmann::json& v) { v = v.dump(); }}};
+    for (const char* field : {"radius", "segments", "period", "fiber_radius"})
+        for (const auto& [how, change] : damage)
+            for (const std::vector<std::string>* parts : {&one, &two}) {
+                const std::string& dir = parts->back();
+                const std::string original = readFile(dir + "/meta.json");
+                nlohmann::json meta = nlohmann::json::parse(original);
+                nlohmann::json& ply = meta.at("ply");
+                if (field == std::string("segments") && how == std::string("next double"))
+                    ply.at(field) = ply.at(field).get<int64_t>() + 1;  // an integer field
+                else
+                    change(ply.at(field));
+                if (ply.at(field).is_null()) ply.erase(field);
+                writeMeta(dir, meta);
+                SCOPED_TRACE(std::string(field) + " " + how + " in " + dir);
+                expectRefused(*parts, {dir + "/meta.json", field});
+                writeFileAtomic(dir + "/meta.json", original);
+            }
+    EXPECT_NO_THROW(mergeGatherParts(one));
+    EXPECT_NO_THROW(mergeGatherParts(two));
+}
+
+TEST_F(GatherPartDamageTest, EveryFieldOfTheGatheredInputsIsSharedByThePartsOrChecked) {
+    // Each leaf of gatherInputs() lies under a field of the list, but the
+    // Embree version (the same weft can link another Embree).
+    GatherOptions o = options();
+    const nlohmann::json inputs = gatherInputs(o, 0.1, 2.0, 100);
+    const nlohmann::json leaves = inputs.flatten();
+    for (const auto& [pointer, value] : leaves.items()) {
+        std::string path = pointer.substr(1);
+        std::replace(path.begin(), path.end(), '/', '.');
+        if (path == "versions.embree") continue;
+        bool covered = false;
+        for (std::string_view field : sharedPartFields())
+            covered = covered || path == field || path.rfind(std::string(field) + ".", 0) == 0;
+        EXPECT_TRUE(covered) << path << " is not in sharedPartFields()";
+    }
+    // And each of them, changed in one part, is refused naming it.
+    const std::vector<std::string> parts = writeParts(2, "p");
+    const std::string original = readFile(parts[1] + "/meta.json");
+    for (std::string_view field : sharedPartFields()) {
+        nlohmann::json meta = nlohmann::json::parse(original);
+        nlohmann::json* v = &meta;
+        std::string rest(field);
+        for (size_t dot; (dot = rest.find('.')) != std::string::npos; rest = rest.substr(dot + 1))
+            v = &v->at(rest.substr(0, dot));
+        v->at(rest) = nlohmann::json::array({"changed"});
+        writeMeta(parts[1], meta);
+        SCOPED_TRACE(std::string(field));
+        const std::string message = mergeError(parts);
+        EXPECT_NE(message.find(parts[1] + "/meta.json"), std::string::npos) << message;
+        EXPECT_NE(message.find(rest), std::string::npos) << message;
+    }
+    // Valid values that differ from the other part's: the comparison names them.
+    for (const auto& [object, key, value] :
+         {std::tuple{"versions", "weft", "0.0.1"}, {"ply", "primitive", "spheres"}}) {
+        nlohmann::json meta = nlohmann::json::parse(original);
+        meta.at(object).at(key) = value;
+        writeMeta(parts[1], meta);
+        expectRefused(parts, {parts[1] + "/meta.json", parts[0] + "/meta.json",
+                              "\"" + std::string(object) + "." + key + "\"",
+                              "not shards of one gather"});
+    }
+    writeFileAtomic(parts[1] + "/meta.json", original);
+    EXPECT_NO_THROW(mergeGatherParts(parts));
+}
+
+TEST_F(GatherPartDamageTest, ARemovedAnyColourFlagIsRefused) {
+    GatherOptions o = options();
+    o.anyColour = true;
+    const std::vector<std::string> parts = writeParts(2, "ac", o);
+    for (const std::string& dir : parts) {
+        nlohmann::json meta = readMeta(dir);
+        meta.erase("any_colour");
+        writeMeta(dir, meta);
+    }
+    expectRefused(parts, {"meta.json", "\"any_colour\""});
+    expectRefused({parts[0]}, {"meta.json", "\"any_colour\""});
+}
+
+TEST_F(GatherPartDamageTest, AMissingOrDifferentPlyTxtIsRefused) {
+    const std::vector<std::string> parts = writeParts(2, "p");
+    const std::string ply = readFile(parts[1] + "/ply.txt");
+    std::filesystem::remove(parts[1] + "/ply.txt");
+    expectRefused(parts, {parts[1] + "/ply.txt"});
+    // One digit of one coordinate.
+    std::string changed = ply;
+    const size_t digit = changed.find_first_of("123456789", changed.size() / 2);
+    changed[digit] = changed[digit] == '9' ? '8' : static_cast<char>(changed[digit] + 1);
+    writeFileAtomic(parts[1] + "/ply.txt", changed);
+    expectRefused(parts, {parts[1] + "/ply.txt", "line ", "differs"});
+    // The same change in every part: still not the traced ply.
+    writeFileAtomic(parts[0] + "/ply.txt", changed);
+    expectRefused(parts, {"ply.txt", "differs"});
+    writeFileAtomic(parts[0] + "/ply.txt", ply);
+    writeFileAtomic(parts[1] + "/ply.txt", ply);
+    EXPECT_NO_THROW(mergeGatherParts(parts));
+}
+
+TEST_F(GatherPartDamageTest, AFileLinkedToAnotherPartsIsRefused) {
+    const std::vector<std::string> parts = writeParts(2, "p");
+    const std::string own = parts[1] + "/sum_m.npy", saved = path("sum_m.npy");
+    std::filesystem::rename(own, saved);
+    std::filesystem::create_symlink(parts[0] + "/sum_m.npy", own);
+    expectRefused(parts, {own, parts[0] + "/sum_m.npy", "one file", "inode"});
+    std::filesystem::remove(own);
+    std::filesystem::create_hard_link(parts[0] + "/sum_m.npy", own);
+    expectRefused(parts, {own, parts[0] + "/sum_m.npy", "one file"});
+    // Within one part: its R sums linked to its M sums.
+    std::filesystem::remove(own);
+    std::filesystem::create_symlink(std::filesystem::absolute(parts[1] + "/sum_r.npy"), own);
+    expectRefused(parts, {own, parts[1] + "/sum_r.npy", "one file"});
+    std::filesystem::remove(own);
+    std::filesystem::rename(saved, own);
+    EXPECT_NO_THROW(mergeGatherParts(parts));
+}
+
+TEST_F(GatherPartDamageTest, CountsThatContradictEachOtherAreRefused) {
+    const std::vector<std::string> parts = writeParts(2, "p");
+    const std::string dir = parts[1];
+    const auto ints = [](const std::string& file) {
+        const NpyArray a = readNpy(file);
+        std::vector<int64_t> v(a.size());
+        std::memcpy(v.data(), a.bytes.data(), a.bytes.size());
+        return std::make_pair(v, a.shape);
+    };
+    const auto [count, incident] = ints(dir + "/count.npy");
+    const auto [countT, incidentT] = ints(dir + "/count_t.npy");
+    const auto [depth, depthShape] = ints(dir + "/depth.npy");
+    // More T paths than paths in a bin.
+    std::vector<int64_t> v = countT;
+    v[2] = count[2] + 1;
+    writeNpy(dir + "/count_t.npy", v.data(), incident);
+    expectRefused(parts, {dir + "/count_t.npy", "element 2 (0, 2)", "more than"});
+    writeNpy(dir + "/count_t.npy", countT.data(), incident);
+    // Depth 0 (no interaction) must be the T paths: move one path to depth 1.
+    v = depth;
+    ASSERT_GT(v[0], 0);
+    v[0] -= 1, v[1] += 1;
+    writeNpy(dir + "/depth.npy", v.data(), depthShape);
+    expectRefused(parts, {dir + "/depth.npy", "element 0", "count_t.npy"});
+    // Interactions that meta.json's depth_sum does not count: one path one deeper.
+    v = depth;
+    ASSERT_GT(v[1], 0);
+    v[1] -= 1, v[2] += 1;
+    writeNpy(dir + "/depth.npy", v.data(), depthShape);
+    expectRefused(parts, {dir + "/meta.json", "\"depth_sum\"", "depth.npy"});
+    // A count beyond the part's paths.
+    v = count;
+    v[0] = int64_t{1} << 40;
+    writeNpy(dir + "/count.npy", v.data(), incident);
+    expectRefused(parts, {dir + "/count.npy", "element 0 (0, 0)", "in [0, 1250]"});
+    writeNpy(dir + "/count.npy", count.data(), incident);
+    writeNpy(dir + "/depth.npy", depth.data(), depthShape);
+    EXPECT_NO_THROW(mergeGatherParts(parts));
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "weft/core/error.h"
+#include "weft/core/json_message.h"
 #include "weft/core/limits.h"
 #include "weft/core/math.h"
 
@@ -52,32 +53,59 @@ void PeriodicPlyTracer::validateSegmentsPerTwist(int segmentsPerTwist) {
     checkRange("segments per twist =", segmentsPerTwist, 16, 65536);
 }
 
+PeriodicPlyTracer::Layout PeriodicPlyTracer::layout(const PlyParams& params, double radius,
+                                                    double fiberRadius, int segmentsPerTwist,
+                                                    size_t fibers, FiberPrimitive primitive) {
+    validateSegmentsPerTwist(segmentsPerTwist);
+    const double r = fiberRadius;
+    const bool straight = params.twist == 0;
+    Layout l;
+    l.period = straight ? 4.0 * radius : 2.0 * radius / params.twist;  // PlyGeometry::twistPeriod
+    // A twist below 2R / DBL_MAX (a denormal) has no finite period.
+    if (!std::isfinite(l.period))
+        throw InputError("ply: twist (alpha) = " + formatNumber(params.twist) +
+                         " has no finite twist period 2R / alpha (use 0 for a straight ply)");
+    // A fiber tilted by at most atan(pi alpha) reaches r / cos(tilt) < r (1 + pi alpha)
+    // along z from its centre line; add one segment for the chords.
+    l.perPeriod = straight ? 1 : segmentsPerTwist;
+    l.step = l.period / l.perPeriod;
+    l.margin = r * (1.0 + kPi * params.twist) + (straight ? 0.0 : l.step) + 1e-3 * radius;
+    const bool cubic = primitive == FiberPrimitive::RoundCatmullRom;
+    // A Catmull-Rom segment needs one more control point on each side. In
+    // double until the memory budget has bounded it: a large twist makes the
+    // margin many periods long (twist 1e6: 4e12 points per fiber).
+    const double extra = straight ? 0.0 : std::ceil(l.margin / l.step) + (cubic ? 1 : 0);
+    const double points = straight ? (cubic ? 4 : 2) : l.perPeriod + 2 * extra + 1;
+    // Per control point: the float4 vertex, the double copy in lines_, an
+    // index and a flag, and Embree's BVH (about 100 bytes per segment).
+    checkMemoryBudget(static_cast<double>(fibers) * points * 150.0,
+                      "the explicit ply (" + std::to_string(fibers) + " fibers x " +
+                          formatNumber(points) + " points)");
+    if (!(points <= std::numeric_limits<int>::max()))
+        throw InputError("ply: twist (alpha) = " + formatNumber(params.twist) + " needs " +
+                         formatNumber(points) + " points per fiber (at most 2^31 - 1)");
+    l.extra = static_cast<int>(extra);
+    l.points = static_cast<int>(points);
+    return l;
+}
+
 PeriodicPlyTracer::PeriodicPlyTracer(const PlyGeometry& ply, int segmentsPerTwist,
                                      FiberPrimitive primitive)
     : ply_(ply) {
-    validateSegmentsPerTwist(segmentsPerTwist);
     const double radius = ply_.radius, r = ply_.fiberRadius;
     const bool straight = ply_.params.twist == 0;
-    period_ = straight ? 4.0 * radius : ply_.twistPeriod();
-    // A fiber tilted by at most atan(pi alpha) reaches r / cos(tilt) < r (1 + pi alpha)
-    // along z from its centre line; add one segment for the chords.
-    const int perPeriod = straight ? 1 : segmentsPerTwist;
-    const double step = period_ / perPeriod;
-    margin_ = r * (1.0 + kPi * ply_.params.twist) + (straight ? 0.0 : step) + 1e-3 * radius;
+    const Layout l = layout(ply_.params, radius, ply_.fiberRadius, segmentsPerTwist,
+                            ply_.centres.size(), primitive);
+    period_ = l.period;
+    margin_ = l.margin;
     const bool cubic = primitive == FiberPrimitive::RoundCatmullRom;
-    // A Catmull-Rom segment needs one more control point on each side.
-    const int extra = straight ? 0 : static_cast<int>(std::ceil(margin_ / step)) + (cubic ? 1 : 0);
+    const double step = l.step;
+    const int extra = l.extra;
     const double z0 = straight ? -margin_ : -extra * step;
-    const int points = straight ? (cubic ? 4 : 2) : perPeriod + 2 * extra + 1;
+    const int points = l.points;
     const int segments = cubic ? points - 3 : points - 1;
     const double dz = straight ? (period_ + 2.0 * margin_) / (points - 1 - (cubic ? 2 : 0)) : step;
     const double zStart = straight && cubic ? z0 - dz : z0;
-
-    // Per control point: the float4 vertex, the double copy in lines_, an
-    // index and a flag, and Embree's BVH (about 100 bytes per segment).
-    checkMemoryBudget(static_cast<double>(ply_.centres.size()) * points * 150.0,
-                      "the explicit ply (" + std::to_string(ply_.centres.size()) + " fibers x " +
-                          std::to_string(points) + " points)");
     scene_ = rtcNewScene(device_.get());
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);

@@ -75,6 +75,21 @@ public:
     // InputError unless segmentsPerTwist is in [16, 65536].
     static void validateSegmentsPerTwist(int segmentsPerTwist);
 
+    // The slab and control points of a ply of `fibers` fibers of radius
+    // fiberRadius, without placing them: the constructor's numbers, so that
+    // a gather can refuse a ply before placing a million fibers. InputError
+    // when the twist has no finite period, or the points exceed the memory
+    // budget or an int.
+    struct Layout {
+        double period = 0, margin = 0, step = 0;
+        int perPeriod = 0;  // segments per period
+        int extra = 0;      // points beyond each slab face (not for straight plies)
+        int points = 0;     // control points per fiber
+    };
+    static Layout layout(const PlyParams& params, double radius, double fiberRadius,
+                         int segmentsPerTwist, size_t fibers,
+                         FiberPrimitive primitive = FiberPrimitive::RoundLinear);
+
     PlyTraceHit trace(const Vec3& org, const Vec3& dir, int excludedFiber,
                       int maxWraps = 4096) const;
 

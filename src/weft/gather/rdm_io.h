@@ -1,10 +1,12 @@
-// weft/gather/rdm_io.h — reading a gather directory back (weft fit, weft yarn check).
+// weft/gather/rdm_io.h — reading a gather directory back (weft fit, weft yarn check,
+// weft rdm slice, Python).
 //
 // loadRdm(DIR) reads meta.json, count.npy, p_t.npy, rdm_r.npy and rdm_m.npy
-// as written by `weft gather` and checks them against each other: format and
-// version, the four bin counts, every array's dtype and shape, finite
-// non-negative values. Any mismatch is an InputError naming the file and
-// what was expected.
+// as written by `weft gather`, and checks every file of the gather through
+// gather_folder.h: meta.json's fields, the counts against each other
+// (count_t.npy and depth.npy too), p_t = count_t / count, every map finite
+// and >= 0, truncated.npy and exit_distance.npy, no file a link to another.
+// Any mismatch is an InputError naming the file and what was expected.
 #pragma once
 
 #include <cstdint>
@@ -12,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "weft/gather/gather_folder.h"
 #include "weft/gather/rdm.h"
 
 namespace weft {
@@ -26,9 +29,5 @@ struct RdmData {
 };
 
 RdmData loadRdm(const std::string& dir);
-
-// InputError naming metaPath unless `meta` (a gather's meta.json) is a whole
-// weft gather of format version 1; a shard of one is told to merge first.
-void checkGatherMeta(const nlohmann::json& meta, const std::string& metaPath);
 
 }  // namespace weft

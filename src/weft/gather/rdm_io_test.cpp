@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 
 #include "weft/core/file.h"
 #include "weft/core/npy.h"
@@ -80,6 +82,114 @@ TEST_F(RdmIoTest, MalformedDirectoriesNameTheFile) {
     testing::expectInputError([&] { loadRdm(dir); }, {"rdm_m.npy", "element 10"});
     std::filesystem::remove(dir + "/rdm_m.npy");
     testing::expectInputError([&] { loadRdm(dir); }, {"rdm_m.npy"});
+}
+
+// Issue 41, item 9: `weft fit` read a gather whose truncated.npy or depth.npy
+// was damaged (NaN, negative, a declared shape of 2^40, cut short) and
+// succeeded. loadRdm checks every file of the gather now.
+TEST_F(RdmIoTest, DamagedCountsDepthAndTruncatedAreRefused) {
+    const std::string dir = writeSmallGather();
+    const auto refused = [&](std::initializer_list<std::string> words) {
+        testing::expectInputError([&] { loadRdm(dir); }, words);
+    };
+    // truncated.npy (2,4,3): NaN, negative, weight where no path was truncated.
+    ASSERT_EQ(result_.depth.back(), 0);
+    std::vector<double> t = result_.truncated;
+    t[4] = NAN;
+    writeNpy(dir + "/truncated.npy", t.data(), {2, 4, 3});
+    refused({dir + "/truncated.npy", "element 4 (0, 1, 1) is nan", "finite number >= 0"});
+    t[4] = -1;
+    writeNpy(dir + "/truncated.npy", t.data(), {2, 4, 3});
+    refused({dir + "/truncated.npy", "element 4 (0, 1, 1) is -1"});
+    t[4] = 0.25;
+    writeNpy(dir + "/truncated.npy", t.data(), {2, 4, 3});
+    refused({dir + "/truncated.npy", "element 4", "no truncated path"});
+    std::filesystem::remove(dir + "/truncated.npy");
+    refused({dir + "/truncated.npy"});
+    writeNpy(dir + "/truncated.npy", result_.truncated.data(), {2, 4, 3});
+
+    // depth.npy (1002): negative, not summing to the paths, float with a NaN,
+    // a declared shape of 2^40, cut short.
+    const std::string depthPath = dir + "/depth.npy";
+    std::vector<int64_t> d = result_.depth;
+    d[3] = -1;
+    writeNpy(depthPath, d.data(), {d.size()});
+    refused({depthPath, "element 3 is -1", "[0, 2000]"});
+    d = result_.depth;
+    d[3] += 1;
+    writeNpy(depthPath, d.data(), {d.size()});
+    refused({depthPath, "sum to 2001", "2000 paths"});
+    std::vector<double> nan(d.size(), NAN);
+    writeNpy(depthPath, nan.data(), {nan.size()});
+    refused({depthPath, "expected <i8 of shape (1002,)"});
+    const std::string header =
+        "{'descr': '<i8', 'fortran_order': False, 'shape': (1099511627776,), }";
+    std::string huge = std::string("\x93NUMPY\x01\x00", 8);
+    const size_t padded = (10 + header.size() + 1 + 63) / 64 * 64 - 10;
+    huge += static_cast<char>(padded & 0xff);
+    huge += static_cast<char>(padded >> 8);
+    huge += header + std::string(padded - header.size() - 1, ' ') + "\n" + std::string(64, '\0');
+    writeFileAtomic(depthPath, huge);
+    refused({depthPath, "1099511627776"});
+    const std::string bytes = encodeNpy(result_.depth.data(), {result_.depth.size()});
+    writeFileAtomic(depthPath, bytes.substr(0, bytes.size() - 12));
+    refused({depthPath, "truncated"});
+    // Depth 0 must be the T paths.
+    d = result_.depth;
+    d[0] -= 1, d[1] += 1;
+    writeNpy(depthPath, d.data(), {d.size()});
+    refused({depthPath, "element 0", "count_t.npy"});
+    writeNpy(depthPath, result_.depth.data(), {result_.depth.size()});
+
+    // count_t.npy beyond count.npy; p_t.npy in [0, 1] but not count_t / count.
+    std::vector<int64_t> ct = result_.countT;
+    ct[5] = result_.count[5] + 1;
+    writeNpy(dir + "/count_t.npy", ct.data(), {2, 4});
+    refused({dir + "/count_t.npy", "element 5 (1, 1)", "more than"});
+    writeNpy(dir + "/count_t.npy", result_.countT.data(), {2, 4});
+    std::vector<double> pT = result_.pT;
+    pT[2] = pT[2] > 0.5 ? pT[2] - 0.25 : pT[2] + 0.25;
+    writeNpy(dir + "/p_t.npy", pT.data(), {2, 4});
+    refused({dir + "/p_t.npy", "element 2 (0, 2)", "count_t.npy / count.npy"});
+    writeNpy(dir + "/p_t.npy", result_.pT.data(), {2, 4});
+
+    // exit_distance.npy, when there is one.
+    std::vector<double> e = result_.exitDistance;
+    e[7] = -0.5;
+    writeNpy(dir + "/exit_distance.npy", e.data(), {129, 3});
+    refused({dir + "/exit_distance.npy", "element 7 (2, 1) is -0.5"});
+    std::filesystem::remove(dir + "/exit_distance.npy");
+    EXPECT_NO_THROW(loadRdm(dir));  // a recoloured gather has none
+}
+
+TEST_F(RdmIoTest, APlyDescriptionOrLinkedFilesAreRefused) {
+    const std::string dir = writeSmallGather();
+    const std::string meta = readFile(dir + "/meta.json");
+    for (const char* field : {"radius", "fiber_radius", "period", "segments"}) {
+        for (const double factor : {0.0, -1.0, 1e30}) {
+            nlohmann::json j = nlohmann::json::parse(meta);
+            j["ply"][field] = j["ply"][field].get<double>() * factor;
+            writeFileAtomic(dir + "/meta.json", j.dump());
+            testing::expectInputError([&] { loadRdm(dir); },
+                                      {dir + "/meta.json", std::string("ply.") + field});
+        }
+        nlohmann::json j = nlohmann::json::parse(meta);
+        j["ply"].erase(field);
+        writeFileAtomic(dir + "/meta.json", j.dump());
+        testing::expectInputError([&] { loadRdm(dir); }, {dir + "/meta.json", field, "missing"});
+    }
+    writeFileAtomic(dir + "/meta.json", meta);
+    // rdm_m.npy a link to rdm_r.npy: the R map would be fitted as M.
+    std::filesystem::rename(dir + "/rdm_m.npy", path("rdm_m.npy"));
+    std::filesystem::create_symlink(dir + "/rdm_r.npy", dir + "/rdm_m.npy");
+    testing::expectInputError([&] { loadRdm(dir); },
+                              {dir + "/rdm_m.npy", dir + "/rdm_r.npy", "one file"});
+    std::filesystem::remove(dir + "/rdm_m.npy");
+    std::filesystem::create_hard_link(dir + "/count.npy", dir + "/rdm_m.npy");
+    testing::expectInputError([&] { loadRdm(dir); }, {"rdm_m.npy", "count.npy", "one file"});
+    std::filesystem::remove(dir + "/rdm_m.npy");
+    std::filesystem::rename(path("rdm_m.npy"), dir + "/rdm_m.npy");
+    EXPECT_NO_THROW(loadRdm(dir));
 }
 
 }  // namespace

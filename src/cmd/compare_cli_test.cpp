@@ -9,6 +9,8 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cli_test_util.h"
 #include "weft/core/file.h"
@@ -177,6 +179,46 @@ TEST_F(CompareCliTest, MontageOfRendersAndAHeatmap) {
     expectUserError(run("montage ref.exr missing.exr --out f2.png"), {"missing.exr"});
     expectUserError(run("montage ref.exr --columns 99 --out f2.png"), {"--columns", "[0, 64]"});
     EXPECT_FALSE(std::filesystem::exists(path("f2.png")));
+}
+
+// Issue 41: montage drew NaN and infinite pixels black (compare refused
+// them), and both read a Radiance header "-Y 4294967312 +X 4294967312" as
+// 16 x 16 and a PNG whose IHDR checksum is wrong: one check where images
+// enter, so both commands refuse each of them with exit 2, naming the file.
+TEST_F(CompareCliTest, CompareAndMontageRefuseTheSameBadImages) {
+    Image inf = gradient(16, 12, 0.1);
+    inf.pixels[3 * (16 * 3 + 5) + 2] = std::numeric_limits<float>::infinity();
+    writeExr(path("inf.exr"), inf);
+    Image nan = gradient(16, 12, 0.1);
+    nan.pixels[3 * (16 * 11 + 15)] = std::numeric_limits<float>::quiet_NaN();
+    writeExr(path("nan.exr"), nan);
+    writeFileAtomic(path("wrap.hdr"),
+                    "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 4294967312 +X 4294967312\n" +
+                        std::string(16 * 16 * 4, '\x80'));
+    writePng(path("heat.png"), gradient(16, 12, 0.1));
+    std::string png = readFile(path("heat.png"));
+    png[29] ^= 1;  // the IHDR chunk's CRC
+    writeFileAtomic(path("crc.png"), png);
+    const std::pair<std::string, std::vector<std::string>> bad[] = {
+        {"inf.exr", {"inf.exr", "pixel (5, 3) channel B is infinite"}},
+        {"nan.exr", {"nan.exr", "pixel (15, 11) channel R is NaN"}},
+        {"wrap.hdr", {"wrap.hdr", "4294967312 x 4294967312"}},
+        {"crc.png", {"crc.png", "IHDR", "CRC"}}};
+    for (const auto& [file, parts] : bad) {
+        for (const std::string& command :
+             {"montage ref.exr " + file + " --out fig.png", "compare ref.exr " + file,
+              "compare " + file + " ref.exr --json r.json"}) {
+            const RunResult r = run(command);
+            EXPECT_EQ(r.status, 2) << command << "\n" << r.out << r.err;
+            for (const std::string& part : parts)
+                EXPECT_TRUE(contains(r.err, part))
+                    << command << ": '" << r.err << "' lacks '" << part << "'";
+        }
+    }
+    EXPECT_FALSE(std::filesystem::exists(path("fig.png")));
+    EXPECT_FALSE(std::filesystem::exists(path("r.json")));
+    // The good PNG still goes into a figure.
+    EXPECT_EQ(run("montage ref.exr heat.png --out fig.png").status, 0);
 }
 
 TEST_F(CompareCliTest, Help) {

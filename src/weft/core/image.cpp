@@ -1,10 +1,13 @@
 #include "weft/core/image.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <string_view>
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/hash.h"
 
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #define STBI_WRITE_NO_STDIO
@@ -19,6 +22,27 @@ void checkImage(const Image& image, const std::string& what) {
                          std::to_string(image.height) + " texels with " +
                          std::to_string(image.pixels.size()) +
                          " values; expected width, height >= 1 and 3 values per texel");
+}
+
+void checkFinitePixels(const Image& image, const std::string& what) {
+    static const char* channels[3] = {"R", "G", "B"};
+    for (size_t i = 0; i < image.pixels.size(); ++i) {
+        if (std::isfinite(image.pixels[i])) continue;
+        const size_t pixel = i / 3;
+        const size_t width = static_cast<size_t>(std::max(image.width, 1));
+        throw InputError(what + ": pixel (" + std::to_string(pixel % width) + ", " +
+                         std::to_string(pixel / width) + ") channel " + channels[i % 3] + " is " +
+                         (std::isnan(image.pixels[i]) ? "NaN" : "infinite") +
+                         ": images must be finite");
+    }
+}
+
+std::string pixelChecksum(const Image& image) {
+    static_assert(std::endian::native == std::endian::little && sizeof(float) == 4,
+                  "the checksum is of little-endian float32 bytes");
+    const std::string_view bytes(reinterpret_cast<const char*>(image.pixels.data()),
+                                 image.pixels.size() * sizeof(float));
+    return "fnv1a64:" + hex16(fnv1a64(bytes));
 }
 
 double linearToSrgb(double v) {

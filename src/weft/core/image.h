@@ -35,6 +35,18 @@ struct Image {
 // 3 values per texel.
 void checkImage(const Image& image, const std::string& what);
 
+// InputError "<what>: pixel (x, y) channel G is NaN: images must be finite"
+// (or "is infinite") for the first value, in row order, that is not finite.
+// The image readers (image_io.h) check every image they return with it.
+void checkFinitePixels(const Image& image, const std::string& what);
+
+// "fnv1a64:" and 16 hex digits: FNV-1a (core/hash.h) of the pixels' float32
+// values as little-endian bytes, in their order in `pixels` (rows from the
+// top, R, G, B per texel): what an OpenEXR file of the image holds, so that
+// the checksum of the image written equals that of the image read back. The
+// checksum a render part's JSON carries (render/render_merge.h).
+std::string pixelChecksum(const Image& image);
+
 // The sRGB transfer function of a linear value in [0, 1] (clamped to it).
 double linearToSrgb(double v);
 // Its inverse: the linear value of an sRGB-encoded value in [0, 1] (clamped to it).

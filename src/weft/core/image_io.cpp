@@ -10,11 +10,16 @@
 #include <stb/stb_image.h>
 
 #include <algorithm>
+#include <array>
+#include <cctype>
 #include <climits>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <optional>
+#include <string_view>
 #include <vector>
 
 #include "weft/core/error.h"
@@ -294,15 +299,91 @@ std::string checkRleScanlines(const std::string& bytes, size_t pos, int width, i
     return pos > bytes.size() ? truncated : "";
 }
 
+// The resolution line of a Radiance header as stb_image reads it: lines of
+// at most 1023 characters, the header up to an empty line, then
+// "-Y <height> +X <width>", each number as strtol takes it (leading spaces, a
+// sign, digits). stb casts strtol's long to int, so that "-Y 4294967312"
+// became 16; here the numbers are kept as written. nullopt where stb finds
+// no such line (it then says why).
+struct HdrResolution {
+    std::string width, height;  // as written: a sign and digits
+    size_t dataStart = 0;       // the first byte after the resolution line
+};
+
+std::optional<HdrResolution> hdrResolution(const std::string& bytes) {
+    size_t pos = 0;
+    const auto nextLine = [&] {
+        const size_t end = std::min(bytes.find('\n', pos), bytes.size());
+        std::string line = bytes.substr(pos, std::min<size_t>(end - pos, 1023));
+        pos = std::min(end + 1, bytes.size());
+        return line;
+    };
+    nextLine();  // #?RADIANCE or #?RGBE
+    for (;;) {
+        if (pos >= bytes.size()) return std::nullopt;
+        if (nextLine().empty()) break;
+    }
+    const std::string line = nextLine();
+    size_t at = 0;
+    // strtol's number: spaces, a sign, digits ("" when there are none).
+    const auto number = [&] {
+        while (at < line.size() && std::isspace(static_cast<unsigned char>(line[at]))) ++at;
+        const size_t start = at;
+        if (at < line.size() && (line[at] == '+' || line[at] == '-')) ++at;
+        const size_t digits = at;
+        while (at < line.size() && std::isdigit(static_cast<unsigned char>(line[at]))) ++at;
+        return at > digits ? line.substr(start, at - start) : std::string();
+    };
+    HdrResolution r;
+    if (line.compare(0, 3, "-Y ") != 0) return std::nullopt;
+    at = 3;
+    r.height = number();
+    while (at < line.size() && line[at] == ' ') ++at;
+    if (line.compare(at, 3, "+X ") != 0 || r.height.empty()) return std::nullopt;
+    at += 3;
+    r.width = number();
+    if (r.width.empty()) return std::nullopt;
+    r.dataStart = pos;
+    return r;
+}
+
+// A number of hdrResolution as int64_t, saturating beyond +-2^62.
+int64_t saturatingInteger(const std::string& text) {
+    const bool negative = text[0] == '-';
+    int64_t v = 0;
+    for (const char c : text) {
+        if (!std::isdigit(static_cast<unsigned char>(c))) continue;
+        v = v > (int64_t{1} << 62) / 10 ? int64_t{1} << 62 : 10 * v + (c - '0');
+    }
+    return negative ? -v : v;
+}
+
 Image readHdr(const std::string& path, const std::string& bytes) {
     if (bytes.size() > static_cast<size_t>(INT_MAX)) failRead(path, "file larger than 2 GiB");
     const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
     const int size = static_cast<int>(bytes.size());
     if (!stbi_is_hdr_from_memory(data, size))
         failRead(path, "not a Radiance RGBE file (no #?RADIANCE or #?RGBE header)");
+    // The size as written, checked against the limits before stb reads it
+    // (and wraps it at 2^32).
+    const std::optional<HdrResolution> resolution = hdrResolution(bytes);
+    if (resolution) {
+        const int64_t w = saturatingInteger(resolution->width);
+        const int64_t h = saturatingInteger(resolution->height);
+        if (w < 1 || h < 1 || w > kMaxImagePixels / h)
+            failRead(path, "size " + resolution->width + " x " + resolution->height +
+                               " (the resolution line \"-Y " + resolution->height + " +X " +
+                               resolution->width + "\") is empty or larger than " +
+                               std::to_string(kMaxImagePixels) + " texels (corrupt header?)");
+    }
     int width = 0, height = 0, channels = 0;
     if (!stbi_info_from_memory(data, size, &width, &height, &channels))
         failRead(path, std::string("bad Radiance header (") + stbi_failure_reason() + ")");
+    if (!resolution || saturatingInteger(resolution->width) != width ||
+        saturatingInteger(resolution->height) != height)
+        failRead(path,
+                 "unsupported Radiance header (its resolution line does not read as "
+                 "\"-Y <height> +X <width>\")");
     checkImageSize(path, width, height);
     // A scanline takes 4 bytes per texel, or, run-length encoded (widths 8 to
     // 32767), at least 4 header bytes and 2 bytes per run of up to 127 values
@@ -310,11 +391,9 @@ Image readHdr(const std::string& path, const std::string& bytes) {
     // can hold is refused before stb allocates them.
     const int64_t rowBytes =
         width < 8 || width > 32767 ? 4 * int64_t(width) : 4 + 8 * ((int64_t(width) + 126) / 127);
-    // The texels follow the resolution line, the line after the blank line
-    // that ends the header.
-    const size_t blank = bytes.find("\n\n");
-    const size_t dataStart = blank == std::string::npos ? 0 : bytes.find('\n', blank + 2) + 1;
-    const int64_t dataBytes = size - static_cast<int64_t>(std::min(dataStart, bytes.size()));
+    // The texels follow the resolution line.
+    const size_t dataStart = resolution->dataStart;
+    const int64_t dataBytes = size - static_cast<int64_t>(dataStart);
     if (int64_t(height) * rowBytes > dataBytes)
         failRead(path, "truncated: " + std::to_string(width) + " x " + std::to_string(height) +
                            " texels need more than the file's " + std::to_string(dataBytes) +
@@ -346,37 +425,211 @@ Image decodeImage(const std::string& bytes, const std::string& path) {
     const std::string ext = lowercaseExtension(path);
     if (ext != ".exr" && ext != ".hdr")
         failRead(path, "unsupported extension '" + ext + "' (expected .exr or .hdr)");
-    return ext == ".exr" ? readExr(path, bytes) : readHdr(path, bytes);
+    Image image = ext == ".exr" ? readExr(path, bytes) : readHdr(path, bytes);
+    // One check where images enter: compare, montage, render merge and
+    // envmaps all refuse NaN and infinite pixels, with the same message.
+    checkFinitePixels(image, "cannot read image '" + path + "'");
+    return image;
 }
 
 namespace {
 
-// stb reserves what a PNG chunk's length field claims before reading it (up
-// to 2 GB): every chunk must fit in the file first.
+[[noreturn]] void failPng(const std::string& path, const std::string& reason) {
+    throw InputError("cannot read PNG image '" + path + "': " + reason);
+}
+
+uint32_t bigEndian32(const std::string& bytes, size_t at) {
+    uint32_t v = 0;
+    for (int k = 0; k < 4; ++k) v = v << 8 | static_cast<unsigned char>(bytes[at + k]);
+    return v;
+}
+
+// The CRC-32 of PNG chunks (ISO 3309, zlib's crc32), a byte at a time.
+uint32_t pngCrc(std::string_view bytes) {
+    static const std::array<uint32_t, 256> table = [] {
+        std::array<uint32_t, 256> t{};
+        for (uint32_t n = 0; n < 256; ++n) {
+            uint32_t c = n;
+            for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xedb88320u ^ (c >> 1) : c >> 1;
+            t[n] = c;
+        }
+        return t;
+    }();
+    uint32_t crc = 0xffffffffu;
+    for (const char b : bytes)
+        crc = table[(crc ^ static_cast<unsigned char>(b)) & 0xffu] ^ crc >> 8;
+    return crc ^ 0xffffffffu;
+}
+
+// A chunk type for messages: its four letters, or its bytes in hex.
+std::string chunkName(const std::string& type) {
+    const bool letters = std::all_of(type.begin(), type.end(), [](char c) {
+        return std::isalpha(static_cast<unsigned char>(c)) != 0;
+    });
+    if (letters) return type;
+    char hex[16];
+    std::snprintf(hex, sizeof hex, "0x%08x", bigEndian32(type, 0));
+    return hex;
+}
+
+// What the image header (IHDR) says, and the bytes of filtered image data
+// (one filter byte per row, Adam7's seven passes for an interlaced image)
+// that the image data must inflate to.
+struct PngHeader {
+    uint32_t width = 0, height = 0;
+    uint64_t imageDataBytes = 0;
+};
+
+PngHeader readPngHeader(const std::string& data, const std::string& path) {
+    if (data.size() != 13)
+        failPng(path, "IHDR chunk of " + std::to_string(data.size()) + " bytes (expected 13)");
+    PngHeader h;
+    h.width = bigEndian32(data, 0);
+    h.height = bigEndian32(data, 4);
+    const int depth = static_cast<unsigned char>(data[8]),
+              colour = static_cast<unsigned char>(data[9]);
+    const int interlace = static_cast<unsigned char>(data[12]);
+    // Samples per texel of each colour type, and the bit depths it allows.
+    int samples = 0;
+    bool depthOk = false;
+    switch (colour) {
+        case 0:
+            samples = 1,
+            depthOk = depth == 1 || depth == 2 || depth == 4 || depth == 8 || depth == 16;
+            break;
+        case 3:
+            samples = 1, depthOk = depth == 1 || depth == 2 || depth == 4 || depth == 8;
+            break;
+        case 2:
+            samples = 3, depthOk = depth == 8 || depth == 16;
+            break;
+        case 4:
+            samples = 2, depthOk = depth == 8 || depth == 16;
+            break;
+        case 6:
+            samples = 4, depthOk = depth == 8 || depth == 16;
+            break;
+        default:
+            break;
+    }
+    if (samples == 0 || !depthOk || data[10] != 0 || data[11] != 0 || interlace > 1)
+        failPng(path, "IHDR: colour type " + std::to_string(colour) + ", bit depth " +
+                          std::to_string(depth) + ", compression " +
+                          std::to_string(static_cast<unsigned char>(data[10])) + ", filter " +
+                          std::to_string(static_cast<unsigned char>(data[11])) + ", interlace " +
+                          std::to_string(interlace) + " is not a valid PNG header");
+    checkImageSize(path, h.width, h.height);
+    const uint64_t bits = static_cast<uint64_t>(samples) * depth;
+    const auto passBytes = [&](uint64_t w, uint64_t rows) {
+        return w == 0 || rows == 0 ? 0 : rows * (1 + (w * bits + 7) / 8);
+    };
+    if (interlace == 0) {
+        h.imageDataBytes = passBytes(h.width, h.height);
+    } else {
+        static const int x0[7] = {0, 4, 0, 2, 0, 1, 0}, y0[7] = {0, 0, 4, 0, 2, 0, 1};
+        static const int dx[7] = {8, 8, 4, 4, 2, 2, 1}, dy[7] = {8, 8, 8, 4, 4, 2, 2};
+        for (int p = 0; p < 7; ++p)
+            h.imageDataBytes += passBytes((h.width + dx[p] - 1 - x0[p]) / dx[p],
+                                          (h.height + dy[p] - 1 - y0[p]) / dy[p]);
+    }
+    return h;
+}
+
+// stb_image checks no CRC, reserves what a chunk's length field claims
+// before reading it (up to 2 GB), reads nothing after IEND and inflates image
+// data beyond what the image needs. So the chunks are walked first: the
+// signature, every chunk within the file and matching its CRC, IHDR first and
+// valid, IEND last, and the IDAT data (at most twice the image's filtered
+// size, plus 4 KiB) inflating to exactly the bytes the image needs.
 void checkPngChunks(const std::string& bytes, const std::string& path) {
     static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
     if (bytes.size() < 8 || std::memcmp(bytes.data(), kSignature, 8) != 0)
-        throw InputError("cannot read PNG image '" + path + "': not a PNG file (bad signature)");
-    for (size_t at = 8; at + 12 <= bytes.size();) {
-        uint32_t length = 0;
-        for (int k = 0; k < 4; ++k)
-            length = length << 8 | static_cast<unsigned char>(bytes[at + k]);
+        failPng(path, "not a PNG file (bad signature)");
+    // The chunks' frames first (each within the file, IEND last), then their
+    // CRCs and contents.
+    std::vector<std::pair<size_t, uint32_t>> chunks;  // offset, data length
+    for (size_t at = 8;;) {
+        if (at >= bytes.size())
+            failPng(path,
+                    "no IEND chunk: the file ends at byte " + std::to_string(at) + " (truncated?)");
+        if (bytes.size() - at < 12)
+            failPng(path, "chunk at byte " + std::to_string(at) + " is cut short (truncated?)");
+        const uint32_t length = bigEndian32(bytes, at);
         if (length > bytes.size() - at - 12)
-            throw InputError("cannot read PNG image '" + path + "': chunk at byte " +
-                             std::to_string(at) + " claims " + std::to_string(length) +
-                             " bytes, the file has " + std::to_string(bytes.size() - at - 12) +
-                             " left (truncated or corrupt)");
-        if (bytes.compare(at + 4, 4, "IEND") == 0) break;
-        at += 12 + length;
+            failPng(path, "chunk at byte " + std::to_string(at) + " claims " +
+                              std::to_string(length) + " bytes, the file has " +
+                              std::to_string(bytes.size() - at - 12) +
+                              " left (truncated or corrupt)");
+        chunks.emplace_back(at, length);
+        at += 12 + static_cast<size_t>(length);
+        if (bytes.compare(at - 8 - length, 4, "IEND") == 0) {
+            if (at != bytes.size())
+                failPng(path, std::to_string(bytes.size() - at) +
+                                  " bytes after the IEND chunk (corrupt file)");
+            break;
+        }
     }
+    std::optional<PngHeader> header;
+    bool apple = false;  // a CgBI chunk first: raw deflate data (stb reads it)
+    std::string imageData;
+    for (const auto& [at, length] : chunks) {
+        const std::string type = bytes.substr(at + 4, 4);
+        const std::string name = chunkName(type);
+        const uint32_t stored = bigEndian32(bytes, at + 8 + length);
+        const uint32_t crc = pngCrc(std::string_view(bytes).substr(at + 4, 4 + length));
+        if (stored != crc) {
+            char text[96];
+            std::snprintf(text, sizeof text, " at byte %zu: CRC 0x%08x, but its bytes give 0x%08x",
+                          at, stored, crc);
+            failPng(path, name + " chunk" + text + " (corrupt file)");
+        }
+        const std::string data = bytes.substr(at + 8, length);
+        if (!header && type == "CgBI" && at == 8) {
+            apple = true;
+        } else if (!header) {
+            if (type != "IHDR")
+                failPng(path, "the first chunk is " + name + ", not IHDR (corrupt file)");
+            header = readPngHeader(data, path);
+        } else if (type == "IHDR") {
+            failPng(path, "a second IHDR chunk at byte " + std::to_string(at));
+        } else if (type == "IDAT") {
+            if (imageData.size() + length > 2 * header->imageDataBytes + 4096)
+                failPng(path,
+                        "IDAT chunks hold more than " +
+                            std::to_string(2 * header->imageDataBytes + 4096) +
+                            " bytes, over twice the " + std::to_string(header->imageDataBytes) +
+                            " bytes of image data a " + std::to_string(header->width) + " x " +
+                            std::to_string(header->height) + " image needs (corrupt file)");
+            imageData += data;
+        }
+    }
+    if (!header) failPng(path, "no IHDR chunk");
+    // Inflated into a buffer of exactly the image's size: a stream that
+    // holds more stops at its end (stb reports "output buffer limit").
+    const uint64_t needed = header->imageDataBytes;
+    if (needed > static_cast<uint64_t>(INT_MAX) || imageData.size() > static_cast<size_t>(INT_MAX))
+        failPng(path, "image data of " + std::to_string(needed) + " bytes: too large");
+    std::string inflated(static_cast<size_t>(needed), '\0');
+    const int n = (apple ? stbi_zlib_decode_noheader_buffer : stbi_zlib_decode_buffer)(
+        inflated.data(), static_cast<int>(needed), imageData.data(),
+        static_cast<int>(imageData.size()));
+    const std::string image =
+        std::to_string(header->width) + " x " + std::to_string(header->height) + " image needs";
+    if (n < 0 && std::strcmp(stbi_failure_reason(), "output buffer limit") == 0)
+        failPng(path, "its image data inflate to more than the " + std::to_string(needed) +
+                          " bytes a " + image + " (surplus data; corrupt file)");
+    if (n < 0) failPng(path, std::string("corrupt image data (") + stbi_failure_reason() + ")");
+    if (static_cast<uint64_t>(n) < needed)
+        failPng(path, "its image data inflate to " + std::to_string(n) + " bytes, fewer than the " +
+                          std::to_string(needed) + " bytes a " + image + " (truncated?)");
 }
 
 }  // namespace
 
 Image decodePng(const std::string& bytes, const std::string& path) {
-    checkPngChunks(bytes, path);
     if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
         throw InputError("cannot read PNG image '" + path + "': file too large");
+    checkPngChunks(bytes, path);
     int w = 0, h = 0, channels = 0;
     // The header first: a 16384 x 16384 PNG is refused before it is decoded.
     if (!stbi_info_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),

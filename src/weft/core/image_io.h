@@ -12,7 +12,11 @@
 //                     R, G, B, ZIP compressed (lossless).
 //   Radiance (.hdr)   read only (RGBE, flat or run-length encoded), through
 //                     stb_image, with truncated and corrupt files detected
-//                     first (see image_io.cpp).
+//                     first (see image_io.cpp); the size is read as written
+//                     (stb_image wraps "-Y 4294967312" to 16).
+// Every image read is checked here, once for every command that reads one
+// (compare, montage, render merge, envmaps): its size against the limits and
+// the memory budget, and its pixels finite (checkFinitePixels, image.h).
 #pragma once
 
 #include <cstdint>
@@ -33,16 +37,20 @@ void checkImageSize(const std::string& path, int64_t width, int64_t height);
 
 // Reads a linear RGB image, OpenEXR (.exr) or Radiance RGBE (.hdr); the
 // extension picks the reader (case-insensitive). Values are returned as
-// stored (no validation). InputError naming the file for a missing,
-// unreadable, truncated or corrupt file, an unknown extension, or more than
-// kMaxImagePixels texels.
+// stored. InputError naming the file for a missing, unreadable, truncated or
+// corrupt file, an unknown extension, more than kMaxImagePixels texels, or a
+// NaN or infinite value (naming the first such pixel and channel).
 Image readImage(const std::string& path);
 // The same on the file's bytes; `path` picks the reader by its extension and
 // names the file in errors.
 Image decodeImage(const std::string& bytes, const std::string& path);
 // A PNG's bytes as linear RGB: 8-bit RGB or RGBA (alpha ignored) decoded from
 // sRGB, so that writePng at exposure 0 gives back the same bytes. InputError
-// naming `path` for a file that is not a PNG, truncated or corrupt, or too large.
+// naming `path` for a file that is not a PNG, truncated or corrupt, or too
+// large. The chunks are checked before stb_image decodes them (it checks
+// none of this): each within the file and matching its CRC-32, IHDR first
+// and valid, IEND last with nothing after it, and the image data no larger
+// than twice what the image needs plus 4 KiB, inflating to exactly that.
 Image decodePng(const std::string& bytes, const std::string& path);
 // readImage, except that a .png file is decoded with decodePng: for the
 // display images that `weft montage` lays out and `weft compare` may score.

@@ -13,8 +13,10 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -72,10 +74,14 @@ void writeExrChannels(const std::string& path, int w, int h, Imath::V2i origin,
 
 TEST_F(ImageFiles, ExrRoundTripIsBitExact) {
     Image image(5, 3);
-    const float values[] = {0.0f,  1.0f,     0.1f,  3.4e38f,  1e-40f /* denormal */,
-                            -2.5f, 65504.5f, 1e-7f, INFINITY, std::nanf("")};
-    for (size_t i = 0; i < image.pixels.size(); ++i)
+    // Finite values only: a NaN or infinite pixel is refused where images
+    // enter (NonFinitePixelsAreRefusedWhereImagesEnter).
+    const float values[] = {0.0f,  1.0f,     0.1f,  3.2e38f, 1e-40f /* denormal */,
+                            -2.5f, 65504.5f, 1e-7f, -0.0f,   -3.2e38f};
+    for (size_t i = 0; i < image.pixels.size(); ++i) {
         image.pixels[i] = values[i % 10] * (1.0f + 0.001f * static_cast<float>(i));
+        ASSERT_TRUE(std::isfinite(image.pixels[i])) << i;
+    }
     const std::string path = this->path("round.exr");
     writeExr(path, image);
     EXPECT_EQ(filesIn(dir_), std::vector<std::string>{"round.exr"});  // no temp files left
@@ -306,6 +312,148 @@ TEST_F(ImageFiles, WriteReportsErrors) {
     expectInputError([&] { writeExr(path("short.exr"), wrongSize); },
                      {path("short.exr"), "4 x 2 texels with 23 values"});
     EXPECT_TRUE(filesIn(dir_).empty());
+}
+
+// ---------------------------------------------------------------------------
+// Issue 41: what stb_image let through.
+
+// A NaN or infinite pixel is refused by the readers themselves, so that every
+// command that reads an image (compare, montage, render merge, envmaps) names
+// the file and the first bad pixel: montage used to draw them black.
+TEST_F(ImageFiles, NonFinitePixelsAreRefusedWhereImagesEnter) {
+    Image image(4, 3);
+    for (size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = 0.1f * i;
+    Image nan = image, inf = image, negative = image;
+    nan.pixels[3 * (4 * 2 + 1) + 1] = std::nanf("");
+    inf.pixels[3 * 3 + 2] = INFINITY;
+    inf.pixels[3 * (4 * 2 + 3)] = std::nanf("");  // a later one is not the first
+    negative.pixels[0] = -INFINITY;
+    writeExr(path("nan.exr"), nan);
+    writeExr(path("inf.exr"), inf);
+    writeExr(path("neg.exr"), negative);
+    for (const auto& read : {std::function<Image(const std::string&)>(readImage),
+                             std::function<Image(const std::string&)>(readImageOrPng)}) {
+        expectInputError([&] { read(path("nan.exr")); },
+                         {path("nan.exr"), "pixel (1, 2) channel G is NaN"});
+        expectInputError([&] { read(path("inf.exr")); },
+                         {path("inf.exr"), "pixel (3, 0) channel B is infinite"});
+        expectInputError([&] { read(path("neg.exr")); },
+                         {path("neg.exr"), "pixel (0, 0) channel R is infinite"});
+    }
+    expectInputError([&] { decodeImage(readFile(path("nan.exr")), "mem.exr"); },
+                     {"mem.exr", "NaN"});
+    writeExr(path("ok.exr"), image);
+    EXPECT_TRUE(sameBits(readImageOrPng(path("ok.exr")), image));
+}
+
+// stb_image parses a Radiance resolution line with strtol and casts to int:
+// "-Y 4294967312 +X 4294967312" was read as 16 x 16. Sizes are now read
+// without wrapping and checked against the image limits.
+TEST_F(ImageFiles, HdrSizesDoNotWrapAtTwoToThe32) {
+    const std::string texels(16 * 16 * 4, '\x80');
+    const auto file = [&](const std::string& resolution) {
+        return "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n" + resolution + "\n" + texels;
+    };
+    writeFileAtomic(path("ok.hdr"), file("-Y 16 +X 16"));
+    EXPECT_EQ(readImage(path("ok.hdr")).width, 16);
+    for (const auto& [resolution, size] :
+         {std::pair<std::string, std::string>{"-Y 4294967312 +X 4294967312",
+                                              "4294967312 x 4294967312"},
+          {"-Y 16 +X 4294967312", "4294967312 x 16"},
+          {"-Y 4294967312 +X 16", "16 x 4294967312"},
+          {"-Y 18446744073709551632 +X 16", "16 x 18446744073709551632"},
+          {"-Y 16 +X 0", "0 x 16"},
+          {"-Y -16 +X 16", "16 x -16"}}) {
+        writeFileAtomic(path("wrap.hdr"), file(resolution));
+        expectInputError([&] { readImage(path("wrap.hdr")); },
+                         {path("wrap.hdr"), "size " + size, "texels"});
+        expectInputError([&] { readImageOrPng(path("wrap.hdr")); }, {path("wrap.hdr"), size});
+    }
+}
+
+// PNG files byte by byte: chunks with their CRC-32 (computed bit by bit here),
+// image data compressed by stb_image_write's zlib.
+extern "C" unsigned char* stbi_zlib_compress(unsigned char* data, int length, int* outLength,
+                                             int quality);
+
+uint32_t crc32BitByBit(const std::string& bytes) {
+    uint32_t crc = 0xffffffffu;
+    for (const char c : bytes) {
+        crc ^= static_cast<unsigned char>(c);
+        for (int bit = 0; bit < 8; ++bit) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+}
+
+std::string bigEndian32(uint32_t v) {
+    return {static_cast<char>(v >> 24), static_cast<char>(v >> 16 & 0xff),
+            static_cast<char>(v >> 8 & 0xff), static_cast<char>(v & 0xff)};
+}
+
+std::string pngChunk(const std::string& type, const std::string& data) {
+    return bigEndian32(static_cast<uint32_t>(data.size())) + type + data +
+           bigEndian32(crc32BitByBit(type + data));
+}
+
+// An 8-bit RGB PNG of w x h texels of grey `value` whose image data inflates
+// to `surplus` bytes (zeros) more than the image needs.
+std::string greyPng(int w, int h, unsigned char value, size_t surplus = 0) {
+    std::string raw;
+    for (int y = 0; y < h; ++y) raw += '\0' + std::string(3 * w, static_cast<char>(value));
+    raw.append(surplus, '\0');
+    int length = 0;
+    unsigned char* z = stbi_zlib_compress(reinterpret_cast<unsigned char*>(raw.data()),
+                                          static_cast<int>(raw.size()), &length, 8);
+    const std::string zlib(reinterpret_cast<const char*>(z), length);
+    std::free(z);
+    const std::string header = bigEndian32(w) + bigEndian32(h) + std::string("\x08\x02\0\0\0", 5);
+    return std::string("\x89PNG\r\n\x1a\n", 8) + pngChunk("IHDR", header) + pngChunk("IDAT", zlib) +
+           pngChunk("IEND", "");
+}
+
+// stb_image checks no CRC and inflates image data beyond what the image
+// needs: a PNG with a bad IHDR checksum, or with 200 MB of surplus image
+// data, was read. The chunks are now walked first.
+TEST_F(ImageFiles, PngChunksChecksumsAndImageDataAreChecked) {
+    const std::string good = greyPng(5, 3, 200);
+    const Image image = decodePng(good, "good.png");
+    ASSERT_EQ(image.width, 5);
+    ASSERT_EQ(image.height, 3);
+    EXPECT_FLOAT_EQ(static_cast<float>(image.get(4, 2).g),
+                    static_cast<float>(srgbToLinear(200 / 255.0)));
+    // weft's own PNGs read back to the same bytes.
+    Image ramp(7, 5);
+    for (size_t i = 0; i < ramp.pixels.size(); ++i) ramp.pixels[i] = static_cast<float>(i) / 105;
+    const std::string written = encodePng(ramp);
+    EXPECT_EQ(encodePng(decodePng(written, "ramp.png")), written);
+
+    std::string bad = good;
+    bad[29] ^= 1;  // the IHDR's CRC (bytes 29-32)
+    expectInputError([&] { decodePng(bad, "crc.png"); }, {"'crc.png'", "IHDR", "CRC"});
+    bad = good;
+    bad[16] ^= 1;  // the IHDR's width, its CRC kept
+    expectInputError([&] { decodePng(bad, "crc.png"); }, {"'crc.png'", "IHDR", "CRC"});
+    bad = good;
+    bad[45] ^= 0x40;  // image data
+    expectInputError([&] { decodePng(bad, "data.png"); }, {"'data.png'", "IDAT", "CRC"});
+    // 1 MB of zeros after the image's 48 bytes of image data: IDAT chunks
+    // larger than such an image can need, and (one byte more) data that
+    // inflate to more than it needs.
+    expectInputError([&] { decodePng(greyPng(5, 3, 200, 1 << 20), "surplus.png"); },
+                     {"'surplus.png'", "IDAT chunks hold more than", "48 bytes"});
+    expectInputError([&] { decodePng(greyPng(5, 3, 200, 1), "surplus.png"); },
+                     {"'surplus.png'", "inflate to more than the 48 bytes"});
+    // Bytes after IEND; no IEND; a chunk before IHDR.
+    expectInputError([&] { decodePng(good + "trailing", "tail.png"); }, {"'tail.png'", "IEND"});
+    expectInputError([&] { decodePng(good.substr(0, good.size() - 12), "end.png"); },
+                     {"'end.png'", "IEND"});
+    const std::string text = pngChunk("tEXt", std::string("a\0b", 3));
+    expectInputError([&] { decodePng(good.substr(0, 8) + text + good.substr(8), "first.png"); },
+                     {"'first.png'", "IHDR"});
+    // An ancillary chunk in its place is fine.
+    const size_t iend = good.size() - 12;
+    EXPECT_EQ(decodePng(good.substr(0, iend) + text + good.substr(iend), "text.png").pixels,
+              image.pixels);
 }
 
 }  // namespace

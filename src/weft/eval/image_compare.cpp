@@ -17,21 +17,6 @@ std::string sizeText(int width, int height) {
     return std::to_string(width) + " x " + std::to_string(height);
 }
 
-// InputError naming `name` and the first pixel that is NaN or infinite.
-void checkFinite(const Image& image, const std::string& name) {
-    static const char* channels[3] = {"R", "G", "B"};
-    for (size_t i = 0; i < image.pixels.size(); ++i) {
-        if (std::isfinite(image.pixels[i])) continue;
-        const size_t pixel = i / 3;
-        const int x = static_cast<int>(pixel % image.width);
-        const int y = static_cast<int>(pixel / image.width);
-        throw InputError(name + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                         ") channel " + channels[i % 3] + " is " +
-                         (std::isnan(image.pixels[i]) ? "NaN" : "infinite") +
-                         ": images must be finite");
-    }
-}
-
 template <typename Value>
 Plane toneMapped(const Image& image, double exposure, const Value& value) {
     const double scale = std::exp2(exposure);
@@ -204,8 +189,8 @@ ImageComparison compareImages(const Image& fullA, const std::string& aName, cons
                                       " x " + std::to_string(k) + " blocks)"
                                 : std::string(": SSIM needs at least 11 x 11 pixels (its window)")));
     // Checked at full resolution, so that the pixel named is the file's own.
-    checkFinite(fullA, aName);
-    checkFinite(fullB, bName);
+    checkFinitePixels(fullA, aName);
+    checkFinitePixels(fullB, bName);
     Image downA, downB;
     if (k > 1) downA = boxDownsampled(fullA, k), downB = boxDownsampled(fullB, k);
     const Image& a = k > 1 ? downA : fullA;

@@ -14,6 +14,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/hash.h"
 #include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/json_reader.h"
@@ -106,22 +107,6 @@ YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
     }
     if (r.has("mode")) y.mode = readYarnModeName(r, "mode");
     return y;
-}
-
-// FNV-1a, 64 bit.
-uint64_t fnv1a(std::string_view bytes) {
-    uint64_t h = 0xcbf29ce484222325ULL;
-    for (const char c : bytes) {
-        h ^= static_cast<unsigned char>(c);
-        h *= 0x100000001b3ULL;
-    }
-    return h;
-}
-
-std::string hex16(uint64_t v) {
-    char buffer[17];
-    std::snprintf(buffer, sizeof buffer, "%016" PRIx64, v);
-    return buffer;
 }
 
 }  // namespace
@@ -227,8 +212,8 @@ std::string sceneHash(const SceneDesc& scene) {
             }
             // The contents, not the path: a scene folder copied elsewhere keeps its hash.
             it = digests
-                     .emplace(path,
-                              "fnv1a64:" + hex16(fnv1a(bytes)) + ":" + std::to_string(bytes.size()))
+                     .emplace(path, "fnv1a64:" + hex16(fnv1a64(bytes)) + ":" +
+                                        std::to_string(bytes.size()))
                      .first;
         }
         value = it->second;
@@ -243,7 +228,7 @@ std::string sceneHash(const SceneDesc& scene) {
             digest(j["yarns"][i]["vertex_colours"], jsonIndexPath("yarns", i) + ".vertex_colours");
     }
     // Object keys dump sorted (std::map), so the text is canonical.
-    return hex16(fnv1a("weft scene hash 1\n" + j.dump()));
+    return hex16(fnv1a64("weft scene hash 1\n" + j.dump()));
 }
 
 }  // namespace weft::render

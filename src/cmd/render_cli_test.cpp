@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -174,6 +177,80 @@ TEST_F(RenderCliTest, ShardedRenderMergesToTheUnshardedImage) {
     expectUserError(run("render scene.json --time 1 --shard 0/2 --out a.exr"),
                     {"--shard", "--spp"});
     expectUserError(run("render scene.json --spp 2 --shard x --out a.exr"), {"--shard", "K/N"});
+}
+
+// Issue 41: bytes flipped inside a part's ZIP-compressed pixels may still
+// decode, to pixels up to 1e33 that the merge averaged in with exit 0. A
+// part's JSON carries the FNV-1a checksum of its pixels, which the merge
+// verifies; a part without one (an older weft) is refused with the advice to
+// render it again.
+TEST_F(RenderCliTest, MergeRefusesACorruptedOrUncheckedPart) {
+    for (int k = 0; k < 2; ++k)
+        ASSERT_EQ(run("render scene.json --spp 4 --shard " + std::to_string(k) +
+                      "/2 --quiet --out part" + std::to_string(k) + ".exr")
+                      .status,
+                  0);
+    const nlohmann::json stats = nlohmann::json::parse(readFile(path("part1.json")));
+    // The checksum is FNV-1a 64 of the float32 pixels as the EXR holds them,
+    // computed here byte by byte from the image read back.
+    uint64_t fnv = 0xcbf29ce484222325ULL;
+    for (const float v : readImage(path("part1.exr")).pixels) {
+        uint32_t bits = 0;
+        std::memcpy(&bits, &v, 4);
+        for (int byte = 0; byte < 4; ++byte) fnv = (fnv ^ (bits >> (8 * byte) & 0xff)) * 0x100000001b3ULL;
+    }
+    char expected[32];
+    std::snprintf(expected, sizeof expected, "fnv1a64:%016llx", static_cast<unsigned long long>(fnv));
+    EXPECT_EQ(stats.at("shard").at("checksum"), expected);
+    ASSERT_EQ(run("render merge part0.exr part1.exr --out merged.exr").status, 0);
+    const Image merged = readImage(path("merged.exr"));
+    const std::string exr = readFile(path("part1.exr")), json = readFile(path("part1.json"));
+    // 8 bytes flipped at offsets through the second half of the file (the
+    // compressed pixels); each corruption is refused, naming the part.
+    int checksumFailures = 0, corruptions = 0;
+    for (size_t at = exr.size() / 2; at + 8 < exr.size(); at += exr.size() / 10, ++corruptions) {
+        std::string bytes = exr;
+        for (size_t i = at; i < at + 8; ++i) bytes[i] = static_cast<char>(~bytes[i]);
+        writeFileAtomic(path("part1.exr"), bytes);
+        const RunResult r = run("render merge part0.exr part1.exr --out bad.exr");
+        expectUserError(r, {"part1.exr"});
+        checksumFailures += testing::contains(r.err, "checksum");
+    }
+    EXPECT_GT(corruptions, 4);
+    EXPECT_GT(checksumFailures, 0) << "no corruption decoded: the test does not reach the checksum";
+    EXPECT_FALSE(std::filesystem::exists(path("bad.exr")));
+    // The same bytes again: the same merge.
+    writeFileAtomic(path("part1.exr"), exr);
+    ASSERT_EQ(run("render merge part0.exr part1.exr --out again.exr").status, 0);
+    EXPECT_EQ(readImage(path("again.exr")).pixels, merged.pixels);
+    // A checksum missing (a part of an older weft), malformed, or of other pixels.
+    nlohmann::json edited = stats;
+    edited["shard"].erase("checksum");
+    writeFileAtomic(path("part1.json"), edited.dump(2));
+    expectUserError(run("render merge part0.exr part1.exr --out bad.exr"),
+                    {"part1.json", "shard.checksum", "render this part again"});
+    edited["shard"]["checksum"] = "sha1:0123";
+    writeFileAtomic(path("part1.json"), edited.dump(2));
+    expectUserError(run("render merge part0.exr part1.exr --out bad.exr"),
+                    {"part1.json", "shard.checksum", "fnv1a64:"});
+    edited["shard"]["checksum"] =
+        nlohmann::json::parse(readFile(path("part0.json"))).at("shard").at("checksum");
+    writeFileAtomic(path("part1.json"), edited.dump(2));
+    expectUserError(run("render merge part0.exr part1.exr --out bad.exr"),
+                    {"part1.exr", "checksum", "part1.json"});
+    EXPECT_FALSE(std::filesystem::exists(path("bad.exr")));
+    writeFileAtomic(path("part1.json"), json);
+    EXPECT_EQ(run("render merge part0.exr part1.exr --out again.exr").status, 0);
+    // Parts whose JSON claim a 65536 x 65536 film: the merge allocates its
+    // sums once the first image has been read and matched (before: 103 GB
+    // from the claim alone, "out of memory").
+    for (const char* part : {"part0.json", "part1.json"}) {
+        nlohmann::json claim = nlohmann::json::parse(readFile(path(part)));
+        claim["width"] = claim["height"] = 65536;
+        writeFileAtomic(path(part), claim.dump(2));
+    }
+    expectUserError(run("render merge part0.exr part1.exr --out bad.exr"),
+                    {"part0.exr", "16 x 12 pixels", "65536 x 65536"});
 }
 
 // Two parallel yarns 0.03 apart drawn with radius 0.03: the whole length of

@@ -1,13 +1,14 @@
 #include "weft/render/render_merge.h"
 
 #include <algorithm>
-#include <cmath>
 #include <limits>
 
 #include "weft/core/error.h"
+#include "weft/core/file.h"
 #include "weft/core/image_io.h"
 #include "weft/core/json_file.h"
 #include "weft/core/json_reader.h"
+#include "weft/core/limits.h"
 #include "weft/core/shard.h"
 
 namespace weft::render {
@@ -19,18 +20,28 @@ struct Part {
     nlohmann::json stats;
     Shard shard;
     int64_t spp = 0, totalSpp = 0, first = 0;
+    std::string checksum;  // shard.checksum: pixelChecksum of the image written
 };
 
-Part readPart(const std::string& exr) {
+// "fnv1a64:" and 16 lower-case hex digits.
+bool isPixelChecksum(const std::string& text) {
+    const std::string prefix = "fnv1a64:";
+    return text.size() == prefix.size() + 16 && text.compare(0, prefix.size(), prefix) == 0 &&
+           std::all_of(text.begin() + prefix.size(), text.end(),
+                       [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); });
+}
+
+Part readPart(const std::string& exr, const ReadPartFile& read) {
     Part p;
     p.exr = exr;
     p.jsonPath = renderStatsPath(exr, "part " + exr);
-    p.stats = readJsonFile(p.jsonPath);
+    p.stats = parseJsonText(read(p.jsonPath), p.jsonPath);
     const JsonObjectReader r(p.stats, p.jsonPath);
     if (!r.has("shard"))
         throw InputError(p.jsonPath +
                          ": a whole render, not a part of one (no \"shard\"): merge the images "
                          "that weft render --shard K/N wrote");
+    r.string("mode");  // the merged statistics keep it
     const JsonObjectReader shard = r.object("shard");
     p.shard.count = shard.integer("count", {1, Shard::kMaxCount});
     p.shard.index = shard.integer("index", {0, p.shard.count - 1});
@@ -44,6 +55,18 @@ Part readPart(const std::string& exr) {
                          std::to_string(p.shard.begin(p.totalSpp)) + ", " +
                          std::to_string(p.shard.end(p.totalSpp)) +
                          "), but \"spp\" and \"shard\" say otherwise");
+    // Parts written before parts had a checksum cannot be told from damaged
+    // ones: they are refused rather than merged unchecked (docs/cluster.md).
+    if (!shard.has("checksum"))
+        shard.fail("checksum",
+                   "missing: the part has no checksum of its pixels (written by a weft before "
+                   "render parts had one), so a damaged EXR could not be told from a good one; "
+                   "render this part again (weft render --shard " +
+                       p.shard.toString() + ")");
+    p.checksum = shard.string("checksum");
+    if (!isPixelChecksum(p.checksum))
+        shard.fail("checksum", "expected \"fnv1a64:\" and 16 hex digits, got \"" +
+                                   p.checksum.substr(0, 64) + "\"");
     return p;
 }
 
@@ -70,9 +93,13 @@ std::string renderStatsPath(const std::string& exr, const std::string& what) {
 }
 
 MergedRender mergeRenderParts(const std::vector<std::string>& exrPaths) {
+    return mergeRenderParts(exrPaths, [](const std::string& path) { return readFile(path); });
+}
+
+MergedRender mergeRenderParts(const std::vector<std::string>& exrPaths, const ReadPartFile& read) {
     if (exrPaths.empty()) throw InputError("no render parts to merge");
     std::vector<Part> parts;
-    for (const std::string& exr : exrPaths) parts.push_back(readPart(exr));
+    for (const std::string& exr : exrPaths) parts.push_back(readPart(exr, read));
     std::vector<std::string> keys(std::begin(kSharedKeys), std::end(kSharedKeys));
     keys.push_back("shard.count");
     keys.push_back("shard.spp");
@@ -91,24 +118,35 @@ MergedRender mergeRenderParts(const std::vector<std::string>& exrPaths) {
     const JsonObjectReader first(parts[0].stats, parts[0].jsonPath);
     const int width = static_cast<int>(first.integer("width", {1, 1 << 16}));
     const int height = static_cast<int>(first.integer("height", {1, 1 << 16}));
-    std::vector<double> sum(static_cast<size_t>(width) * height * 3, 0.0);
+    // Allocated with the first image, whose size the reader has checked.
+    std::vector<double> sum;
     nlohmann::json stats = parts[0].stats;
     int64_t passes = 0, rays = 0, nonFinite = 0, peak = 0, threads = 0, truncated = 0;
     // Parts by an older weft carry no truncation count: the merge then reports none.
     bool allCountTruncation = true;
     double seconds = 0, buildSeconds = 0;
     for (const Part& p : parts) {
-        const Image image = readImage(p.exr);
+        // The reader refuses NaN and infinite pixels (core/image_io.h).
+        const Image image = decodeImage(read(p.exr), p.exr);
         if (image.width != width || image.height != height)
             throw InputError(p.exr + ": " + std::to_string(image.width) + " x " +
                              std::to_string(image.height) + " pixels, but " + p.jsonPath +
                              " says " + std::to_string(width) + " x " + std::to_string(height));
-        for (size_t i = 0; i < sum.size(); ++i) {
-            if (!std::isfinite(image.pixels[i]))
-                throw InputError(p.exr + ": pixel " + std::to_string(i / 3) +
-                                 " is not finite (a render part never is)");
-            sum[i] += static_cast<double>(image.pixels[i]) * static_cast<double>(p.spp);
+        if (const std::string checksum = pixelChecksum(image); checksum != p.checksum)
+            throw InputError(p.exr + ": its pixels do not match the checksum in " + p.jsonPath +
+                             " (shard.checksum " + p.checksum + ", the pixels read give " +
+                             checksum + "): the part is damaged; render shard " +
+                             p.shard.toString() + " again");
+        if (sum.empty()) {
+            // The sums, one image being read and the merged image with its
+            // EXR and PNG encodings: a render's film (render/scene.cpp).
+            checkMemoryBudget(static_cast<double>(width) * height * 56.0,
+                              "merging render parts of " + std::to_string(width) + " x " +
+                                  std::to_string(height) + " pixels");
+            sum.assign(static_cast<size_t>(width) * height * 3, 0.0);
         }
+        for (size_t i = 0; i < sum.size(); ++i)
+            sum[i] += static_cast<double>(image.pixels[i]) * static_cast<double>(p.spp);
         const JsonObjectReader r(p.stats, p.jsonPath);
         passes += r.integer("passes", {0, 1 << 30});
         rays += r.integer("rays", {0, std::numeric_limits<int64_t>::max() / 65536});

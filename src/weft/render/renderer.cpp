@@ -177,6 +177,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     st.shard = options.shard;
     st.shardSpp = options.shard ? options.spp : 0;
     st.firstSample = first;
+    if (options.shard) st.pixelChecksum = pixelChecksum(result.image);
     return result;
 }
 
@@ -226,7 +227,8 @@ nlohmann::json toJson(const RenderStats& s) {
                       {"count", s.shard->count},
                       {"spp", s.shardSpp},
                       {"first_sample", s.firstSample},
-                      {"end_sample", s.firstSample + s.spp}};
+                      {"end_sample", s.firstSample + s.spp},
+                      {"checksum", s.pixelChecksum}};
     return j;
 }
 

@@ -68,9 +68,11 @@ struct RenderStats {
     // paths: the image lacks their further light (a bias, not noise).
     int64_t truncatedPaths = 0;
     double truncatedFraction = 0;
-    // A part: its shard of `shardSpp` samples per pixel, samples [firstSample, firstSample + spp).
+    // A part: its shard of `shardSpp` samples per pixel, samples [firstSample, firstSample + spp),
+    // and pixelChecksum (core/image.h) of its image, which the merge verifies.
     std::optional<Shard> shard;
     int64_t shardSpp = 0, firstSample = 0;
+    std::string pixelChecksum;
 };
 
 struct RenderResult {

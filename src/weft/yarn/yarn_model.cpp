@@ -482,6 +482,12 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     model.fiber = FiberParams::fromJson(r.value("fiber"), source, "fiber");
     model.ply = readPly(r);
     model.tNet = readNetwork(r, "t_net", 3, 1);
+    // Version 3 exists for a conditioned model's calibration by colour: the
+    // writer writes it only with a colour block, which it requires.
+    if (version >= 3 && !r.has("colour"))
+        r.fail("colour",
+               "missing: a version 3 model is a colour-conditioned one (its "
+               "energy_calibration by colour); a model of one colour is version 1");
     if (version >= 2 && r.has("colour"))
         model.colour = ColourBasis::fromJson(r.value("colour"), source + ": colour");
     model.mNet = readNetwork(r, "m_net", 6, model.colour ? 3 * model.colour->functions() : 3);

@@ -359,6 +359,19 @@ TEST(YarnModel, VersionAndFormat) {
     expectModelError(j, {"format: expected \"weft-yarn-model\"", "weft-fiber"});
 }
 
+// Version 3 exists for a conditioned model's energy calibration by colour
+// (docs/model-format.md): a version 3 file without its colour block was read
+// as a model of one colour (issue 41). Version 2 without one still reads.
+TEST(YarnModel, Version3NeedsItsColourBlock) {
+    json j = yarnModelToJson(sampleModel());
+    j["version"] = 3;
+    expectModelError(j, {"model.json", "colour", "version 3"});
+    j["version"] = 2;
+    EXPECT_NO_THROW(yarnModelFromJson(j, "model.json"));
+    EXPECT_NO_THROW(
+        loadYarnModel(std::string(WEFT_SOURCE_DIR) + "/fuzz/seeds/model/conditioned-v3.json"));
+}
+
 TEST(YarnModel, OutOfRange) {
     const auto set = [](const char* block, const char* key, const json& value) {
         json j = yarnModelToJson(sampleModel());

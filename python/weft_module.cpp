@@ -22,11 +22,13 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "weft/core/error.h"
@@ -42,6 +44,7 @@
 #include "weft/gather/gather.h"
 #include "weft/gather/gather_merge.h"
 #include "weft/gather/rdm_io.h"
+#include "weft/ply/ply.h"
 #include "weft/render/curve_report.h"
 #include "weft/core/curves.h"
 #include "weft/render/render_merge.h"
@@ -155,6 +158,64 @@ std::string pathOf(py::handle h, const std::string& what) {
     if (!py::isinstance<py::str>(h) && !py::hasattr(h, "__fspath__"))
         throw InputError(what + ": expected a path (str or os.PathLike)");
     return py::str(py::module_::import("os").attr("fspath")(h)).cast<std::string>();
+}
+
+// ---------------------------------------------------------------------------
+// Integer arguments.
+
+// The integer argument `name` within [lo, hi]: a Python int, or any object
+// with __index__ (a NumPy integer) other than a bool. Anything else (a value
+// out of range however large, a negative one where the range has none, a
+// float even when integral, a bool, a string) is an InputError, so ValueError,
+// naming the argument and its range: pybind11's own conversion raised
+// "RuntimeError: Unable to cast Python instance to C++ type" for 2**40, a
+// TypeError for a float, and took True as 1. Every integer argument of the
+// module comes through here, before any file is read.
+template <typename T>
+T integerArg(py::handle h, const std::string& name, T lo, T hi) {
+    const auto refused = [&](std::string got) {
+        if (got.size() > 80) got = got.substr(0, 77) + "...";
+        return InputError(name + ": expected an integer in [" + std::to_string(lo) + ", " +
+                          std::to_string(hi) + "], got " + got);
+    };
+    if (PyBool_Check(h.ptr()) || !PyIndex_Check(h.ptr()))
+        throw refused(py::repr(h).cast<std::string>() + " (" +
+                      py::str(py::type::of(h).attr("__name__")).cast<std::string>() + ")");
+    const py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(h.ptr()));
+    if (!index) throw py::error_already_set();
+    if constexpr (std::is_signed_v<T>) {
+        int overflow = 0;
+        const long long v = PyLong_AsLongLongAndOverflow(index.ptr(), &overflow);
+        if (PyErr_Occurred())
+            PyErr_Clear();
+        else if (overflow == 0 && v >= lo && v <= hi)
+            return static_cast<T>(v);
+    } else {
+        const unsigned long long v = PyLong_AsUnsignedLongLong(index.ptr());
+        if (PyErr_Occurred())
+            PyErr_Clear();  // negative, or beyond 64 bits
+        else if (v >= lo && v <= hi)
+            return static_cast<T>(v);
+    }
+    throw refused(py::repr(index).cast<std::string>());
+}
+
+int intArg(py::handle h, const std::string& name, int lo, int hi) {
+    return static_cast<int>(integerArg<int64_t>(h, name, lo, hi));
+}
+
+// A seed: any integer in [0, 2^64 - 1], as the CLI's --seed.
+uint64_t seedArg(py::handle h, const std::string& name) {
+    return integerArg<uint64_t>(h, name, 0, std::numeric_limits<uint64_t>::max());
+}
+
+// A sequence of `count` values (a tuple, list or array; not a string), or
+// InputError naming `name` and `what` it should hold.
+py::sequence sequenceArg(const py::object& h, const std::string& name, size_t count,
+                         const std::string& what) {
+    if (!py::isinstance<py::sequence>(h) || py::isinstance<py::str>(h) || py::len(h) != count)
+        throw InputError(name + ": expected " + what + ", got " + py::repr(h).cast<std::string>());
+    return h.cast<py::sequence>();
 }
 
 // ---------------------------------------------------------------------------
@@ -339,12 +400,13 @@ py::dict sampleRows(const Bsdf& bsdf, const py::handle& wiArg, const py::handle&
 // The samples of `weft {fiber,yarn} sample --wi WI --count N --seed S`
 // (cmd/commands.h, writeSamples): sample i draws from random stream i.
 template <typename Bsdf>
-py::dict sampleSeeded(const Bsdf& bsdf, const py::handle& wiArg, int64_t count, uint64_t seed) {
+py::dict sampleSeeded(const Bsdf& bsdf, const py::handle& wiArg, const py::handle& countArg,
+                      const py::handle& seedArgument) {
+    const int64_t count = integerArg<int64_t>(countArg, "count", 1, 100000000);
+    const uint64_t seed = seedArg(seedArgument, "seed");
     const Rows wiRows = rowsOf(wiArg, "wi");
     if (!wiRows.single)
         throw InputError("wi: sample_seeded takes one incident direction, shape (3,)");
-    if (count < 1 || count > 100000000)
-        throw InputError("count = " + std::to_string(count) + " is out of range: allowed [1, 1e8]");
     const Vec3 wi = directionRow(wiRows, 0, "wi");
     return sampleDict(static_cast<size_t>(count), false, [&](size_t i) {
         Rng rng(static_cast<uint64_t>(i), seed);
@@ -415,13 +477,11 @@ py::array_t<T> ndarray(const std::vector<T>& values, std::vector<py::ssize_t> sh
 
 // (k, n) -> shard k of n (core/shard.h).
 Shard shardOf(const py::object& shard) {
-    std::pair<int64_t, int64_t> kn;
-    try {
-        kn = shard.cast<std::pair<int64_t, int64_t>>();
-    } catch (const py::cast_error&) {
-        throw InputError("shard: expected a pair (k, n) of integers, 0 <= k < n");
-    }
-    return Shard::parse(std::to_string(kn.first) + "/" + std::to_string(kn.second), "shard");
+    const py::sequence kn = sequenceArg(shard, "shard", 2, "a pair (k, n) of integers, 0 <= k < n");
+    Shard s;
+    s.count = integerArg<int64_t>(kn[1], "shard n", 1, Shard::kMaxCount);
+    s.index = integerArg<int64_t>(kn[0], "shard k", 0, s.count - 1);
+    return s;
 }
 
 py::dict gatherDict(const GatherResult& r, const GatherOptions& o, const std::string& outPath);
@@ -450,11 +510,27 @@ py::dict gatherPartDict(const GatherSums& s, const GatherOptions& o, const std::
 }
 
 py::dict pyGather(const py::object& preset, const py::object& params, const py::object& fibers,
-                  const py::object& density, const py::object& twist, int64_t paths, uint64_t seed,
-                  const py::object& plySeed, const std::vector<int>& bins, int maxDepth,
-                  int threads, int segmentsPerTwist, const py::object& shard,
-                  bool anyColour, const py::object& out, bool quiet) {
+                  const py::object& density, const py::object& twist, const py::object& paths,
+                  const py::object& seed, const py::object& plySeed, const py::object& bins,
+                  const py::object& maxDepth, const py::object& threads,
+                  const py::object& segmentsPerTwist, const py::object& shard, bool anyColour,
+                  const py::object& out, bool quiet) {
     GatherOptions o;
+    // The integer arguments first (gather.h and rdm.h give their ranges).
+    o.paths = integerArg<int64_t>(paths, "paths", 1, kMaxPaths);
+    o.seed = seedArg(seed, "seed");
+    if (!plySeed.is_none()) o.plySeed = seedArg(plySeed, "ply_seed");
+    const py::sequence binCounts =
+        sequenceArg(bins, "bins", 4, "four counts (theta_i, phi_i, theta_o, phi_o)");
+    int counts[4];
+    for (size_t k = 0; k < 4; ++k)
+        counts[k] = intArg(binCounts[k], "bins[" + std::to_string(k) + "]", 1, 4096);
+    o.bins = {counts[0], counts[1], counts[2], counts[3]};
+    o.maxDepth = intArg(maxDepth, "max_depth", 1, 1000000);
+    o.threads = intArg(threads, "threads", 0, 1024);
+    o.segmentsPerTwist = intArg(segmentsPerTwist, "segments_per_twist", 16, 65536);
+    const int fiberCount = fibers.is_none() ? 0 : intArg(fibers, "fibers", 1, kMaxPlyFibers);
+    if (!shard.is_none()) o.shard = shardOf(shard);
     const bool geometry = !fibers.is_none() || !density.is_none() || !twist.is_none();
     if (!preset.is_none()) {
         if (!params.is_none() || geometry)
@@ -471,22 +547,11 @@ py::dict pyGather(const py::object& preset, const py::object& params, const py::
                 "give preset=NAME, or params={...} with fibers=N, density=RHO, "
                 "twist=ALPHA");
         o.fiber = fiberParamsOf(params.cast<py::dict>());
-        o.ply = {fibers.cast<int>(), density.cast<double>(), twist.cast<double>()};
+        o.ply = {fiberCount, density.cast<double>(), twist.cast<double>()};
         o.material = "params (Python)";
     }
-    if (bins.size() != 4)
-        throw InputError("bins: expected four counts (theta_i, phi_i, theta_o, phi_o), got " +
-                         std::to_string(bins.size()));
-    o.bins = {bins[0], bins[1], bins[2], bins[3]};
-    o.paths = paths;
-    o.seed = seed;
-    if (!plySeed.is_none()) o.plySeed = plySeed.cast<uint64_t>();
-    o.maxDepth = maxDepth;
-    o.threads = threads;
-    o.segmentsPerTwist = segmentsPerTwist;
     o.quiet = quiet;
     o.anyColour = anyColour;
-    if (!shard.is_none()) o.shard = shardOf(shard);
     o.validate();
     std::unique_ptr<TempDirCommit> dir;
     std::string outPath;
@@ -623,9 +688,15 @@ py::dict lossDict(const LossCurve& c) {
 }
 
 py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object& config,
-               uint64_t seed, const py::object& threads, const std::string& ablationName,
-               const py::object& reference, const py::object& report,
-               const py::object& colourRange, int colourFunctions, bool quiet) {
+               const py::object& seedArgument, const py::object& threads,
+               const std::string& ablationName, const py::object& reference,
+               const py::object& report, const py::object& colourRange,
+               const py::object& colourFunctionsArg, bool quiet) {
+    const uint64_t seed = seedArg(seedArgument, "seed");
+    const std::optional<int> threadCount =
+        threads.is_none() ? std::nullopt : std::optional<int>(intArg(threads, "threads", 0, 1024));
+    const int colourFunctions =
+        intArg(colourFunctionsArg, "colour_functions", 2, ColourBasis::kMaxFunctions);
     FitConfig c = fitConfigOf(config);
     std::unique_ptr<ColourFitOptions> colour;
     if (!colourRange.is_none()) {
@@ -638,12 +709,11 @@ py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object
         colour = std::make_unique<ColourFitOptions>();
         colour->range = {range.first, range.second};
         colour->range.validate("colour_range");
-        checkRange("colour_functions =", colourFunctions, 2, ColourBasis::kMaxFunctions);
         colour->functions = colourFunctions;
         if (ablationOf(ablationName) != YarnAblation::None)
             throw InputError("colour_range cannot be combined with an ablation");
     }
-    if (!threads.is_none()) c.threads = threads.cast<int>();
+    if (threadCount) c.threads = *threadCount;
     if (c.threads < 0 || c.threads > 1024)
         throw InputError("threads = " + std::to_string(c.threads) +
                          " is out of range: allowed [0, 1024]");
@@ -716,9 +786,17 @@ py::array_t<float> imageArray(const Image& image) {
 }
 
 py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const py::object& spp,
-                   const py::object& seconds, int threads, const py::object& seed, bool nee,
-                   const std::string& yarnSampling, const py::object& sampler,
+                   const py::object& seconds, const py::object& threads, const py::object& seed,
+                   bool nee, const std::string& yarnSampling, const py::object& sampler,
                    const py::object& baseDir, const py::object& shard, bool quiet) {
+    // The integer arguments first (renderer.h gives their ranges).
+    const std::optional<int> sppCount =
+        spp.is_none() ? std::nullopt : std::optional<int>(intArg(spp, "spp", 1, 1 << 20));
+    const int threadCount = intArg(threads, "threads", 0, 1024);
+    const std::optional<uint64_t> seedValue =
+        seed.is_none() ? std::nullopt : std::optional<uint64_t>(seedArg(seed, "seed"));
+    const std::optional<Shard> shardValue =
+        shard.is_none() ? std::nullopt : std::optional<Shard>(shardOf(shard));
     render::SceneOptions sceneOptions;
     if (!modeName.is_none())
         sceneOptions.mode = render::yarnModeNamed(modeName.cast<std::string>(), "mode").name();
@@ -744,17 +822,17 @@ py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const
         sceneFile = py::str(path);
     }
     render::RenderOptions options;
-    options.spp = !spp.is_none() ? spp.cast<int>() : (!seconds.is_none() ? 0 : desc.render.spp);
+    options.spp = sppCount ? *sppCount : (!seconds.is_none() ? 0 : desc.render.spp);
     options.seconds = seconds.is_none() ? 0.0 : seconds.cast<double>();
-    options.threads = threads;
-    options.seed = seed.is_none() ? desc.render.seed : seed.cast<uint64_t>();
+    options.threads = threadCount;
+    options.seed = seedValue ? *seedValue : desc.render.seed;
     options.maxDepth = desc.render.maxDepth;
     options.sampler = sampler.is_none()
                           ? desc.render.sampler
                           : render::parseSampler(sampler.cast<std::string>(), "sampler");
     options.nextEventEstimation = nee;
     options.quiet = quiet;
-    if (!shard.is_none()) options.shard = shardOf(shard);
+    options.shard = shardValue;
     options.validate();
     std::optional<render::RenderResult> result;
     std::string hash;
@@ -811,22 +889,25 @@ py::object pyCurvesInfo(const py::object& pathArg, const py::object& radiusArg) 
 }
 
 py::object pyScene(const std::string& kindName, const py::object& model, const py::object& out,
-                   int size, double radius, int plies, double plyTwist, int width, int height,
-                   int spp, const py::object& envmap, const py::object& colours,
-                   const py::object& stripe, double dyeLength) {
+                   const py::object& size, double radius, const py::object& plies, double plyTwist,
+                   const py::object& width, const py::object& height, const py::object& spp,
+                   const py::object& envmap, const py::object& colours, const py::object& stripe,
+                   const py::object& dyeLength) {
     const eval::SceneKind kind = eval::parseSceneKind(kindName);
     eval::SceneOptions o;
+    // The integer arguments first (eval/scene_gen.h gives their ranges).
+    o.size = intArg(size, "size", 1, eval::kMaxPatchSize);
+    o.plies = intArg(plies, "plies", 1, 16);
+    o.width = intArg(width, "width", 1, 16384);
+    o.height = intArg(height, "height", 1, 16384);
+    o.spp = intArg(spp, "spp", 1, 1 << 20);
+    if (!stripe.is_none()) o.stripe = intArg(stripe, "stripe", 1, eval::kMaxPatchSize);
     o.model = pathOf(model, "model");
     const std::string dir = pathOf(out, "out");
-    o.size = size;
     o.radius = radius;
-    o.plies = plies;
     o.plyTwist = plyTwist;
-    o.width = width;
-    o.height = height;
-    o.spp = spp;
-    if (!stripe.is_none()) o.stripe = stripe.cast<int>();
-    o.dyeLength = dyeLength;
+    // None (the default): no space dyeing.
+    if (!dyeLength.is_none()) o.dyeLength = dyeLength.cast<double>();
     if (!envmap.is_none()) o.envmap = pathOf(envmap, "envmap");
     if (!colours.is_none())
         for (const auto& c : colours.cast<std::vector<std::vector<double>>>()) {
@@ -914,9 +995,8 @@ PYBIND11_MODULE(weft, m) {
             "lobe (n,) (0 = R, 1 = TT).")
         .def(
             "sample_seeded",
-            [](const FiberBcsdf& f, const py::object& wi, int64_t count, uint64_t seed) {
-                return sampleSeeded(f, wi, count, seed);
-            },
+            [](const FiberBcsdf& f, const py::object& wi, const py::object& count,
+               const py::object& seed) { return sampleSeeded(f, wi, count, seed); },
             py::arg("wi"), py::arg("count"), py::arg("seed") = 0,
             "The samples of `weft fiber sample --wi WI --count COUNT --seed SEED`.")
         .def(
@@ -978,9 +1058,8 @@ PYBIND11_MODULE(weft, m) {
             "lobe), lobe (0 = T, 1 = R, 2 = M).")
         .def(
             "sample_seeded",
-            [](const PyYarnModel& y, const py::object& wi, int64_t count, uint64_t seed) {
-                return sampleSeeded(*y.bsdf, wi, count, seed);
-            },
+            [](const PyYarnModel& y, const py::object& wi, const py::object& count,
+               const py::object& seed) { return sampleSeeded(*y.bsdf, wi, count, seed); },
             py::arg("wi"), py::arg("count"), py::arg("seed") = 0,
             "The samples of `weft yarn sample --wi WI --count COUNT --seed SEED`.")
         .def(
@@ -1073,7 +1152,7 @@ PYBIND11_MODULE(weft, m) {
           py::arg("size") = 6, py::arg("radius") = 0.01, py::arg("plies") = 3,
           py::arg("ply_twist") = 0.3, py::arg("width") = 512, py::arg("height") = 512,
           py::arg("spp") = 64, py::arg("envmap") = py::none(), py::arg("colours") = py::none(),
-          py::arg("stripe") = py::none(), py::arg("dye_length") = 0.0,
+          py::arg("stripe") = py::none(), py::arg("dye_length") = py::none(),
           "`weft scene`: writes the generated scene folder `out` (\"closeup\", \"weave\" or "
           "\"knit\") and returns its summary dict; colours=[(r, g, b)] colours every yarn, two "
           "colours make a striped knit or a check weave (stripe yarns per stripe, default 2), or with "

@@ -159,6 +159,16 @@ TEST_F(SceneCliTest, BadInputIsNamed) {
                     {"--colours", "one colour", "--dye-length"});
     expectUserError(run("scene closeup" + m + " --colours 0,0,0 1,1,1 --dye-length 0.1 --out o"),
                     {"--dye-length 0.1", "[0.5, 10000]"});
+    // Given means checked, 0 included (issue 41: 0 was taken for "not given").
+    expectUserError(run("scene knit" + m + " --colours 0,0,0 1,1,1 --dye-length 0 --out o"),
+                    {"--dye-length 0", "[0.5, 10000]"});
+    // Issue 41: films a patch cannot fill searched for an extension forever.
+    expectUserError(run("scene weave" + m + " --width 1 --height 512 --size 2 --out o"),
+                    {"--width 1 --height 512", "at most 10"});
+    expectUserError(run("scene knit" + m + " --width 1 --height 16 --out o"),
+                    {"--width 1 --height 16", "a knit allows at most 10"});
+    expectUserError(run("scene weave" + m + " --width 16384 --height 1 --out o"),
+                    {"--width 16384 --height 1", "at most 100"});
     expectUserError(run("scene knit" + m + " --stripe 2 --out o"), {"--stripe", "two --colours"});
     expectUserError(run("scene knit" + m + " --colours 0,0,0 1,1,1 --stripe 0 --out o"),
                     {"--stripe 0", "[1, 100]"});

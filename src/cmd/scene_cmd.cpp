@@ -23,6 +23,8 @@ struct SceneCmdOptions {
     CLI::Option* sizeOpt = nullptr;
     CLI::Option* stripeOpt = nullptr;
     int stripe = eval::kDefaultStripe;
+    CLI::Option* dyeLengthOpt = nullptr;
+    double dyeLength = 0;
     bool quiet = false;
 };
 
@@ -31,6 +33,8 @@ void runScene(SceneCmdOptions o) {
     if (kind == eval::SceneKind::Closeup && o.sizeOpt->count())
         throw InputError("--size applies to weave and knit only (a close-up is one yarn)");
     if (o.stripeOpt->count()) o.scene.stripe = o.stripe;
+    // Given means checked (SceneOptions::validate), 0 included.
+    if (o.dyeLengthOpt->count()) o.scene.dyeLength = o.dyeLength;
     for (const std::string& c : o.colours) o.scene.colours.push_back(parseColour(c, "--colours"));
     checkOutputsSpareInputs({{"--model", o.scene.model}, {"--envmap", o.scene.envmap}}, {}, {},
                             {{"--out", o.out}});
@@ -82,10 +86,10 @@ void addSceneCommand(CLI::App& app) {
                                    "With two colours: knit courses or weave yarns per stripe, "
                                    "[1, 100]")
                        ->capture_default_str();
-    cmd->add_option("--dye-length", s.dyeLength,
-                    "With two colours: space-dyed yarns instead of stripes, the colour "
-                    "alternating every L yarn radii along each yarn (a vertex colour file), "
-                    "[0.5, 10000]");
+    o->dyeLengthOpt = cmd->add_option("--dye-length", o->dyeLength,
+                                      "With two colours: space-dyed yarns instead of stripes, "
+                                      "the colour alternating every L yarn radii along each "
+                                      "yarn (a vertex colour file), [0.5, 10000]");
     cmd->add_flag("--quiet", o->quiet, "No warning when the generated yarns overlap");
     cmd->add_option("--out", o->out,
                     "Output directory (replaced only if it holds nothing but an earlier "

@@ -35,8 +35,11 @@ constexpr double kCloseupFill = 0.95;
 // Close-up: yarn length in radii and samples along it.
 constexpr double kCloseupLengthRadii = 8;
 constexpr int kCloseupSamplesPerRadius = 8;
-// Yarn extensions tried before giving up (each a radius, a spacing or a loop).
-constexpr int kMaxEndMargin = 512;
+// What a generator makes for one margin: whole curves, or each curve as its
+// first and last point only (extendEndsOutOfView's tries).
+constexpr bool kEndsOnly = true, kWholeCurves = false;
+// The sample after i on a curve of samples 0..last: every one, or the ends only.
+int nextSample(int i, int last, bool endsOnly) { return endsOnly && i < last ? last : i + 1; }
 // Lights, relative to the camera distance D from the framed box's centre: two
 // spheres of radius kLightRadius * D at distance D, in the directions
 // (+-0.6 right, +-0.6 up, 0.55 towards the camera): outside a 30-degree view.
@@ -112,13 +115,14 @@ struct PatternedCurves {
     CurveSet set;
     std::vector<int> group;
     std::vector<size_t> anchor;
+    int margin = 0;  // the extension that put every end out of view
 };
 
 // Space-dyed colours (--dye-length): along each curve, colour 0 for
 // L = dyeLength R of arc length from the anchor, then colour 1 for L, and so
 // on both ways; a point takes the colour of the stretch it lies in.
 void spaceDye(CurveSet& set, const std::vector<size_t>& anchor, const SceneOptions& o) {
-    const double stretch = o.dyeLength * o.radius;
+    const double stretch = *o.dyeLength * o.radius;
     for (size_t c = 0; c < set.curves.size(); ++c) {
         Curve& curve = set.curves[c];
         std::vector<double> arc(curve.points.size(), 0.0);
@@ -135,6 +139,7 @@ void spaceDye(CurveSet& set, const std::vector<size_t>& anchor, const SceneOptio
 GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera,
                         const SceneOptions& o) {
     GeneratedScene g;
+    g.endMargin = curves.margin;
     render::SceneDesc& s = g.scene;
     s.camera = camera;
     s.film = {o.width, o.height};
@@ -145,7 +150,7 @@ GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera
     yarn.plies = o.plies;
     yarn.plyTwist = o.plyTwist;
     yarn.model = absolutePath(o.model);
-    if (o.dyeLength > 0) {
+    if (o.dyeLength) {
         // Space-dyed: one entry, a colour per curve point.
         spaceDye(curves.set, curves.anchor, o);
         yarn.vertexColours = kVertexColourFile;
@@ -181,23 +186,52 @@ int stripeGroup(int i, int stripe) {
     return s % 2 == 0 ? 0 : 1;
 }
 
-// The shortest extension of the yarns (curvesWithMargin(0), (1), ...) whose
-// every end lies outside the view: a cut yarn end is drawn as a sphere cap
-// in neural mode and as flat-cut, splaying fibers in fiber mode, so ends in
-// view would be compared for a difference no model is meant to capture.
+// The shortest extension of the yarns (curvesWithMargin(0, ...), (1, ...),
+// ...) whose every end lies outside the view: a cut yarn end is drawn as a
+// sphere cap in neural mode and as flat-cut, splaying fibers in fiber mode,
+// so ends in view would be compared for a difference no model is meant to
+// capture. Each margin is tried on the curves' ends alone
+// (curvesWithMargin(margin, kEndsOnly): every curve as its first and last
+// point, the same numbers as the full curve's), so a try costs one point per
+// yarn end, not the whole patch; only the margin found is generated in full.
+// checkFilmShape bounds the margin that the allowed films need below
+// kMaxEndMargin.
 template <class CurvesWithMargin>
 PatternedCurves extendEndsOutOfView(const CurvesWithMargin& curvesWithMargin,
                                     const render::CameraDesc& camera, const SceneOptions& o) {
     for (int margin = 0; margin <= kMaxEndMargin; ++margin) {
-        PatternedCurves curves = curvesWithMargin(margin);
-        const auto& set = curves.set.curves;
+        const PatternedCurves ends = curvesWithMargin(margin, kEndsOnly);
+        const auto& set = ends.set.curves;
         const bool allOut = std::all_of(set.begin(), set.end(), [&](const auto& c) {
             return c.closed || (outOfView(camera, o.width, o.height, c.points.front(), o.radius) &&
                                 outOfView(camera, o.width, o.height, c.points.back(), o.radius));
         });
-        if (allOut) return curves;
+        if (allOut) {
+            PatternedCurves curves = curvesWithMargin(margin, kWholeCurves);
+            curves.margin = margin;
+            return curves;
+        }
     }
     throw std::logic_error("scene generator: yarn ends still in view after the largest margin");
+}
+
+// The film shapes a kind can frame (scene_gen.h, kMaxFilmAspect).
+void checkFilmShape(SceneKind kind, const SceneOptions& o) {
+    const std::string film = "--width " + std::to_string(o.width) + " --height " +
+                             std::to_string(o.height) + ": ";
+    if (o.width > kMaxFilmAspect * o.height)
+        throw InputError(film + "the film is " + formatNumber(static_cast<double>(o.width) / o.height) +
+                         " times as wide as tall; allowed at most " +
+                         formatNumber(kMaxFilmAspect) +
+                         " (a wider view, over 175 degrees across, needs the yarns to run on "
+                         "hundreds of radii past the frame to keep their ends out of view)");
+    if (kind != SceneKind::Closeup && o.height > kMaxPatchFilmTallness * o.width)
+        throw InputError(film + "the film is " + formatNumber(static_cast<double>(o.height) / o.width) +
+                         " times as tall as wide; a " + sceneKindName(kind) +
+                         " allows at most " + formatNumber(kMaxPatchFilmTallness) +
+                         " (the patch is seen from 19 degrees above: from 10.7 times as tall "
+                         "as wide the bottom of the view looks past the cloth, which then "
+                         "cannot fill the frame)");
 }
 
 // scene.json, yarns.txt or yarns-N.txt (N = 1, 2, ...): what writeScene writes.
@@ -257,13 +291,13 @@ void SceneOptions::validate() const {
     if (stripe) {
         checkInt("--stripe", *stripe, 1, kMaxPatchSize);
         if (colours.size() != 2) throw InputError("--stripe applies to two --colours only");
-        if (dyeLength != 0)
+        if (dyeLength)
             throw InputError(
                 "--stripe and --dye-length exclude each other (stripes of yarns, or "
                 "colours along every yarn)");
     }
-    if (dyeLength != 0) {
-        checkReal("--dye-length", dyeLength, kMinDyeLength, kMaxDyeLength);
+    if (dyeLength) {
+        checkReal("--dye-length", *dyeLength, kMinDyeLength, kMaxDyeLength);
         if (colours.size() != 2)
             throw InputError("--dye-length needs two --colours (the yarn alternates between them)");
     }
@@ -390,7 +424,8 @@ render::CameraDesc frameCover(double x0, double x1, double y0, double y1, const 
 
 GeneratedScene closeupScene(const SceneOptions& o) {
     o.validate();
-    if (o.colours.size() == 2 && o.dyeLength == 0)
+    checkFilmShape(SceneKind::Closeup, o);
+    if (o.colours.size() == 2 && !o.dyeLength)
         throw InputError(
             "--colours: a close-up is one yarn, so it takes one colour, or two "
             "with --dye-length (a space-dyed yarn)");
@@ -398,11 +433,11 @@ GeneratedScene closeupScene(const SceneOptions& o) {
     // by +-0.04 L: gently curved, seen from the front. The camera frames this
     // length; the yarn then runs on past both sides of the film.
     const double len = kCloseupLengthRadii * o.radius;
-    const auto yarn = [&](int margin) {
+    const auto yarn = [&](int margin, bool endsOnly) {
         const int steps = static_cast<int>(kCloseupLengthRadii) * kCloseupSamplesPerRadius +
                           2 * margin * kCloseupSamplesPerRadius;
         Curve c;
-        for (int i = 0; i <= steps; ++i) {
+        for (int i = 0; i <= steps; i = nextSample(i, steps, endsOnly)) {
             const double x =
                 -0.5 * len +
                 o.radius * (static_cast<double>(i) / kCloseupSamplesPerRadius - margin);
@@ -417,19 +452,20 @@ GeneratedScene closeupScene(const SceneOptions& o) {
         return curves;
     };
     const render::CameraDesc camera =
-        frameBox(padded(bounds(yarn(0).set), o.radius), kCloseupForward, kFovDeg, o.width, o.height,
+        frameBox(padded(bounds(yarn(0, kWholeCurves).set), o.radius), kCloseupForward, kFovDeg, o.width, o.height,
                  kCloseupFill);
     return assemble(extendEndsOutOfView(yarn, camera, o), camera, o);
 }
 
 GeneratedScene weaveScene(const SceneOptions& o) {
     o.validate();
+    checkFilmShape(SceneKind::Weave, o);
     const WeaveGeometry g = weaveGeometry(o.radius);
     const double d = g.spacing, a = g.amplitude, k = kPi / d;
     const int n = o.size;
     // The view covers the cells of N x N yarns; `margin` more yarns on each
     // side, each running `margin` + 1 spacings past the outermost ones.
-    const auto weave = [&](int margin) {
+    const auto weave = [&](int margin, bool endsOnly) {
         const int first = -margin, last = n - 1 + margin;
         const double start = (first - 1) * d, span = (last - first + 2) * d;
         const int samples = (last - first + 2) * kWeaveSamplesPerSpacing + 1;
@@ -439,7 +475,7 @@ GeneratedScene weaveScene(const SceneOptions& o) {
         PatternedCurves curves;
         for (int j = first; j <= last; ++j) {  // warp: along x at y = j d
             Curve c;
-            for (int i = 0; i < samples; ++i) {
+            for (int i = 0; i < samples; i = nextSample(i, samples - 1, endsOnly)) {
                 const double x = along(i);
                 c.points.push_back({x, j * d, parity(j) * a * std::cos(k * x)});
             }
@@ -449,7 +485,7 @@ GeneratedScene weaveScene(const SceneOptions& o) {
         }
         for (int i = first; i <= last; ++i) {  // weft: along y at x = i d, opposite phase
             Curve c;
-            for (int s = 0; s < samples; ++s) {
+            for (int s = 0; s < samples; s = nextSample(s, samples - 1, endsOnly)) {
                 const double y = along(s);
                 c.points.push_back({i * d, y, -parity(i) * a * std::cos(k * y)});
             }
@@ -467,18 +503,19 @@ GeneratedScene weaveScene(const SceneOptions& o) {
 
 GeneratedScene knitScene(const SceneOptions& o) {
     o.validate();
+    checkFilmShape(SceneKind::Knit, o);
     const KnitGeometry g = knitGeometry(o.radius);
     const int n = o.size;
     // The view covers N courses of N loops; `margin` + 1 more courses above
     // and below (the first one fills the top course's loops and the gaps below
     // the bottom one), and every course `margin` loops longer at both ends.
-    const auto knit = [&](int margin) {
+    const auto knit = [&](int margin, bool endsOnly) {
         const int loops = n + 2 * margin;
         const int samples = loops * kKnitSamplesPerLoop + 1;
         PatternedCurves curves;
         for (int row = -margin - 1; row <= n + margin; ++row) {
             Curve c;
-            for (int i = 0; i < samples; ++i)
+            for (int i = 0; i < samples; i = nextSample(i, samples - 1, endsOnly))
                 c.points.push_back(knitPoint(
                     g, row, kTwoPi * (static_cast<double>(i) / kKnitSamplesPerLoop - margin)));
             curves.set.curves.push_back(std::move(c));

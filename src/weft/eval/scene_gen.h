@@ -62,6 +62,19 @@ SceneKind parseSceneKind(const std::string& name);
 inline constexpr int kMaxPatchSize = 100;
 inline constexpr double kMinRadius = 1e-6, kMaxRadius = 1e3;
 inline constexpr double kMinDyeLength = 0.5, kMaxDyeLength = 1e4;
+// Film shapes the generators frame (each generator checks them after
+// validate; an InputError names --width, --height and the limit): at most
+// kMaxFilmAspect times as wide as tall, since the yarns must run on past a
+// wider view (over 175 degrees across) by hundreds of radii to keep their
+// ends out of it; and a weave or knit at most kMaxPatchFilmTallness times as
+// tall as wide, since a patch is seen from 19 degrees above and from 10.7
+// times as tall the bottom of the view runs parallel to the cloth or past it,
+// which no extension of the yarns fills. (A close-up may be any taller.)
+inline constexpr double kMaxFilmAspect = 100;
+inline constexpr double kMaxPatchFilmTallness = 10;
+// The most yarn extensions (extendEndsOutOfView in scene_gen.cpp) a scene
+// may need; the film shapes above need at most about half of it.
+inline constexpr int kMaxEndMargin = 512;
 inline constexpr int kDefaultStripe = 2;
 // The vertex colour file of a space-dyed scene.
 inline constexpr const char* kVertexColourFile = "colours.txt";
@@ -80,7 +93,9 @@ struct SceneOptions {
     // --stripe: courses (knit) or yarns (weave) per stripe, [1, 100]; only with
     // two colours and no dyeLength; unset: kDefaultStripe.
     std::optional<int> stripe;
-    double dyeLength = 0;  // --dye-length: 0, or space-dyed stretches in radii; [0.5, 10000]
+    // --dye-length: space-dyed stretches in radii, [0.5, 10000] whenever given
+    // (0 included: unset means no space dyeing); only with two colours.
+    std::optional<double> dyeLength;
 
     // Range checks and the flags' combinations, then the model is loaded
     // (loadYarnModel) and the envmap checked for its extension and
@@ -98,6 +113,10 @@ struct GeneratedScene {
     // The yarn entry of each curve (curves.curves.size() entries, each in
     // [0, scene.yarns.size())).
     std::vector<int> entryOfCurve;
+    // How far the yarns were extended to keep their ends out of view
+    // (radii for the close-up, yarns and spacings for the weave, courses and
+    // loops for the knit; docs/scenes.md), in [0, kMaxEndMargin].
+    int endMargin = 0;
 };
 
 // "yarns.txt" for a scene with one yarn entry, else "yarns-1.txt", "yarns-2.txt", ...

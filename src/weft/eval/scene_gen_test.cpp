@@ -299,6 +299,83 @@ TEST(SceneGen, ClothFillsTheFrameAndEndsStayOutOfViewOnAnyFilm) {
     }
 }
 
+// Issue 41: a weave on a 1 x 512 film never finished: every margin tried
+// generated the whole patch, and no margin could hide the ends of a view that
+// looks past the cloth. Now the extreme shapes in range finish with a
+// bounded margin, and those beyond it are refused with their shape.
+TEST(SceneGen, ExtremeFilmShapesInRangeFrameWithABoundedMargin) {
+    const int wide = static_cast<int>(kMaxFilmAspect);
+    const int tall = static_cast<int>(kMaxPatchFilmTallness);
+    for (const SceneKind kind : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit}) {
+        std::vector<std::pair<int, int>> shapes = {
+            {1, 1}, {2, 1}, {1, 2}, {wide, 1}, {163 * wide, 163}, {16384, 16384}};
+        if (kind == SceneKind::Closeup) {
+            shapes.insert(shapes.end(), {{1, 16384}, {1, 512}, {2, 512}, {1, 16}});
+        } else {
+            shapes.insert(shapes.end(), {{1, tall}, {1638, 1638 * tall}, {3, 3 * tall}});
+        }
+        for (const int size : {1, 2, 3}) {
+            if (kind == SceneKind::Closeup && size > 1) continue;
+            for (const auto& [w, h] : shapes) {
+                SCOPED_TRACE(std::string(sceneKindName(kind)) + " " + std::to_string(w) + "x" +
+                             std::to_string(h) + " size " + std::to_string(size));
+                SceneOptions o = options(size);
+                o.width = w;
+                o.height = h;
+                const GeneratedScene g = generateScene(kind, o);
+                EXPECT_GE(g.endMargin, 0);
+                EXPECT_LE(g.endMargin, kMaxEndMargin / 2);
+                expectEndsOutOfView(g);
+                if (kind == SceneKind::Weave) {
+                    const double d = weaveGeometry(o.radius).spacing;
+                    expectFilmCovered(g, -0.5 * d, (size - 0.5) * d, -0.5 * d, (size - 0.5) * d);
+                } else if (kind == SceneKind::Knit) {
+                    const KnitGeometry k = knitGeometry(o.radius);
+                    expectFilmCovered(g, 0, size * kTwoPi * k.scale, -0.5 * k.rowSpacing * k.scale,
+                                      (size - 0.5) * k.rowSpacing * k.scale);
+                }
+            }
+        }
+    }
+    // A larger patch at the widest and tallest films (the margin, in yarns
+    // and loops, shrinks as the patch grows: docs/scenes.md).
+    for (const auto& [w, h] : {std::pair{wide, 1}, {1, tall}}) {
+        SceneOptions o = options(12);
+        o.width = w;
+        o.height = h;
+        EXPECT_LE(weaveScene(o).endMargin, kMaxEndMargin / 2);
+        EXPECT_LE(knitScene(o).endMargin, kMaxEndMargin / 2);
+    }
+}
+
+TEST(SceneGen, FilmsTooWideOrTooTallToFrameAreRefusedWithTheirShape) {
+    struct Case {
+        SceneKind kind;
+        int width, height;
+        std::vector<std::string> parts;
+    };
+    const std::string tallParts = "times as tall as wide";
+    const std::vector<Case> cases = {
+        {SceneKind::Weave, 1, 512, {"--width 1 --height 512", "512 times as tall", "at most 10"}},
+        {SceneKind::Weave, 2, 512, {"--width 2 --height 512", "256 times as tall"}},
+        {SceneKind::Weave, 1, 16, {"--width 1 --height 16", "a weave allows at most 10"}},
+        {SceneKind::Knit, 1, 16, {"--width 1 --height 16", "a knit allows at most 10"}},
+        {SceneKind::Knit, 1, 11, {"--width 1 --height 11", tallParts}},
+        {SceneKind::Weave, 16384, 1, {"--width 16384 --height 1", "16384 times as wide",
+                                      "at most 100"}},
+        {SceneKind::Knit, 16384, 1, {"--width 16384 --height 1", "at most 100"}},
+        {SceneKind::Closeup, 16384, 1, {"--width 16384 --height 1", "at most 100"}},
+        {SceneKind::Closeup, 101, 1, {"--width 101 --height 1", "101 times as wide"}},
+    };
+    for (const Case& c : cases) {
+        SceneOptions o = options(2);
+        o.width = c.width;
+        o.height = c.height;
+        for (const std::string& part : c.parts)
+            expectInputError([&] { generateScene(c.kind, o); }, {part});
+    }
+}
+
 TEST(SceneGen, FrameCoverIsTight) {
     // A square seen head-on fills a square film exactly: the corner rays land
     // on its corners.
@@ -660,6 +737,15 @@ TEST(SceneGen, SpaceDyedYarnsAlternateEveryDyeLengthAlongTheCurve) {
     o.colours = {a, b};
     o.dyeLength = 0.1;
     expectInputError([&] { knitScene(o); }, {"--dye-length 0.1", "[0.5, 10000]"});
+    // Given is checked, 0 included (issue 41: 0 read as "not given" and made stripes).
+    for (const double bad : {0.0, -0.0, -3.0}) {
+        o.dyeLength = bad;
+        for (const SceneKind kind : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit})
+            expectInputError([&] { generateScene(kind, o); }, {"--dye-length ", "[0.5, 10000]"});
+    }
+    o.colours = {a};
+    o.dyeLength = 0.0;
+    expectInputError([&] { knitScene(o); }, {"--dye-length 0", "[0.5, 10000]"});
 }
 
 TEST_F(SceneGenFiles, TwoColourFilesReadBackAsTwoEntries) {

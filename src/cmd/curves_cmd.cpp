@@ -88,7 +88,8 @@ void runInfo(const CurvesInfoOptions& o) {
     checkOutputsSpareInputs({{"FILE", o.file}}, {{"--json", o.json}});
     const CurveSet set = readCurves(o.file);
     const render::CurveReport report =
-        render::curveReport(set, o.radiusOpt->count() ? std::optional(o.radius) : std::nullopt);
+        render::curveReport(set, o.radiusOpt->count() ? std::optional(o.radius) : std::nullopt,
+                            o.file);
     if (!o.json.empty()) {
         nlohmann::json j = render::toJson(report);
         j["file"] = o.file;

@@ -11,14 +11,21 @@
 
 #include "weft/core/error.h"
 #include "weft/core/json_message.h"
+#include "weft/core/limits.h"
 
 namespace weft::render {
 
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// Segments per leaf of the hierarchy.
+// Pieces per leaf of the hierarchy.
 constexpr size_t kLeafSize = 4;
+// At most this many pieces per segment on average, and in all (unless there
+// are more segments): piecesPerSegment.
+constexpr double kMaxPiecesPerSegment = 32, kMaxPieces = 1 << 21;
+// Bytes per piece while the hierarchy is built and searched: the piece, its
+// sort key and order, and half a node.
+constexpr double kBytesPerPiece = 112;
 
 double clamp01(double v) { return std::clamp(v, 0.0, 1.0); }
 
@@ -105,54 +112,179 @@ double boxDistance(const Bounds3& a, const Bounds3& b) {
     return std::sqrt(d2);
 }
 
+// The point at parameter u of a segment, computed as every search computes
+// it (closestPointsOnSegments, the samples, the nearest partner), so that a
+// box around the points at u0 and u1 holds every computed point in between
+// (each coordinate of a + (b - a) u is monotonic in u, in floating point too).
+Vec3 pointAt(const Segment& s, double u) { return s.a + (s.b - s.a) * u; }
+
+// A box around every point the searches compute on s: its ends a and b and
+// a + (b - a) 1, which may differ from b in the last bit.
 Bounds3 segmentBox(const Segment& s) {
     Bounds3 box;
     box.extend(s.a);
     box.extend(s.b);
+    box.extend(pointAt(s, 1.0));
     return box;
 }
 
-// A bounding volume hierarchy over segments. Besides its box, each node
-// records what the same-curve pruning needs: the one curve all its segments
-// belong to (-1 when several) and their arc range, plus the range of yarn
-// entries and the largest radius among its segments.
+// A stretch [part / parts, (part + 1) / parts] of one segment's parameter:
+// what the hierarchy holds. A segment much longer than the spacing of the
+// curves around it is held as several pieces, so that its box does not
+// overlap everything (random segments across a box made the search
+// quadratic: issue 41); the searches still measure whole segments, a piece
+// only says where to look.
+struct Piece {
+    uint32_t segment = 0;
+    uint32_t part = 0, parts = 1;
+};
+
+double pieceStart(const Piece& p) { return static_cast<double>(p.part) / p.parts; }
+double pieceEnd(const Piece& p) { return static_cast<double>(p.part + 1) / p.parts; }
+
+// Around the piece's points as computed on the segment (pointAt), and the
+// segment's own ends where the piece reaches them.
+Bounds3 pieceBox(const Piece& p, const Segment& s) {
+    if (p.parts == 1) return segmentBox(s);
+    Bounds3 box;
+    box.extend(p.part == 0 ? s.a : pointAt(s, pieceStart(p)));
+    box.extend(pointAt(s, pieceEnd(p)));
+    if (p.part + 1 == p.parts) box.extend(s.b);
+    return box;
+}
+
+// The arc positions the piece spans, computed as the searches compute a
+// point's (arcStart + u length).
+double pieceArcLo(const Piece& p, const Segment& s) {
+    return s.arcStart + pieceStart(p) * s.length;
+}
+double pieceArcHi(const Piece& p, const Segment& s) { return s.arcStart + pieceEnd(p) * s.length; }
+
+// A bounding volume hierarchy over pieces of segments. Besides its box, each
+// node records what the same-curve pruning needs: the one curve all its
+// pieces belong to (-1 when several) and their arc range, plus the range of
+// yarn entries, the largest radius among its segments and the smallest
+// segment index (for the first of several pairs at the same distance).
 struct Node {
     Bounds3 box;
     double arcLo = kInf, arcHi = -kInf;
     int64_t curve = -1;
     uint32_t yarnLo = 0, yarnHi = 0;
     double radiusMax = 0;
-    // Leaf: segments [first, first + count). Inner (count 0): children at
+    uint32_t indexLo = 0;
+    // Leaf: pieces [first, first + count). Inner (count 0): children at
     // this node + 1 and at `first`.
     uint32_t first = 0, count = 0;
+};
+
+// Each segment's piece count (above). L segments' worth of length spread
+// evenly over the curves' box (of diagonal D; D^3 bounds its volume) would
+// lie about sqrt(D^3 / L) apart: a segment longer than that is cut into
+// pieces of about that length, at most kMaxPiecesPerSegment per segment on
+// average and kMaxPieces in all (or one per segment). Yarn curves, whose
+// segments are a fraction of a radius and whose yarns fill their box, are
+// held whole (the same hierarchy, the same order of the overlap sums as
+// before pieces); segments criss-crossing a box no longer all overlap.
+std::vector<uint32_t> piecesPerSegment(const std::vector<Segment>& segments) {
+    std::vector<uint32_t> parts(segments.size(), 1);
+    if (segments.empty()) return parts;
+    Bounds3 box;
+    double total = 0;
+    for (const Segment& s : segments) {
+        box.extend(s.a);
+        box.extend(s.b);
+        total += s.length;
+    }
+    const double n = static_cast<double>(segments.size());
+    const double allowed = std::max(n, std::min(kMaxPiecesPerSegment * n, kMaxPieces));
+    const double diagonal = length(box.hi - box.lo);
+    double piece = diagonal * std::sqrt(diagonal / total);
+    // ceil(l / piece) <= l / piece + 1: at most total / piece + n pieces.
+    if (allowed > n) piece = std::max(piece, total / (allowed - n));
+    if (allowed == n || !(piece > 0) || !std::isfinite(piece)) return parts;
+    for (size_t i = 0; i < segments.size(); ++i)
+        if (segments[i].length > piece)
+            parts[i] = static_cast<uint32_t>(std::min(std::ceil(segments[i].length / piece), allowed));
+    return parts;
+}
+
+// Steps of the searches (node visits and segment tests), against their limit.
+class StepBudget {
+  public:
+    // `name` begins the message: the file or scene checked.
+    StepBudget(uint64_t limit, const std::string& name) : limit_(limit), name_(name) {}
+    void spend(uint64_t n = 1) {
+        steps_ += n;
+        if (steps_ > limit_)
+            throw CurveReportLimit(
+                name_ + ": the curve overlap check stopped after " + std::to_string(limit_) +
+                " steps (at most " + std::to_string(kMaxReportStepsPerItem) +
+                " per segment and overlap sample, and at least " +
+                std::to_string(kMinReportSteps) +
+                ", docs/limits.md): its segments are long compared with the distances between "
+                "them and crowd every part of the search, as no yarn curves do");
+    }
+    uint64_t steps() const { return steps_; }
+
+  private:
+    uint64_t limit_, steps_ = 0;
+    const std::string& name_;
 };
 
 class SegmentTree {
   public:
     SegmentTree(const std::vector<Segment>& segments, const std::vector<CurveInfo>& curves)
-        : curves_(curves) {
-        std::vector<uint32_t> order(segments.size());
-        for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<uint32_t>(i);
-        if (!segments.empty()) {
-            nodes_.reserve(2 * segments.size() / kLeafSize + 2);
-            build(segments, order, 0, order.size());
+        : segments_(segments), curves_(curves) {
+        const std::vector<uint32_t> parts = piecesPerSegment(segments);
+        size_t total = 0;
+        for (uint32_t p : parts) total += p;
+        checkMemoryBudget(static_cast<double>(segments.size()) * sizeof(Segment) +
+                              static_cast<double>(total) * kBytesPerPiece,
+                          "the curve overlap check (" + std::to_string(segments.size()) +
+                              " segments in " + std::to_string(total) + " pieces)");
+        if (total >= std::numeric_limits<uint32_t>::max())
+            throw InputError("the curves have more than " +
+                             std::to_string(std::numeric_limits<uint32_t>::max() - 1) +
+                             " segment pieces, more than the curve report handles");
+        pieces_.reserve(total);
+        for (size_t i = 0; i < segments.size(); ++i)
+            for (uint32_t k = 0; k < parts[i]; ++k)
+                pieces_.push_back({static_cast<uint32_t>(i), k, parts[i]});
+        // Twice each piece's midpoint, the key of the median split: a + b for
+        // a whole segment (the order of the hierarchy over segments before).
+        std::vector<Vec3> sums(pieces_.size());
+        for (size_t i = 0; i < pieces_.size(); ++i) {
+            const Piece& p = pieces_[i];
+            const Segment& s = segments[p.segment];
+            const Vec3 lo = p.part == 0 ? s.a : pointAt(s, pieceStart(p));
+            const Vec3 hi = p.part + 1 == p.parts ? s.b : pointAt(s, pieceEnd(p));
+            sums[i] = lo + hi;
         }
-        segments_.reserve(segments.size());
-        for (uint32_t i : order) segments_.push_back(segments[i]);
+        std::vector<uint32_t> order(pieces_.size());
+        for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<uint32_t>(i);
+        if (!pieces_.empty()) {
+            nodes_.reserve(2 * pieces_.size() / kLeafSize + 2);
+            build(sums, order, 0, order.size());
+        }
+        std::vector<Piece> sorted;
+        sorted.reserve(pieces_.size());
+        for (uint32_t i : order) sorted.push_back(pieces_[i]);
+        pieces_ = std::move(sorted);
         // Children come after their parent (pre-order): summarise backwards.
         for (size_t i = nodes_.size(); i-- > 0;) summarise(i);
     }
 
     bool empty() const { return nodes_.empty(); }
     const Node& node(uint32_t i) const { return nodes_[i]; }
-    const Segment& segment(uint32_t i) const { return segments_[i]; }
-    const std::vector<Segment>& segments() const { return segments_; }
+    size_t pieceCount() const { return pieces_.size(); }
+    const Piece& piece(uint32_t i) const { return pieces_[i]; }
+    const Segment& segmentOf(uint32_t piece) const { return segments_[pieces_[piece].segment]; }
     const CurveInfo& curveOf(const Segment& s) const { return curves_[s.curve]; }
     const CurveInfo& curve(int64_t i) const { return curves_[static_cast<size_t>(i)]; }
 
   private:
-    // Median split on the longest axis of the segment midpoints; pre-order.
-    uint32_t build(const std::vector<Segment>& segments, std::vector<uint32_t>& order, size_t begin,
+    // Median split on the longest axis of the piece midpoints; pre-order.
+    uint32_t build(const std::vector<Vec3>& sums, std::vector<uint32_t>& order, size_t begin,
                    size_t end) {
         const auto index = static_cast<uint32_t>(nodes_.size());
         nodes_.emplace_back();
@@ -162,30 +294,31 @@ class SegmentTree {
             return index;
         }
         Bounds3 mids;
-        for (size_t i = begin; i < end; ++i)
-            mids.extend(0.5 * (segments[order[i]].a + segments[order[i]].b));
+        for (size_t i = begin; i < end; ++i) mids.extend(0.5 * sums[order[i]]);
         const Vec3 extent = mids.hi - mids.lo;
         const int axis =
             extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
         const size_t middle = begin + (end - begin) / 2;
         const auto at = [&](size_t i) { return order.begin() + static_cast<std::ptrdiff_t>(i); };
         std::nth_element(at(begin), at(middle), at(end), [&](uint32_t x, uint32_t y) {
-            const double mx = segments[x].a[axis] + segments[x].b[axis];
-            const double my = segments[y].a[axis] + segments[y].b[axis];
+            const double mx = sums[x][axis];
+            const double my = sums[y][axis];
             return mx < my || (mx == my && x < y);
         });
-        build(segments, order, begin, middle);
-        const uint32_t right = build(segments, order, middle, end);
+        build(sums, order, begin, middle);
+        const uint32_t right = build(sums, order, middle, end);
         nodes_[index].first = right;
         return index;
     }
 
-    // A leaf from its segments, an inner node from its two children.
+    // A leaf from its pieces, an inner node from its two children.
     void summarise(size_t i) {
         Node& node = nodes_[i];
         node.yarnLo = std::numeric_limits<uint32_t>::max();
+        node.indexLo = std::numeric_limits<uint32_t>::max();
         const auto add = [&node](const Bounds3& box, int64_t curve, double arcLo, double arcHi,
-                                 uint32_t yarnLo, uint32_t yarnHi, double radius, bool first) {
+                                 uint32_t yarnLo, uint32_t yarnHi, double radius, uint32_t indexLo,
+                                 bool first) {
             node.box.extend(box.lo);
             node.box.extend(box.hi);
             node.curve = first || node.curve == curve ? curve : -1;
@@ -194,33 +327,39 @@ class SegmentTree {
             node.yarnLo = std::min(node.yarnLo, yarnLo);
             node.yarnHi = std::max(node.yarnHi, yarnHi);
             node.radiusMax = std::max(node.radiusMax, radius);
+            node.indexLo = std::min(node.indexLo, indexLo);
         };
         if (node.count == 0) {
             for (const size_t child : {i + 1, size_t{node.first}}) {
                 const Node& c = nodes_[child];
-                add(c.box, c.curve, c.arcLo, c.arcHi, c.yarnLo, c.yarnHi, c.radiusMax,
+                add(c.box, c.curve, c.arcLo, c.arcHi, c.yarnLo, c.yarnHi, c.radiusMax, c.indexLo,
                     child == i + 1);
             }
             return;
         }
         for (uint32_t k = node.first; k < node.first + node.count; ++k) {
-            const Segment& s = segments_[k];
+            const Piece& p = pieces_[k];
+            const Segment& s = segments_[p.segment];
             const CurveInfo& c = curves_[s.curve];
-            add(segmentBox(s), s.curve, s.arcStart, s.arcStart + s.length, c.yarn, c.yarn, c.radius,
-                k == node.first);
+            add(pieceBox(p, s), s.curve, pieceArcLo(p, s), pieceArcHi(p, s), c.yarn, c.yarn,
+                c.radius, s.index, k == node.first);
         }
     }
 
+    const std::vector<Segment>& segments_;
     const std::vector<CurveInfo>& curves_;
+    std::vector<Piece> pieces_;
     std::vector<Node> nodes_;
-    std::vector<Segment> segments_;
 };
 
-// The closest contact pair, by a traversal of the tree against itself.
-// `yarn` >= 0 keeps only pairs with a segment of that entry.
+// The closest contact pair, by a traversal of the tree against itself: the
+// smallest distance, and of the pairs at that distance the first in segment
+// order (the pair a search over all pairs in order keeps). `yarn` >= 0 keeps
+// only pairs with a segment of that entry.
 class ContactSearch {
   public:
-    ContactSearch(const SegmentTree& tree, int64_t yarn) : tree_(tree), yarn_(yarn) {
+    ContactSearch(const SegmentTree& tree, int64_t yarn, StepBudget& budget)
+        : tree_(tree), yarn_(yarn), budget_(budget) {
         if (!tree.empty()) visit(0, 0);
     }
 
@@ -235,14 +374,27 @@ class ContactSearch {
         return yarn_ < 0 || (n.yarnLo <= yarn_ && yarn_ <= n.yarnHi);
     }
 
+    // Whether a pair of the two nodes could still replace the best pair: at
+    // a smaller distance than `gap` allows, or at the same distance but
+    // earlier. A pair (s, t), s < t, of a segment from each node has s >= the
+    // smaller of the two nodes' first indices and t >= the larger one. (Many
+    // pairs at one distance, e.g. coincident segments, made the search
+    // quadratic when only a smaller distance pruned: issue 41.)
+    bool mayImprove(double gap, const Node& a, const Node& b) const {
+        if (gap < best_) return true;
+        if (gap > best_) return false;
+        const uint32_t lo = std::min(a.indexLo, b.indexLo), hi = std::max(a.indexLo, b.indexLo);
+        return std::tie(lo, hi) < std::tie(a_->index, b_->index);
+    }
+
     void visit(uint32_t ia, uint32_t ib) {
+        budget_.spend();
         const Node& a = tree_.node(ia);
         const Node& b = tree_.node(ib);
         if (!involvesYarn(a) && !involvesYarn(b)) return;
         if (ia != ib) {
             const double gap = boxDistance(a.box, b.box);
-            // Not >=: an equal distance may still be an earlier pair.
-            if (gap > best_) return;
+            if (!mayImprove(gap, a, b)) return;
             // One stretch of one curve against another: every contact needs
             // sep > 2 d >= 2 gap.
             if (a.curve >= 0 && a.curve == b.curve &&
@@ -253,7 +405,8 @@ class ContactSearch {
         if (a.count != 0 && b.count != 0) {
             for (uint32_t i = a.first; i < a.first + a.count; ++i)
                 for (uint32_t j = b.first; j < b.first + b.count; ++j)
-                    if (ia != ib || i < j) test(tree_.segment(i), tree_.segment(j));
+                    if ((ia != ib || i < j) && tree_.piece(i).segment != tree_.piece(j).segment)
+                        test(tree_.segmentOf(i), tree_.segmentOf(j));
             return;
         }
         if (ia == ib) {
@@ -278,6 +431,7 @@ class ContactSearch {
     static double diagonal(const Node& n) { return length(n.box.hi - n.box.lo); }
 
     void test(const Segment& x, const Segment& y) {
+        budget_.spend();
         const Segment& s = x.index < y.index ? x : y;
         const Segment& t = x.index < y.index ? y : x;
         if (yarn_ >= 0 && tree_.curveOf(s).yarn != yarn_ && tree_.curveOf(t).yarn != yarn_) return;
@@ -296,6 +450,7 @@ class ContactSearch {
 
     const SegmentTree& tree_;
     int64_t yarn_;
+    StepBudget& budget_;
     double best_ = kInf;
     const Segment *a_ = nullptr, *b_ = nullptr;
     SegmentClosestPoints points_;
@@ -321,7 +476,7 @@ double overlapFraction(const OverlapSums& sums) {
 // Samples every segment and finds, for each sample, its deepest partner.
 class OverlapSampler {
   public:
-    explicit OverlapSampler(const SegmentTree& tree) : tree_(tree) {}
+    OverlapSampler(const SegmentTree& tree, StepBudget& budget) : tree_(tree), budget_(budget) {}
 
     void addSegment(const Segment& s, OverlapSums& sums, std::vector<char>& curveOverlaps) {
         const CurveInfo& curve = tree_.curveOf(s);
@@ -338,7 +493,7 @@ class OverlapSampler {
         for (int k = 0; k <= n; ++k) {
             const double u = static_cast<double>(k) / n;
             const double weight = s.length / n * (k == 0 || k == n ? 0.5 : 1.0);
-            const Vec3 x = s.a + (s.b - s.a) * u;
+            const Vec3 x = pointAt(s, u);
             const double g = nearestPartner(x, s.curve, s.arcStart + u * s.length, bound);
             if (!(g < bound)) continue;
             sums.overlapping += weight;
@@ -364,6 +519,7 @@ class OverlapSampler {
         const double arcHi = s.arcStart + s.length;
         stack_.assign(1, 0);
         while (!stack_.empty()) {
+            budget_.spend();
             const uint32_t index = stack_.back();
             stack_.pop_back();
             const Node& n = tree_.node(index);
@@ -375,12 +531,14 @@ class OverlapSampler {
                 continue;
             }
             for (uint32_t i = n.first; i < n.first + n.count; ++i) {
-                const Segment& t = tree_.segment(i);
+                const Piece& p = tree_.piece(i);
+                const Segment& t = tree_.segmentOf(i);
                 if (t.index == s.index) continue;
-                if (boxDistance(segmentBox(t), box) - tree_.curveOf(t).radius >= bound) continue;
+                const double radius = tree_.curveOf(t).radius;
+                if (boxDistance(pieceBox(p, t), box) - radius >= bound) continue;
                 if (t.curve == s.curve &&
-                    !(maxArcSeparation(tree_.curveOf(t), t.arcStart, t.arcStart + t.length,
-                                       s.arcStart, arcHi) > 4 * tree_.curveOf(t).radius))
+                    !(maxArcSeparation(tree_.curveOf(t), pieceArcLo(p, t), pieceArcHi(p, t),
+                                       s.arcStart, arcHi) > 4 * radius))
                     continue;
                 return true;
             }
@@ -395,6 +553,7 @@ class OverlapSampler {
         bool found = false;
         stack_.assign(1, 0);
         while (!stack_.empty()) {
+            budget_.spend();
             const uint32_t index = stack_.back();
             stack_.pop_back();
             const Node& n = tree_.node(index);
@@ -411,7 +570,7 @@ class OverlapSampler {
                 continue;
             }
             for (uint32_t i = n.first; i < n.first + n.count; ++i) {
-                const Segment& t = tree_.segment(i);
+                const Segment& t = tree_.segmentOf(i);
                 const CurveInfo& c = tree_.curveOf(t);
                 const Vec3 d = t.b - t.a;
                 const double len2 = dot(d, d);
@@ -430,6 +589,7 @@ class OverlapSampler {
     }
 
     const SegmentTree& tree_;
+    StepBudget& budget_;
     std::vector<uint32_t> stack_;
 };
 
@@ -440,7 +600,14 @@ struct CurveTable {
 };
 
 CurveTable curveTable(const std::vector<YarnCurves>& yarns) {
+    double segments = 0;
+    for (const YarnCurves& y : yarns)
+        for (const Curve& c : y.curves->curves) segments += static_cast<double>(segmentCount(c));
+    // Before the first allocation; the hierarchy checks again with its pieces.
+    checkMemoryBudget(segments * (sizeof(Segment) + kBytesPerPiece),
+                      "the curve overlap check (" + formatNumber(segments) + " segments)");
     CurveTable table;
+    table.segments.reserve(static_cast<size_t>(segments));
     for (size_t y = 0; y < yarns.size(); ++y) {
         const std::vector<Curve>& curves = yarns[y].curves->curves;
         for (size_t c = 0; c < curves.size(); ++c) {
@@ -474,6 +641,29 @@ CurveTable curveTable(const std::vector<YarnCurves>& yarns) {
     return table;
 }
 
+// Each segment once, in the order of the hierarchy (of its first piece): the
+// order in which the overlap sums are added.
+template <class F>
+void forEachSegment(const SegmentTree& tree, const F& f) {
+    for (uint32_t i = 0; i < tree.pieceCount(); ++i)
+        if (tree.piece(i).part == 0) f(tree.segmentOf(i));
+}
+
+// The step limit of each search: kMaxReportStepsPerItem per segment and per
+// overlap sample (OverlapSampler's sample count, when `sampled`), at least
+// kMinReportSteps.
+uint64_t stepLimit(const CurveTable& table, bool sampled) {
+    double items = static_cast<double>(table.segments.size());
+    if (sampled)
+        for (const Segment& s : table.segments)
+            items += std::clamp(std::ceil(s.length / (0.25 * table.curves[s.curve].radius)), 1.0,
+                                double{kMaxSamplesPerSegment}) +
+                     1;
+    const double limit = std::max(static_cast<double>(kMinReportSteps),
+                                  static_cast<double>(kMaxReportStepsPerItem) * items);
+    return limit >= 1.8e19 ? std::numeric_limits<uint64_t>::max() : static_cast<uint64_t>(limit);
+}
+
 std::string formatPercent(double fraction) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.1f%%", 100 * fraction);
@@ -500,7 +690,8 @@ void checkOverlapRadius(double radius, const std::string& label) {
                          " is out of range: allowed finite and > 0");
 }
 
-CurveReport curveReport(const CurveSet& set, std::optional<double> radius) {
+CurveReport curveReport(const CurveSet& set, std::optional<double> radius,
+                        const std::string& name) {
     if (radius) checkOverlapRadius(*radius, "radius");
     const CurveTable table = curveTable({{&set, 1.0, radius.value_or(0.0)}});
     CurveReport report;
@@ -521,7 +712,10 @@ CurveReport curveReport(const CurveSet& set, std::optional<double> radius) {
         report.segmentLengthMean = report.totalLength / static_cast<double>(table.segments.size());
 
     const SegmentTree tree(table.segments, table.curves);
-    const ContactSearch search(tree, -1);
+    const uint64_t limit = stepLimit(table, radius.has_value());
+    StepBudget contactSteps(limit, name);
+    const ContactSearch search(tree, -1, contactSteps);
+    report.steps = contactSteps.steps();
     if (search.found()) {
         CurveContact& c = report.closest.emplace();
         c.distance = search.distance();
@@ -533,8 +727,10 @@ CurveReport curveReport(const CurveSet& set, std::optional<double> radius) {
     if (radius) {
         OverlapSums sums;
         std::vector<char> curveOverlaps(table.curves.size(), 0);
-        OverlapSampler sampler(tree);
-        for (const Segment& s : tree.segments()) sampler.addSegment(s, sums, curveOverlaps);
+        StepBudget overlapSteps(limit, name);
+        OverlapSampler sampler(tree, overlapSteps);
+        forEachSegment(tree, [&](const Segment& s) { sampler.addSegment(s, sums, curveOverlaps); });
+        report.steps += overlapSteps.steps();
         CurveOverlap& o = report.overlap.emplace();
         o.radius = *radius;
         o.fraction = overlapFraction(sums);
@@ -545,17 +741,21 @@ CurveReport curveReport(const CurveSet& set, std::optional<double> radius) {
     return report;
 }
 
-std::vector<YarnOverlap> yarnOverlaps(const std::vector<YarnCurves>& yarns) {
+std::vector<YarnOverlap> yarnOverlaps(const std::vector<YarnCurves>& yarns,
+                                     const std::string& name) {
     for (const YarnCurves& y : yarns)
         if (!(std::isfinite(y.radius) && y.radius > 0))
             throw std::invalid_argument("yarnOverlaps: radius " + formatNumber(y.radius));
     const CurveTable table = curveTable(yarns);
     const SegmentTree tree(table.segments, table.curves);
+    const uint64_t limit = stepLimit(table, true);
     std::vector<OverlapSums> sums(yarns.size());
     std::vector<char> curveOverlaps(table.curves.size(), 0);
-    OverlapSampler sampler(tree);
-    for (const Segment& s : tree.segments())
+    StepBudget overlapSteps(limit, name);
+    OverlapSampler sampler(tree, overlapSteps);
+    forEachSegment(tree, [&](const Segment& s) {
         sampler.addSegment(s, sums[table.curves[s.curve].yarn], curveOverlaps);
+    });
     std::vector<YarnOverlap> result(yarns.size());
     for (size_t y = 0; y < yarns.size(); ++y) {
         YarnOverlap& o = result[y];
@@ -563,7 +763,9 @@ std::vector<YarnOverlap> yarnOverlaps(const std::vector<YarnCurves>& yarns) {
         o.fraction = overlapFraction(sums[y]);
         o.maxDepth = sums[y].maxDepth;
         // One entry: every contact involves it.
-        const ContactSearch search(tree, yarns.size() == 1 ? -1 : static_cast<int64_t>(y));
+        StepBudget contactSteps(limit, name);
+        const ContactSearch search(tree, yarns.size() == 1 ? -1 : static_cast<int64_t>(y),
+                                   contactSteps);
         o.largestRadiusWithoutOverlap = 0.5 * search.distance();
     }
     return result;

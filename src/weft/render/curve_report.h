@@ -35,10 +35,19 @@
 //   plain circle: on a circle sep / |p - q| <= pi / 2 < 2).
 // The search is exact and uses a bounding volume hierarchy over the segments,
 // traversed against itself; a pair of nodes is skipped when its boxes are
-// farther apart than the best pair so far, or when both hold one stretch of
-// the same curve that is too short along the curve for any contact
-// (max sep <= 2 x box distance), so that one long yarn with no contact costs
-// O(n log n), not all pairs.
+// farther apart than the best pair so far, when they are as far apart and
+// cannot hold an earlier pair in segment order (so that many pairs at one
+// distance, e.g. coincident segments, cost no more than one), or when both
+// hold one stretch of the same curve that is too short along the curve for
+// any contact (max sep <= 2 x box distance), so that one long yarn with no
+// contact costs O(n log n), not all pairs. A segment longer than the
+// spacing its set would have spread evenly over its box (sqrt(D^3 / L), D
+// the box's diagonal, L the total length) is held as several pieces of about
+// that length (at most 32 per segment on average and 2^21 in all), so that
+// long segments criss-crossing a box do not all overlap (issue 41); the
+// searches still measure whole segments. Yarn curves are held whole. Every
+// search is bounded (kMaxReportStepsPerItem), and its memory is checked
+// against the budget (core/limits.h) before it is allocated.
 //
 // Overlap at radius R. Each segment is sampled at spacing <= R / 4 (at least
 // both ends; at most kMaxSamplesPerSegment intervals), each sample weighted by
@@ -56,6 +65,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
@@ -63,6 +73,7 @@
 #include <vector>
 
 #include "weft/core/curves.h"
+#include "weft/core/error.h"
 #include "weft/core/vec.h"
 
 namespace weft::render {
@@ -74,6 +85,22 @@ inline constexpr double kOverlapTolerance = 0.02;
 // A segment longer than this many times R / 4 is sampled more coarsely, which
 // bounds the work for a radius far below the segment lengths.
 inline constexpr int kMaxSamplesPerSegment = 1024;
+// Each search (the closest contact; the overlap samples) stops after
+// kMaxReportStepsPerItem steps (a node of the hierarchy visited, a segment
+// pair measured) per segment and per overlap sample, and never before
+// kMinReportSteps, with a CurveReportLimit: its time is bounded for any
+// input, in proportion to its size. Yarn curves take 10 to 80 steps per
+// item (the shared knit and satin, random walks; bench/curves); a tangle of
+// long segments criss-crossing a box (thousands of steps per segment) is
+// refused (docs/limits.md).
+inline constexpr uint64_t kMaxReportStepsPerItem = 256;
+inline constexpr uint64_t kMinReportSteps = 100'000'000;
+
+// The InputError of a search that reached its step limit.
+class CurveReportLimit : public InputError {
+  public:
+    using InputError::InputError;
+};
 
 // Closest points of segments [p1, q1] and [p2, q2]: p = p1 + s (q1 - p1),
 // q = p2 + t (q2 - p2), s and t in [0, 1] (Ericson, Real-Time Collision
@@ -111,6 +138,8 @@ struct CurveReport {
     double segmentLengthMin = 0, segmentLengthMean = 0, segmentLengthMax = 0;
     std::optional<CurveContact> closest;  // none: no contact pair
     std::optional<CurveOverlap> overlap;  // when a radius was given
+    // The steps the searches took (kMaxReportStepsPerItem), not in the JSON.
+    uint64_t steps = 0;
 
     double minDistance() const {
         return closest ? closest->distance : std::numeric_limits<double>::infinity();
@@ -122,8 +151,11 @@ struct CurveReport {
 void checkOverlapRadius(double radius, const std::string& label);
 
 // The report of `set` (in its own units), with the overlap at `radius` when
-// given (checked by checkOverlapRadius with label "radius").
-CurveReport curveReport(const CurveSet& set, std::optional<double> radius = std::nullopt);
+// given (checked by checkOverlapRadius with label "radius"). A search past
+// its step limit throws CurveReportLimit, its message beginning with `name`
+// (the file).
+CurveReport curveReport(const CurveSet& set, std::optional<double> radius = std::nullopt,
+                        const std::string& name = "curves");
 
 // The report as JSON: curves, points, closed_curves, basis ("polyline",
 // "catmull_rom"), segments, degenerate_segments, total_length, bounds {min,
@@ -151,8 +183,10 @@ struct YarnOverlap {
     bool overlaps() const { return fraction > 0; }
 };
 
-// Overlap of every entry against all of them (one result per entry, in order).
-std::vector<YarnOverlap> yarnOverlaps(const std::vector<YarnCurves>& yarns);
+// Overlap of every entry against all of them (one result per entry, in order);
+// `name` begins a CurveReportLimit's message (the scene).
+std::vector<YarnOverlap> yarnOverlaps(const std::vector<YarnCurves>& yarns,
+                                      const std::string& name = "yarns");
 
 // The warning for one scene entry, without the "weft: warning: " prefix, or ""
 // when it does not overlap:

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -90,6 +91,63 @@ BruteContact bruteForceContact(const CurveSet& set,
         }
     }
     return best;
+}
+
+// The overlap of curve_report.h at `radius` written out again: every sample
+// of every segment against every segment.
+struct BruteOverlap {
+    double fraction = 0, maxDepth = 0;
+    size_t curvesOverlapping = 0;
+};
+
+BruteOverlap bruteForceOverlap(const CurveSet& set, double radius) {
+    const std::vector<FlatSegment> segs = flatten(set);
+    const double bound = radius * (1 - 2 * kOverlapTolerance);
+    double total = 0, overlapping = 0;
+    BruteOverlap result;
+    std::vector<char> overlaps(set.curves.size(), 0);
+    for (const FlatSegment& s : segs) {
+        total += s.length;
+        const int n = static_cast<int>(
+            std::clamp(std::ceil(s.length / (0.25 * radius)), 1.0, double{kMaxSamplesPerSegment}));
+        for (int k = 0; k <= n; ++k) {
+            const double u = static_cast<double>(k) / n;
+            const Vec3 x = s.a + (s.b - s.a) * u;
+            const double arc = s.arcStart + u * s.length;
+            double g = kInf;
+            for (const FlatSegment& t : segs) {
+                const Vec3 d = t.b - t.a;
+                const double len2 = dot(d, d);
+                const double v = len2 > 0 ? std::clamp(dot(x - t.a, d) / len2, 0.0, 1.0) : 0.0;
+                if (t.curve == s.curve) {
+                    double sep = std::fabs(arc - (t.arcStart + v * t.length));
+                    if (t.closed) sep = std::min(sep, t.curveLength - sep);
+                    if (!(sep > 4 * radius)) continue;
+                }
+                g = std::min(g, length(x - (t.a + d * v)) - radius);
+            }
+            if (!(g < bound)) continue;
+            overlapping += s.length / n * (k == 0 || k == n ? 0.5 : 1.0);
+            result.maxDepth = std::max(result.maxDepth, 0.5 - 0.5 * g / radius);
+            overlaps[s.curve] = 1;
+        }
+    }
+    result.fraction = total > 0 ? std::min(1.0, overlapping / total) : 0.0;
+    for (const char o : overlaps) result.curvesOverlapping += o ? 1 : 0;
+    return result;
+}
+
+// Two-point curves from random points of a box of side `box` (issue 41's
+// hostile input: long segments criss-crossing each other), after the curves
+// of `set`; every `twins`-th one again, the same segment twice (ties).
+CurveSet withRandomSegments(CurveSet set, uint64_t seed, int count, double box, int twins = 0) {
+    Rng rng(seed, 9);
+    const auto point = [&] { return Vec3{rng.uniform(), rng.uniform(), rng.uniform()} * box; };
+    for (int i = 0; i < count; ++i) {
+        set.curves.push_back(polyline({point(), point()}));
+        if (twins > 0 && i % twins == 0) set.curves.push_back(set.curves.back());
+    }
+    return set;
 }
 
 // Random-walk curves in a small box: close approaches between curves and
@@ -200,6 +258,59 @@ TEST(CurveReport, DivergingHairpinMatchesBruteForce) {
     EXPECT_EQ(r.closest->pointB, truth.pointB);
     EXPECT_GT(r.minDistance(), 0.2);
     EXPECT_LT(r.minDistance(), 0.21);
+}
+
+// Issue 41: long segments criss-crossing a box made the search quadratic
+// (40,000 took 38 s). The segments are now held as pieces; the closest
+// contact and the overlap equal brute force on such sets, alone, among the
+// short segments of random walks, and with coincident segments.
+TEST(CurveReport, LongCrissCrossingSegmentsMatchBruteForce) {
+    for (uint64_t seed = 1; seed <= 6; ++seed) {
+        const bool walks = seed % 2 == 0;
+        const CurveSet set = withRandomSegments(
+            walks ? randomWalks(seed, 3, 40, 4, 0.2) : CurveSet{}, seed, walks ? 40 : 90, 4,
+            seed % 4 == 3 ? 7 : 0);
+        SCOPED_TRACE("seed " + std::to_string(seed));
+        const double radius = 0.05;
+        const BruteContact truth = bruteForceContact(set);
+        const CurveReport report = curveReport(set, radius);
+        ASSERT_TRUE(report.closest.has_value());
+        EXPECT_EQ(report.closest->distance, truth.distance);
+        EXPECT_EQ(report.closest->curveA, truth.curveA);
+        EXPECT_EQ(report.closest->curveB, truth.curveB);
+        EXPECT_EQ(report.closest->pointA, truth.pointA);
+        EXPECT_EQ(report.closest->pointB, truth.pointB);
+        const BruteOverlap overlap = bruteForceOverlap(set, radius);
+        EXPECT_GT(overlap.fraction, 0.0);
+        EXPECT_NEAR(report.overlap->fraction, overlap.fraction, 1e-12);
+        EXPECT_EQ(report.overlap->maxDepth, overlap.maxDepth);
+        EXPECT_EQ(report.overlap->curvesOverlapping, overlap.curvesOverlapping);
+        // The same in the scene's check, whose result per entry is the whole set's.
+        const YarnOverlap o = yarnOverlaps({{&set, 1.0, radius}}).front();
+        EXPECT_NEAR(o.fraction, overlap.fraction, 1e-12);
+        EXPECT_EQ(o.largestRadiusWithoutOverlap, truth.distance / 2);
+    }
+}
+
+// The searches' work grows about as the input: twice the curves of the same
+// kinds (random walks, segments across the box) at the same density (a box
+// sqrt(2) times as wide, so that the length per volume stays the same) take
+// about as many more steps as there is more length (the segments grow with
+// the box; the overlap samples with the length). Held whole (before issue
+// 41), each long segment's box overlapped a fixed share of all the others:
+// about twice as many steps per length.
+TEST(CurveReport, StepsGrowAboutAsTheLengthWithLongSegments) {
+    const auto measure = [](int scale) {
+        const double box = 20 * std::sqrt(scale);
+        const CurveSet set = withRandomSegments(randomWalks(5, 2 * scale, 100, box, 0.5), 6,
+                                                150 * scale, box);
+        return curveReport(set, 0.2);
+    };
+    const CurveReport one = measure(1), two = measure(2);
+    const double steps = static_cast<double>(two.steps) / static_cast<double>(one.steps);
+    const double length = two.totalLength / one.totalLength;
+    EXPECT_LT(steps, 1.5 * length) << one.steps << " steps, then " << two.steps;
+    EXPECT_GT(length, 2.0);
 }
 
 TEST(CurveReport, CountsLengthsAndBounds) {

@@ -73,6 +73,30 @@ void checkCurveExtent(const CurveSet& set, const SceneDesc& desc, size_t yarn) {
                      "curves, or a larger radius");
 }
 
+// The segments frameCurve and the mode will make of `curve` of the entry
+// `yarn`, from its control polygon's length (to within the spline's bulge),
+// before any is allocated.
+double estimatedSegments(const Curve& curve, const YarnDesc& yarn, const YarnMode& mode,
+                         const PlyParams& fibers) {
+    const double radius = largestRadius(curve, yarn);
+    const double step = sampleStep(radius > 0 ? radius : 1.0, yarn.plies, yarn.plyTwist,
+                                   mode.drawsPlies() ? nullptr : &fibers);
+    double chord = 0;
+    const std::vector<Vec3>& cp = curve.points;
+    for (size_t k = 0; k + 1 < cp.size(); ++k) chord += length(cp[k + 1] - cp[k]);
+    if (curve.closed && cp.size() > 1) chord += length(cp.front() - cp.back());
+    return (chord * yarn.scale / step + 1) * yarn.plies * (mode.drawsPlies() ? 1 : fibers.fibers);
+}
+
+// Refuses, naming the entry, geometry beyond kMaxSceneSegments or the memory
+// budget once `planned` + `estimate` segments are made.
+void checkGeometrySize(double planned, double estimate, const SceneDesc& desc, size_t y,
+                       const YarnMode& mode) {
+    if (planned + estimate > static_cast<double>(kMaxSceneSegments))
+        tooMuchGeometry(desc, y, mode);
+    checkMemoryBudget((planned + estimate) * kBytesPerSegment, geometryName(desc, y, mode));
+}
+
 // The radius the overlap check gives an entry: its "radius", or the mean of
 // the per-point radii times its scale; none when a curve has no radii.
 std::optional<double> overlapRadius(const YarnDesc& yarn, const CurveSet& set) {
@@ -181,7 +205,8 @@ std::vector<YarnEntryOverlap> checkYarnOverlap(const SceneDesc& desc,
         if (!radius) return {};
         yarns.push_back({&curveSets[y], desc.yarns[y].scale, *radius});
     }
-    const std::vector<YarnOverlap> overlaps = yarnOverlaps(yarns);
+    const std::vector<YarnOverlap> overlaps =
+        yarnOverlaps(yarns, desc.path.empty() ? std::string("scene") : desc.path);
     std::vector<YarnEntryOverlap> result;
     for (size_t y = 0; y < overlaps.size(); ++y)
         result.push_back({desc.yarns[y].curves, overlaps[y]});
@@ -239,6 +264,18 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
         if (yarn.vertexColours.empty()) entryMaterial[y] = materials.material(y, yarn.colour);
         else if (!read.empty()) materials.material(y, read.front().colours.front());
     }
+    // The whole geometry's estimate first: the overlap check samples the
+    // yarns at the spacing of the geometry's segments (R / 4 or finer), so
+    // its work is bounded by a geometry that may be built (issue 41: a render
+    // of 20,000 long random segments spent minutes in the check).
+    double estimated = 0;
+    for (size_t y = 0; y < desc.yarns.size(); ++y)
+        for (const Curve& curve : curveSets[y].curves) {
+            const double estimate =
+                estimatedSegments(curve, desc.yarns[y], *modes[y], materials.model(y).ply);
+            checkGeometrySize(estimated, estimate, desc, y, *modes[y]);
+            estimated += estimate;
+        }
     // Before the geometry: what the render will draw inside other yarns.
     stats_.yarnOverlap = checkYarnOverlap(desc, curveSets);
 
@@ -256,18 +293,9 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
             const double radius = largestRadius(curves[c], yarn);
             const double step = sampleStep(radius > 0 ? radius : 1.0, yarn.plies, yarn.plyTwist,
                                            mode.drawsPlies() ? nullptr : &fibers);
-            // The control polygon's length bounds the samples frameCurve will
-            // make (to within the spline's bulge): refuse before allocating them.
-            double chord = 0;
-            const std::vector<Vec3>& cp = curves[c].points;
-            for (size_t k = 0; k + 1 < cp.size(); ++k) chord += length(cp[k + 1] - cp[k]);
-            if (curves[c].closed && cp.size() > 1) chord += length(cp.front() - cp.back());
-            const double estimate = (chord * yarn.scale / step + 1) * yarn.plies *
-                                    (mode.drawsPlies() ? 1 : fibers.fibers);
-            if (static_cast<double>(planned) + estimate > static_cast<double>(kMaxSceneSegments))
-                tooMuchGeometry(desc, y, mode);
-            checkMemoryBudget((static_cast<double>(planned) + estimate) * kBytesPerSegment,
-                              geometryName(desc, y, mode));
+            // Again with the segments made so far: the spline may bulge.
+            checkGeometrySize(static_cast<double>(planned),
+                              estimatedSegments(curves[c], yarn, mode, fibers), desc, y, mode);
             const FramedCurve centre =
                 frameCurve(curves[c], yarn.scale, yarn.radius, step, yarn.curves, c);
             const std::vector<FramedCurve> plies = plyCurves(centre, yarn.plies, yarn.plyTwist);

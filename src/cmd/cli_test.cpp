@@ -61,6 +61,27 @@ TEST_F(CliTest, TopLevelHelp) {
     EXPECT_TRUE(contains(r.out, "--version")) << r.out;
 }
 
+// Issue 41: `weft view --help` printed the main help with status 0.
+TEST_F(CliTest, UnknownCommandIsNamedEvenWithHelp) {
+    for (const char* args : {"view --help", "view", "view --version", "view --bogus"}) {
+        const RunResult r = run(args);
+        EXPECT_EQ(r.status, 2) << args;
+        EXPECT_TRUE(contains(r.err, "unknown command 'view' for 'weft'")) << args << ": " << r.err;
+        EXPECT_TRUE(contains(r.err, "render, compare, scene")) << r.err;
+        EXPECT_EQ(r.out, "") << args;
+    }
+    RunResult r = run("curves bogus --help");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_TRUE(contains(r.err, "unknown command 'bogus' for 'weft curves'; the commands are: info"))
+        << r.err;
+    // A known command's help, and a positional argument, are unchanged.
+    r = run("curves info --help");
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(contains(r.out, "--radius")) << r.out;
+    r = run("render missing.json --help");
+    EXPECT_EQ(r.status, 0) << r.err;
+}
+
 TEST_F(CliTest, FiberHelp) {
     const RunResult r = run("fiber --help");
     EXPECT_EQ(r.status, 0) << r.err;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "commands.h"
+#include "unknown_command.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 
@@ -56,12 +57,16 @@ int main(int argc, char** argv) {
         app.parse(argc, argv);
         flushStandardOutput();
     } catch (const CLI::CallForHelp& e) {
+        if (weft::cmd::reportUnknownCommand(app)) return 2;  // `weft view --help`
         return app.exit(e);
     } catch (const CLI::CallForAllHelp& e) {
+        if (weft::cmd::reportUnknownCommand(app)) return 2;
         return app.exit(e);
     } catch (const CLI::CallForVersion& e) {
+        if (weft::cmd::reportUnknownCommand(app)) return 2;
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
+        if (weft::cmd::reportUnknownCommand(app)) return 2;
         app.exit(e);
         return 2;
     } catch (const weft::InputError& e) {

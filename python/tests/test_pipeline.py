@@ -177,7 +177,8 @@ def test_colour_range_fit(tmp_path):
     assert colour["functions"] == 3 and len(colour["m_rel_l2_by_colour"]) == 8
     # Version 3: its energy calibration is by colour, one per node colour.
     model = json.load(open(tmp_path / "any.json"))
-    assert model["version"] == 3
+    assert model["version"] == 4  # with its appearance table (docs/colour.md)
+    assert len(model["appearance"]["c_tt"]) == 49
     assert len(model["energy_calibration"]["c_tt"]) == len(colour["energy_calibration"]["nodes"]) == 7
     with pytest.raises(ValueError, match="colour_range"):
         weft.fit(tmp_path / "ac", config=SHORT_FIT, colour_range=(0.5, 0.4))

@@ -55,7 +55,11 @@ TEST_F(FitCliTest, ColourRangeFitsAModelForAnyColour) {
     ASSERT_EQ(model.colourCalibration.nodes.size(), 7u);
     EXPECT_EQ(model.colourCalibration.cTT.front(), 0.3);
     EXPECT_EQ(model.colourCalibration.cTT.back(), 0.999);
-    EXPECT_EQ(nlohmann::json::parse(readFile(path("any.json"))).at("version"), 3);
+    // Version 4: with its appearance table (docs/colour.md, "Colour by appearance").
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("any.json"))).at("version"), 4);
+    ASSERT_TRUE(model.appearance.has_value());
+    EXPECT_EQ(model.appearance->cTT.size(), 49u);
+    EXPECT_EQ(summary.at("colour").at("appearance").at("nodes"), 49);
     EXPECT_EQ(summary.at("colour").at("energy_calibration").at("nodes").size(), 7u);
     // It renders, checks and makes scenes like any model (at its gathered colour).
     ASSERT_EQ(run("yarn check --model any.json --rdm ac --out check").status, 0);
@@ -85,8 +89,8 @@ TEST_F(FitCliTest, ColourRangeFitsAModelForAnyColour) {
                     {"--c-tt", "R,G,B"});
     ASSERT_EQ(run("scene closeup --model any.json --width 12 --height 8 --out sc").status, 0);
     ASSERT_EQ(run("render sc/scene.json --spp 2 --quiet --out r.exr").status, 0);
-    // A striped knit of two other colours, in neural mode.
-    ASSERT_EQ(run("scene knit --model any.json --size 2 --colours 0.9,0.2,0.1 0.1,0.3,0.8 "
+    // A striped knit of two other colours (within the colour range), in neural mode.
+    ASSERT_EQ(run("scene knit --model any.json --size 2 --colours 0.9,0.4,0.3 0.3,0.35,0.8 "
                   "--width 12 --height 8 --out striped")
                   .status,
               0);

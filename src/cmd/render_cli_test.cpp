@@ -376,7 +376,12 @@ TEST_F(RenderCliTest, YarnColourInEveryMode) {
     };
     sceneWith("any.scene.json", "");
     sceneWith("own.scene.json", "[0.452, 0.725, 0.948]");
-    sceneWith("red.scene.json", "[0.9, 0.1, 0.1]");
+    sceneWith("red.scene.json", "[0.9, 0.35, 0.3]");
+    // Below the model's colour range [0.3, 0.999]: refused, never clamped.
+    sceneWith("dark.scene.json", "[0.9, 0.1, 0.1]");
+    expectUserError(run("render dark.scene.json --spp 1 --quiet --out x.exr"),
+                    {"dark.scene.json: yarns[0].colour", "C_TT 0.1", "colour range [0.3, 0.999]",
+                     "appearance"});
     for (const char* name : {"any", "own", "red"}) {
         const RunResult r = run(std::string("render ") + name +
                                 ".scene.json --spp 2 --quiet --out img-" + name + ".exr");
@@ -385,14 +390,59 @@ TEST_F(RenderCliTest, YarnColourInEveryMode) {
     EXPECT_EQ(readImage(path("img-own.exr")).pixels, readImage(path("img-any.exr")).pixels);
     EXPECT_NE(readImage(path("img-red.exr")).pixels, readImage(path("img-any.exr")).pixels);
     // Vertex colours of one colour are that colour, in neural mode too.
-    writeFileAtomic(path("red3.txt"), "0.9 0.1 0.1\n0.9 0.1 0.1\n0.9 0.1 0.1\n");
+    writeFileAtomic(path("red3.txt"), "0.9 0.35 0.3\n0.9 0.35 0.3\n0.9 0.35 0.3\n");
     std::string text = readFile(path("red.scene.json"));
-    const std::string colourKey = "\"colour\": [0.9, 0.1, 0.1]";
+    const std::string colourKey = "\"colour\": [0.9, 0.35, 0.3]";
     text.replace(text.find(colourKey), colourKey.size(), "\"vertex_colours\": \"red3.txt\"");
     writeFileAtomic(path("red3.scene.json"), text);
     const RunResult r = run("render red3.scene.json --spp 2 --quiet --out img-red3.exr");
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_EQ(readImage(path("img-red3.exr")).pixels, readImage(path("img-red.exr")).pixels);
+}
+
+// Colour by appearance (docs/colour.md): the scene's sRGB colour becomes the
+// C_TT that `weft yarn appearance` finds, whose appearance evaluated directly
+// (by quadrature, not the table) is the colour asked; every mode draws it.
+TEST_F(RenderCliTest, AppearanceBecomesTheFiberColourThatLooksIt) {
+    const std::string model = std::string(WEFT_SOURCE_DIR) + "/tests/data/fleece-colour-small.json";
+    const RunResult probe = run("yarn appearance --model " + model + " --appearance '#a0704a'");
+    ASSERT_EQ(probe.status, 0) << probe.err;
+    const nlohmann::json p = nlohmann::json::parse(probe.out);
+    const double bytes[3] = {0xa0, 0x70, 0x4a};
+    for (int c = 0; c < 3; ++c) {
+        const double want = p["appearance"]["linear"][c].get<double>();
+        EXPECT_NEAR(p["appearance_direct"][c].get<double>(), want, 0.005 * want) << c;
+        EXPECT_NEAR(p["appearance"]["srgb"][c].get<double>(), bytes[c] / 255.0, 1e-12);
+    }
+    std::string text = readFile(path("scene.json"));
+    text.replace(text.find(kFleece), kFleece.size(), model);
+    const auto withKey = [&](const std::string& name, const std::string& key) {
+        std::string t = text;
+        t.replace(t.find("\"model\""), 0, key + ", ");
+        writeFileAtomic(path(name), t);
+    };
+    withKey("look.json", R"("appearance": "#a0704a")");
+    for (const std::string mode : {"neural", "fiber"}) {
+        const RunResult r =
+            run("render look.json --mode " + mode + " --spp 1 --out " + mode + ".exr");
+        ASSERT_EQ(r.status, 0) << r.err;
+        EXPECT_NE(r.err.find("look.json: yarns[0]: appearance (sRGB 0.627"), std::string::npos)
+            << r.err;
+        const nlohmann::json stats = nlohmann::json::parse(readFile(path(mode + ".json")));
+        ASSERT_EQ(stats["appearance"].size(), 1u);
+        EXPECT_EQ(stats["appearance"][0]["c_tt"], p["c_tt"]) << mode;
+    }
+    withKey("white.json", R"("appearance": [1, 1, 1])");
+    expectUserError(run("render white.json --spp 1 --quiet --out x.exr"),
+                    {"white.json: yarns[0].appearance", "red 1", "out of reach", "sRGB"});
+    withKey("both.json", R"("appearance": "#a0704a", "colour": [0.5, 0.5, 0.5])");
+    expectUserError(run("render both.json --spp 1 --quiet --out x.exr"),
+                    {"both.json", "appearance", "not both"});
+    withKey("hex.json", R"("appearance": "#a0704")");
+    expectUserError(run("render hex.json --spp 1 --quiet --out x.exr"), {"hex.json", "#rrggbb"});
+    writeScene("plain.json", R"(, "appearance": [0.5, 0.4, 0.3])");
+    expectUserError(run("render plain.json --mode fiber --spp 1 --quiet --out x.exr"),
+                    {"plain.json: yarns[0].appearance", "fitted for one colour"});
 }
 
 // The mean colour of the pixels in columns [x0, x1) of the middle two rows.

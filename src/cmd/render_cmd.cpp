@@ -98,6 +98,9 @@ void runRender(const RenderCmdOptions& o) {
         for (const std::string& w :
              render::yarnOverlapWarnings(desc.path, scene.stats().yarnOverlap))
             std::fprintf(stderr, "weft: warning: %s\n", w.c_str());
+    if (!o.quiet)
+        for (const std::string& n : render::appearanceNotes(desc.path, scene.stats()))
+            std::fprintf(stderr, "weft: %s\n", n.c_str());
     const render::RenderResult result = render::render(scene, options);
 
     nlohmann::json stats = render::toJson(result.stats);

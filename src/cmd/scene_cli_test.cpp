@@ -12,6 +12,7 @@
 #include "weft/core/file.h"
 #include "weft/core/image.h"
 #include "weft/core/image_io.h"
+#include "weft/render/curves.h"
 #include "weft/render/scene_file.h"
 
 namespace weft {
@@ -99,6 +100,10 @@ TEST_F(SceneCliTest, TwoColoursMakeTwoYarnEntries) {
                             " --size 2 --colours 0.9,0.2,0.1 0.1,0.3,0.8 --stripe 1 --width 12 "
                             "--height 8 --spp 1 --out striped");
     ASSERT_EQ(r.status, 0) << r.err;
+    // Written, but said at once: neural mode will refuse it (issue 42).
+    EXPECT_NE(r.err.find("warning: --colours: " + kFleece + " is fitted for one colour"),
+              std::string::npos)
+        << r.err;
     const nlohmann::json summary = nlohmann::json::parse(r.out);
     EXPECT_EQ(summary.at("curves"), nlohmann::json({"striped/yarns-1.txt", "striped/yarns-2.txt"}));
     EXPECT_EQ(summary.at("colours"), nlohmann::json({{0.9, 0.2, 0.1}, {0.1, 0.3, 0.8}}));
@@ -134,6 +139,48 @@ TEST_F(SceneCliTest, TwoColoursMakeTwoYarnEntries) {
         run("scene weave --model " + kFleece + " --size 2 --colours 0.5,0.5,0.5 --out grey").status,
         0);
     EXPECT_EQ(*render::loadScene(path("grey/scene.json")).yarns.at(0).colour, Rgb(0.5));
+}
+
+// --appearance: the colours the yarns should look (docs/colour.md), written as
+// the entries' "appearance", or as the C_TT that gives them along a
+// space-dyed yarn; refused without a colour model or out of reach.
+TEST_F(SceneCliTest, AppearanceColoursTheYarnsByHowTheyLook) {
+    const std::string model = std::string(WEFT_SOURCE_DIR) + "/tests/data/fleece-colour-small.json";
+    const std::string flags = " --width 12 --height 8 --spp 1";
+    const RunResult one =
+        run("scene closeup --model " + model + " --appearance '#a0704a'" + flags + " --out one");
+    ASSERT_EQ(one.status, 0) << one.err;
+    EXPECT_EQ(one.err, "");
+    const render::SceneDesc s = render::loadScene(path("one/scene.json"));
+    ASSERT_TRUE(s.yarns.at(0).appearance);
+    EXPECT_EQ(*s.yarns[0].appearance, Rgb(0xa0 / 255.0, 0x70 / 255.0, 0x4a / 255.0));
+    EXPECT_FALSE(s.yarns[0].colour);
+
+    const RunResult dyed =
+        run("scene closeup --model " + model +
+            " --appearance '#a0704a' 0.3,0.4,0.5 --dye-length 3" + flags + " --out dyed");
+    ASSERT_EQ(dyed.status, 0) << dyed.err;
+    const RunResult probe = run("yarn appearance --model " + model + " --appearance '#a0704a'");
+    ASSERT_EQ(probe.status, 0) << probe.err;
+    const nlohmann::json cTT = nlohmann::json::parse(probe.out).at("c_tt");
+    CurveSet points = readCurves(path("dyed/yarns.txt"));
+    render::readVertexColours(path("dyed/colours.txt"), &points);
+    bool found = false;
+    for (const Rgb& c : points.curves.at(0).colours)
+        found = found || (std::fabs(c.r - cTT[0].get<double>()) < 1e-6 &&
+                          std::fabs(c.g - cTT[1].get<double>()) < 1e-6 &&
+                          std::fabs(c.b - cTT[2].get<double>()) < 1e-6);
+    EXPECT_TRUE(found) << "no point of the space-dyed yarn has the C_TT of #a0704a";
+
+    expectUserError(run("scene closeup --model " + kFleece + " --appearance 0.5,0.4,0.3 --out o"),
+                    {"--appearance", "fitted for one colour"});
+    expectUserError(run("scene closeup --model " + model + " --appearance 1,1,1 --out o"),
+                    {"--appearance", "out of reach"});
+    expectUserError(run("scene closeup --model " + model +
+                        " --appearance 0.5,0.4,0.3 --colours 0.5,0.5,0.5 --out o"),
+                    {"--colours and --appearance", "not both"});
+    expectUserError(run("scene closeup --model " + model + " --appearance '#12345' --out o"),
+                    {"--appearance", "#rrggbb"});
 }
 
 TEST_F(SceneCliTest, BadInputIsNamed) {

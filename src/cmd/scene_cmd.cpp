@@ -19,7 +19,8 @@ namespace {
 struct SceneCmdOptions {
     std::string kind, out;
     eval::SceneOptions scene;
-    std::vector<std::string> colours;  // --colours: "R,G,B" each
+    std::vector<std::string> colours;      // --colours: "R,G,B" each
+    std::vector<std::string> appearances;  // --appearance: "#rrggbb" or "R,G,B" each
     CLI::Option* sizeOpt = nullptr;
     CLI::Option* stripeOpt = nullptr;
     int stripe = eval::kDefaultStripe;
@@ -36,6 +37,8 @@ void runScene(SceneCmdOptions o) {
     // Given means checked (SceneOptions::validate), 0 included.
     if (o.dyeLengthOpt->count()) o.scene.dyeLength = o.dyeLength;
     for (const std::string& c : o.colours) o.scene.colours.push_back(parseColour(c, "--colours"));
+    for (const std::string& c : o.appearances)
+        o.scene.appearances.push_back(parseSrgbColour(c, "--appearance"));
     checkOutputsSpareInputs({{"--model", o.scene.model}, {"--envmap", o.scene.envmap}}, {}, {},
                             {{"--out", o.out}});
     const eval::GeneratedScene generated = eval::generateScene(kind, o.scene);
@@ -45,6 +48,9 @@ void runScene(SceneCmdOptions o) {
     if (!o.quiet)
         for (const std::string& w : warnings)
             std::fprintf(stderr, "weft: warning: %s\n", w.c_str());
+    // Printed with --quiet too: the scene as written will not render neural.
+    for (const std::string& w : o.scene.neuralColourWarnings())
+        std::fprintf(stderr, "weft: warning: %s\n", w.c_str());
     std::printf("%s\n", summary.dump().c_str());
 }
 
@@ -80,8 +86,13 @@ void addSceneCommand(CLI::App& app) {
                     "Lat-long .exr or .hdr environment map instead of the procedural sky");
     cmd->add_option("--colours", o->colours,
                     "One or two fiber colours C_TT as R,G,B in [0, 1] (docs/colour.md): one "
-                    "colours every yarn; two make a striped knit or a check weave. Neural "
-                    "mode needs a model fitted with --colour-range");
+                    "colours every yarn; two make a striped knit or a check weave. Neural mode "
+                    "needs a colour model (weft fit --colour-range) and each colour within its "
+                    "range: weft scene warns otherwise");
+    cmd->add_option("--appearance", o->appearances,
+                    "Instead of --colours: one or two colours the yarns should look, sRGB, "
+                    "#rrggbb or R,G,B in [0, 1] (docs/colour.md, \"Colour by appearance\"); "
+                    "needs a colour model, and each colour within the material's reach");
     o->stripeOpt = cmd->add_option("--stripe", o->stripe,
                                    "With two colours: knit courses or weave yarns per stripe, "
                                    "[1, 100]")

@@ -1,4 +1,5 @@
-// weft yarn eval | sample | check: probes of the aggregated yarn BSDF (docs/yarn.md).
+// weft yarn eval | sample | check | appearance: probes of the aggregated yarn BSDF
+// (docs/yarn.md, docs/colour.md).
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -9,10 +10,13 @@
 #include "commands.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/image.h"
+#include "weft/core/json_message.h"
 #include "weft/core/npy.h"
 #include "weft/core/text_parse.h"
 #include "weft/fit/model_check.h"
 #include "weft/gather/rdm_io.h"
+#include "weft/yarn/yarn_appearance.h"
 #include "weft/yarn/yarn_bsdf.h"
 
 namespace weft::cmd {
@@ -37,6 +41,60 @@ struct CheckOptions {
     int threads = 0;
     bool dual = false;
 };
+
+struct AppearanceOptions {
+    std::string model, appearance, cTT;
+};
+
+// One JSON line: the model's reach (its darkest and brightest appearance per
+// channel), and the C_TT of --appearance or the appearance of --c-tt, each
+// with the appearance evaluated directly at that C_TT (yarnAppearance, not
+// the table) as a check.
+void runAppearance(const AppearanceOptions& o) {
+    if (!o.appearance.empty() && !o.cTT.empty())
+        throw InputError("--appearance and --c-tt: give one of them, not both");
+    const YarnModel model = loadYarnModel(o.model);
+    if (!model.colour)
+        throw InputError(o.model +
+                         ": fitted for one colour; an appearance needs a colour model "
+                         "(models/MATERIAL-colour.json, or weft fit --colour-range)");
+    const AppearanceTable table =
+        model.appearance ? *model.appearance : computeAppearanceTable(model, o.model);
+    const ColourRange& range = model.colour->range();
+    Rgb darkest, brightest;
+    for (int c = 0; c < 3; ++c) darkest[c] = table.darkest(c), brightest[c] = table.brightest(c);
+    nlohmann::json line = {
+        {"model", o.model},
+        {"c_tt_range", {range.lo, range.hi}},
+        {"table", model.appearance ? "stored" : "computed"},
+        {"darkest", {{"linear", rgbJson(darkest)}, {"srgb", rgbJson(linearToSrgb(darkest))}}},
+        {"brightest",
+         {{"linear", rgbJson(brightest)}, {"srgb", rgbJson(linearToSrgb(brightest))}}}};
+    Rgb cTT;
+    std::string flag;
+    if (!o.appearance.empty()) {
+        const Rgb srgb = parseSrgbColour(o.appearance, "--appearance");
+        const Rgb linear = srgbToLinear(srgb);
+        cTT = table.cTTFor(linear, "--appearance");
+        flag = "--appearance";
+        line["appearance"] = {{"srgb", rgbJson(srgb)}, {"linear", rgbJson(linear)}};
+    } else if (!o.cTT.empty()) {
+        cTT = parseColour(o.cTT, "--c-tt");
+        flag = "--c-tt";
+    }
+    if (!flag.empty()) {
+        const YarnModel one = model.forColour(cTT, flag);  // refuses a C_TT out of the range
+        if (flag == "--c-tt") {
+            const Rgb linear = table.appearanceAt(cTT);
+            line["appearance"] = {{"srgb", rgbJson(linearToSrgb(linear))},
+                                  {"linear", rgbJson(linear)}};
+        }
+        line["c_tt"] = rgbJson(cTT);
+        const YarnBsdf bsdf(one, o.model, YarnBsdfOptions{true, YarnSampling::Cosine});
+        line["appearance_direct"] = rgbJson(yarnAppearance(bsdf));
+    }
+    std::printf("%s\n", line.dump().c_str());
+}
 
 void runEval(const EvalOptions& o) {
     checkOutputsSpareInputs({{"--model", o.model}, {"--in", o.in}}, {{"--out", o.out}});
@@ -153,6 +211,22 @@ void addYarnCommands(CLI::App& app) {
                       "R,G,B: check a colour-conditioned model (weft fit --colour-range) at this "
                       "fiber colour, e.g. against weft gather recolour's RDM of that colour");
     check->callback([checkOpts] { runCheck(*checkOpts); });
+
+    auto appearanceOpts = std::make_shared<AppearanceOptions>();
+    CLI::App* appearance = yarn->add_subcommand(
+        "appearance",
+        "the colour a yarn of a colour model looks under a uniform white sky, and the fiber "
+        "colour C_TT that gives a colour (docs/colour.md, \"Colour by appearance\"): one JSON "
+        "line with the model's darkest and brightest appearance per channel");
+    appearance
+        ->add_option("--model", appearanceOpts->model, "colour model (weft fit --colour-range)")
+        ->required();
+    appearance->add_option("--appearance", appearanceOpts->appearance,
+                           "#rrggbb or R,G,B in [0, 1], sRGB: find the C_TT that looks this colour "
+                           "(exit 2 when a channel is out of the material's reach)");
+    appearance->add_option("--c-tt", appearanceOpts->cTT,
+                           "R,G,B within the model's colour range: the appearance of this C_TT");
+    appearance->callback([appearanceOpts] { runAppearance(*appearanceOpts); });
 }
 
 }  // namespace weft::cmd

@@ -51,6 +51,13 @@ std::string pixelChecksum(const Image& image);
 double linearToSrgb(double v);
 // Its inverse: the linear value of an sRGB-encoded value in [0, 1] (clamped to it).
 double srgbToLinear(double v);
+// Both per channel.
+inline Rgb linearToSrgb(const Rgb& c) {
+    return Rgb(linearToSrgb(c.r), linearToSrgb(c.g), linearToSrgb(c.b));
+}
+inline Rgb srgbToLinear(const Rgb& c) {
+    return Rgb(srgbToLinear(c.r), srgbToLinear(c.g), srgbToLinear(c.b));
+}
 
 // PNG bytes of the image (8-bit sRGB, exposure in stops).
 std::string encodePng(const Image& image, double exposure = 0.0);

@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -102,6 +103,37 @@ inline Rgb parseColour(const std::string& text, const std::string& flag) {
         start = comma + 1;
     }
     return colour;
+}
+
+// "#rrggbb" (hexadecimal digits, either case) as its three bytes / 255; none
+// for any other text. The sRGB colours of a scene's and weft yarn appearance's
+// "appearance".
+inline std::optional<Rgb> parseHexColour(std::string_view text) {
+    if (text.size() != 7 || text[0] != '#') return std::nullopt;
+    Rgb colour;
+    for (int c = 0; c < 3; ++c) {
+        int byte = 0;
+        for (int k = 1; k <= 2; ++k) {
+            const char d = text[2 * c + k];
+            const int v = d >= '0' && d <= '9'   ? d - '0'
+                          : d >= 'a' && d <= 'f' ? d - 'a' + 10
+                          : d >= 'A' && d <= 'F' ? d - 'A' + 10
+                                                 : -1;
+            if (v < 0) return std::nullopt;
+            byte = 16 * byte + v;
+        }
+        colour[c] = byte / 255.0;
+    }
+    return colour;
+}
+
+// An sRGB colour flag: "#rrggbb" or "R,G,B" in [0, 1]; InputError naming `flag`.
+inline Rgb parseSrgbColour(const std::string& text, const std::string& flag) {
+    if (const std::optional<Rgb> hex = parseHexColour(text)) return *hex;
+    if (!text.empty() && text[0] == '#')
+        throw InputError(flag + ": expected #rrggbb or R,G,B in [0, 1], got \"" + printable(text) +
+                         "\"");
+    return parseColour(text, flag);
 }
 
 }  // namespace weft

@@ -287,7 +287,7 @@ Image ssimHeatmap(const ImageComparison& c) {
             const int mx = std::clamp(x, kSsimRadius, c.width - 1 - kSsimRadius) - kSsimRadius;
             const int my = std::clamp(y, kSsimRadius, c.height - 1 - kSsimRadius) - kSsimRadius;
             const Rgb srgb = heatmapColorSrgb(1 - c.ssimMap.at(mx, my));
-            image.set(x, y, {srgbToLinear(srgb.r), srgbToLinear(srgb.g), srgbToLinear(srgb.b)});
+            image.set(x, y, srgbToLinear(srgb));
         }
     return image;
 }

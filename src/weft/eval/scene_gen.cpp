@@ -15,12 +15,14 @@
 #include "weft/core/curves.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/image.h"
 #include "weft/core/json_message.h"
 #include "weft/core/math.h"
 #include "weft/render/camera.h"
 #include "weft/render/environment_light.h"
 #include "weft/render/scene.h"
 #include "weft/render/sphere_light.h"
+#include "weft/yarn/yarn_appearance.h"
 #include "weft/yarn/yarn_model.h"
 
 namespace weft::eval {
@@ -123,6 +125,7 @@ struct PatternedCurves {
 // on both ways; a point takes the colour of the stretch it lies in.
 void spaceDye(CurveSet& set, const std::vector<size_t>& anchor, const SceneOptions& o) {
     const double stretch = *o.dyeLength * o.radius;
+    const std::vector<Rgb> colours = o.fiberColours();
     for (size_t c = 0; c < set.curves.size(); ++c) {
         Curve& curve = set.curves[c];
         std::vector<double> arc(curve.points.size(), 0.0);
@@ -131,7 +134,7 @@ void spaceDye(CurveSet& set, const std::vector<size_t>& anchor, const SceneOptio
         curve.colours.clear();
         for (size_t i = 0; i < arc.size(); ++i) {
             const auto k = static_cast<int64_t>(std::floor((arc[i] - arc[anchor[c]]) / stretch));
-            curve.colours.push_back(o.colours[k % 2 == 0 ? 0 : 1]);
+            curve.colours.push_back(colours[k % 2 == 0 ? 0 : 1]);
         }
     }
 }
@@ -162,7 +165,7 @@ GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera
     }
     // One yarn entry per colour used, in the order of the colours (an unused
     // colour would be an empty curve file).
-    const int groups = o.colours.size() == 2 ? 2 : 1;
+    const int groups = o.colourCount() == 2 ? 2 : 1;
     const auto groupOf = [&](size_t c) { return groups == 2 ? curves.group[c] : 0; };
     std::vector<int> entryOfGroup(groups, -1);
     for (size_t c = 0; c < curves.set.curves.size(); ++c) entryOfGroup[groupOf(c)] = 0;
@@ -170,6 +173,7 @@ GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera
         if (entryOfGroup[group] < 0) continue;
         entryOfGroup[group] = static_cast<int>(s.yarns.size());
         if (!o.colours.empty()) yarn.colour = o.colours[group];
+        if (!o.appearances.empty()) yarn.appearance = o.appearances[group];
         s.yarns.push_back(yarn);
     }
     for (size_t c = 0; c < curves.set.curves.size(); ++c)
@@ -281,16 +285,23 @@ void SceneOptions::validate() const {
     checkInt("--width", width, 1, 16384);
     checkInt("--height", height, 1, 16384);
     checkInt("--spp", spp, 1, 1 << 20);
-    if (colours.size() > 2)
-        throw InputError("--colours takes one or two R,G,B colours, got " +
-                         std::to_string(colours.size()));
-    for (const Rgb& c : colours)
-        for (int ch = 0; ch < 3; ++ch)
-            if (!std::isfinite(c[ch]) || c[ch] < 0 || c[ch] > 1)
-                throw InputError(rangeError("--colours", formatNumber(c[ch]), "[0, 1]"));
+    if (!colours.empty() && !appearances.empty())
+        throw InputError(
+            "--colours and --appearance: give one of them (fiber colours C_TT, or "
+            "the colours the yarns should look), not both");
+    for (const auto& [flag, list] :
+         {std::pair{"--colours", &colours}, {"--appearance", &appearances}}) {
+        if (list->size() > 2)
+            throw InputError(std::string(flag) + " takes one or two R,G,B colours, got " +
+                             std::to_string(list->size()));
+        for (const Rgb& c : *list)
+            for (int ch = 0; ch < 3; ++ch)
+                if (!std::isfinite(c[ch]) || c[ch] < 0 || c[ch] > 1)
+                    throw InputError(rangeError(flag, formatNumber(c[ch]), "[0, 1]"));
+    }
     if (stripe) {
         checkInt("--stripe", *stripe, 1, kMaxPatchSize);
-        if (colours.size() != 2) throw InputError("--stripe applies to two --colours only");
+        if (colourCount() != 2) throw InputError("--stripe applies to two --colours only");
         if (dyeLength)
             throw InputError(
                 "--stripe and --dye-length exclude each other (stripes of yarns, or "
@@ -298,7 +309,7 @@ void SceneOptions::validate() const {
     }
     if (dyeLength) {
         checkReal("--dye-length", *dyeLength, kMinDyeLength, kMaxDyeLength);
-        if (colours.size() != 2)
+        if (colourCount() != 2)
             throw InputError("--dye-length needs two --colours (the yarn alternates between them)");
     }
     if (!envmap.empty()) {
@@ -313,11 +324,47 @@ void SceneOptions::validate() const {
             throw InputError(std::string("--envmap: ") + e.what());
         }
     }
+    YarnModel loaded;
     try {
-        loadYarnModel(model);
+        loaded = loadYarnModel(model);
     } catch (const InputError& e) {
         throw InputError(std::string("--model: ") + e.what());
     }
+    if (!appearances.empty() && !loaded.colour)
+        throw InputError("--appearance: " + model +
+                         " is fitted for one colour; colour by appearance needs a colour model "
+                         "(models/MATERIAL-colour.json, or weft fit --colour-range)");
+    fiberColours();  // each --appearance within the material's reach
+}
+
+std::vector<std::string> SceneOptions::neuralColourWarnings() const {
+    std::vector<std::string> warnings;
+    if (colours.empty()) return warnings;
+    const YarnModel loaded = loadYarnModel(model);
+    const std::string render = "weft render in neural mode (the default) will refuse this scene; ";
+    if (!loaded.colour) {
+        warnings.push_back("--colours: " + model + " is fitted for one colour: " + render +
+                           "use a colour model (models/MATERIAL-colour.json, weft fit "
+                           "--colour-range) or render with --mode fiber or dual");
+        return warnings;
+    }
+    for (const Rgb& c : colours) try {
+            loaded.forColour(c, "--colours");
+        } catch (const InputError& e) {
+            warnings.push_back(std::string(e.what()) + ": " + render + "or use --appearance");
+        }
+    return warnings;
+}
+
+std::vector<Rgb> SceneOptions::fiberColours() const {
+    if (appearances.empty()) return colours;
+    const YarnModel loaded = loadYarnModel(model);
+    const AppearanceTable table =
+        loaded.appearance ? *loaded.appearance : computeAppearanceTable(loaded, model);
+    std::vector<Rgb> out;
+    for (const Rgb& srgb : appearances)
+        out.push_back(table.cTTFor(srgbToLinear(srgb), "--appearance"));
+    return out;
 }
 
 WeaveGeometry weaveGeometry(double radius) {
@@ -425,7 +472,7 @@ render::CameraDesc frameCover(double x0, double x1, double y0, double y1, const 
 GeneratedScene closeupScene(const SceneOptions& o) {
     o.validate();
     checkFilmShape(SceneKind::Closeup, o);
-    if (o.colours.size() == 2 && !o.dyeLength)
+    if (o.colourCount() == 2 && !o.dyeLength)
         throw InputError(
             "--colours: a close-up is one yarn, so it takes one colour, or two "
             "with --dye-length (a space-dyed yarn)");
@@ -562,10 +609,12 @@ nlohmann::json sceneSummary(const GeneratedScene& generated, SceneKind kind, con
     for (render::YarnEntryOverlap& entry : overlap) entry.curves = (folder / entry.curves).string();
     *warnings = render::yarnOverlapWarnings((folder / "scene.json").string(), overlap);
     nlohmann::json curveFiles = nlohmann::json::array(), colours = nlohmann::json::array(),
-                   colourFiles = nlohmann::json::array();
+                   appearances = nlohmann::json::array(), colourFiles = nlohmann::json::array();
     for (const render::YarnDesc& yarn : generated.scene.yarns) {
         curveFiles.push_back((folder / yarn.curves).string());
         if (yarn.colour) colours.push_back({yarn.colour->r, yarn.colour->g, yarn.colour->b});
+        if (yarn.appearance)
+            appearances.push_back({yarn.appearance->r, yarn.appearance->g, yarn.appearance->b});
         if (!yarn.vertexColours.empty())
             colourFiles.push_back((folder / yarn.vertexColours).string());
     }
@@ -573,6 +622,7 @@ nlohmann::json sceneSummary(const GeneratedScene& generated, SceneKind kind, con
             {"scene", (folder / "scene.json").string()},
             {"curves", curveFiles},
             {"colours", colours},
+            {"appearances", appearances},
             {"vertex_colours", colourFiles},
             {"yarns", generated.curves.curves.size()},
             {"points", generated.curves.pointCount()},

@@ -38,6 +38,7 @@
 // (+y up); every patch lies in the xy plane and faces +z, where the camera is.
 #pragma once
 
+#include <algorithm>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -90,6 +91,10 @@ struct SceneOptions {
     int spp = 64;              // --spp: the scene's render.spp; [1, 1048576]
     std::string envmap;        // --envmap: .exr or .hdr lat-long map instead of the sky; "" = sky
     std::vector<Rgb> colours;  // --colours: none (the model's own), one or two C_TT, [0, 1]
+    // --appearance: instead of --colours, one or two colours the yarns should
+    // look (sRGB, [0, 1]; docs/colour.md, "Colour by appearance"), written as
+    // the yarns' "appearance" (space-dyed: as the C_TT that gives them).
+    std::vector<Rgb> appearances;
     // --stripe: courses (knit) or yarns (weave) per stripe, [1, 100]; only with
     // two colours and no dyeLength; unset: kDefaultStripe.
     std::optional<int> stripe;
@@ -99,8 +104,18 @@ struct SceneOptions {
 
     // Range checks and the flags' combinations, then the model is loaded
     // (loadYarnModel) and the envmap checked for its extension and
-    // readability; InputError naming the flag.
+    // readability; --appearance needs a colour model and each colour within
+    // its reach; InputError naming the flag.
     void validate() const;
+    // What a neural render of the scene would refuse about --colours (a
+    // model of one colour, a colour outside the model's colour range): the
+    // warnings weft scene prints (fiber and dual mode take any colour).
+    std::vector<std::string> neuralColourWarnings() const;
+    // The number of colours given (--colours or --appearance): 0, 1 or 2.
+    size_t colourCount() const { return std::max(colours.size(), appearances.size()); }
+    // The fiber colours C_TT of the yarns: --colours, or the C_TT of each
+    // --appearance (the model's appearance table).
+    std::vector<Rgb> fiberColours() const;
     int stripeWidth() const { return stripe.value_or(kDefaultStripe); }
 };
 

@@ -16,6 +16,7 @@
 #include "weft/core/file.h"
 #include "weft/fit/metrics.h"
 #include "weft/yarn/material_preset.h"
+#include "weft/yarn/yarn_appearance.h"
 #include "weft/yarn/yarn_lobes.h"
 
 namespace weft {
@@ -67,6 +68,25 @@ void finishFit(YarnModel& model, const RdmData& rdm, const FitConfig& config, in
     const double kappaR = rEnergy + mEnergy > 0 ? rEnergy / (rEnergy + mEnergy) : 0.5;
     model.sampling = fitSamplingLobe(model, mFit, bins, kappaR, &report.mSecondMoment, threads);
     phaseDone("sampling lobe");
+}
+
+// 6. A colour model's appearance table (yarn_appearance.h), which a scene's
+// "appearance" inverts to a C_TT; its seconds go into `colourRecord`.
+void tabulateAppearance(YarnModel& model, int threads, bool quiet, nlohmann::json& colourRecord) {
+    const auto start = Clock::now();
+    tbb::task_arena arena(threads);
+    double adjusted = 0;
+    arena.execute([&] {
+        model.appearance =
+            computeAppearanceTable(model, "fit", AppearanceTable::kDefaultNodes, &adjusted);
+    });
+    const double seconds = secondsSince(start);
+    colourRecord["appearance"] = {{"nodes", model.appearance->cTT.size()},
+                                  {"monotone_adjustment", adjusted},
+                                  {"seconds", seconds}};
+    if (!quiet)
+        std::fprintf(stderr, "fit: appearance at %zu greys in %.1fs\n",
+                     model.appearance->cTT.size(), seconds);
 }
 
 nlohmann::json fitRecord(const FitReport& report, const FitConfig& config, uint64_t seed,
@@ -279,9 +299,10 @@ FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_
         // the uncalibrated model, as a one-colour fit's is).
         FitConfig oneColour = config;
         oneColour.calibrationDegree = -1;
-        YarnModel own = model.forColour(model.fiber.cTT, "fit");
+        YarnModel own = model.forColour(model.ownColourInRange(), "fit");
         finishFit(own, rdm, oneColour, threads, quiet, rFit, mFit, report);
         model.sampling = own.sampling;
+        tabulateAppearance(model, threads, quiet, report.colour);
     } else {
         // 4-5. Energy calibration and sampling lobe.
         finishFit(model, rdm, config, threads, quiet, rFit, mFit, report);
@@ -359,16 +380,17 @@ FitResult recalibrateConditioned(const YarnModel& fitted, const RdmData& rdm,
     // without its calibration, as a conditioned fit has them.
     YarnModel uncalibrated = model;
     uncalibrated.colourCalibration = {};
-    YarnModel own = uncalibrated.forColour(model.fiber.cTT, "--recalibrate");
+    YarnModel own = uncalibrated.forColour(model.ownColourInRange(), "--recalibrate");
     std::vector<float> rFit, mFit;
     measureKeptParts(own, fitted, rdm, threads, &rFit, &mFit, report);
     FitConfig oneColour = config;
     oneColour.calibrationDegree = -1;
     finishFit(own, rdm, oneColour, threads, quiet, rFit, mFit, report);
     model.sampling = own.sampling;
-    report.seconds = secondsSince(t0);
     report.colour = fitted.fit.value("colour", nlohmann::json::object());
     report.colour["energy_calibration"] = colourCalibrationRecord(model.colourCalibration, nodes);
+    tabulateAppearance(model, threads, quiet, report.colour);
+    report.seconds = secondsSince(t0);
     nlohmann::json record = fitted.fit;
     record["colour"] = report.colour;
     record["m_second_moment"] = report.mSecondMoment;

@@ -221,6 +221,7 @@ nlohmann::json toJson(const RenderStats& s) {
           {"material_bytes", s.scene.materialBytes},
           {"build_seconds", s.scene.seconds}}},
         {"yarn_overlap", yarnOverlapJson(s.scene.yarnOverlap)},
+        {"appearance", appearanceJson(s.scene)},
     };
     if (s.shard)
         j["shard"] = {{"index", s.shard->index},

@@ -10,14 +10,16 @@
 #include <tuple>
 
 #include "weft/core/error.h"
+#include "weft/core/image.h"
 #include "weft/core/json_message.h"
 #include "weft/core/limits.h"
 #include "weft/core/math.h"
 #include "weft/core/progress.h"
 #include "weft/core/rng.h"
 #include "weft/render/curves.h"
-#include "weft/render/yarn_geometry.h"
 #include "weft/render/environment_light.h"
+#include "weft/render/yarn_geometry.h"
+#include "weft/yarn/yarn_appearance.h"
 #include "weft/yarn/yarn_model.h"
 
 namespace weft::render {
@@ -130,6 +132,27 @@ class SceneMaterials {
         return it->second;
     }
 
+    // The C_TT that makes yarn entry y look its "appearance"
+    // (appearance_table.h): by its model's table, or by one computed once per
+    // model file for a colour model written before the table existed.
+    Rgb appearanceColour(size_t y) {
+        const YarnDesc& yarn = desc_.yarns[y];
+        const YarnModel& m = model(y);
+        const std::string what = entryName(y) + ".appearance";
+        if (!m.colour)
+            throw InputError(what + ": " + yarn.model +
+                             " is fitted for one colour; colour by appearance needs a colour "
+                             "model (models/MATERIAL-colour.json, or weft fit --colour-range)");
+        auto it = tables_.find(yarn.model);
+        if (it == tables_.end())
+            it = tables_
+                     .emplace(yarn.model,
+                              m.appearance ? *m.appearance : computeAppearanceTable(m, yarn.model))
+                     .first;
+        const Rgb& srgb = *yarn.appearance;
+        return it->second.cTTFor(srgbToLinear(srgb), what);
+    }
+
     // The material of yarn entry y in `colour` (none: the model's own).
     int material(size_t y, const std::optional<Rgb>& colour) {
         const YarnDesc& yarn = desc_.yarns[y];
@@ -165,6 +188,7 @@ class SceneMaterials {
     std::vector<std::unique_ptr<Bsdf>>* bsdfs_;
     std::vector<uint8_t>* plyFrame_;
     std::map<std::string, YarnModel> models_;
+    std::map<std::string, AppearanceTable> tables_;
     std::map<std::tuple<std::string, std::vector<double>, std::string>, int> index_;
     // The last coloured lookup: neighbouring segments mostly share a colour.
     struct Last {
@@ -231,6 +255,26 @@ nlohmann::json yarnOverlapJson(const std::vector<YarnEntryOverlap>& overlaps) {
     return list;
 }
 
+std::vector<std::string> appearanceNotes(const std::string& sceneName,
+                                         const SceneBuildStats& stats) {
+    std::vector<std::string> notes;
+    for (const SceneBuildStats::AppearanceColour& a : stats.appearanceColours)
+        notes.push_back((sceneName.empty() ? std::string("scene") : sceneName) + ": yarns[" +
+                        std::to_string(a.yarn) + "]: appearance (sRGB " +
+                        formatNumber(a.appearance.r) + ", " + formatNumber(a.appearance.g) + ", " +
+                        formatNumber(a.appearance.b) + ") is C_TT " + formatNumber(a.cTT.r) + ", " +
+                        formatNumber(a.cTT.g) + ", " + formatNumber(a.cTT.b));
+    return notes;
+}
+
+nlohmann::json appearanceJson(const SceneBuildStats& stats) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const SceneBuildStats::AppearanceColour& a : stats.appearanceColours)
+        list.push_back(
+            {{"yarn", a.yarn}, {"appearance", rgbJson(a.appearance)}, {"c_tt", rgbJson(a.cTT)}});
+    return list;
+}
+
 Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
     : camera_(desc.camera, desc.film.width, desc.film.height),
       width_(desc.film.width),
@@ -261,7 +305,13 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
         // The yarn's own material now, so that its model is checked before any
         // geometry; vertex-coloured yarns get the rest segment by segment below.
         const std::vector<Curve>& read = curveSets.back().curves;
-        if (yarn.vertexColours.empty()) entryMaterial[y] = materials.material(y, yarn.colour);
+        std::optional<Rgb> colour = yarn.colour;
+        if (yarn.appearance) {
+            colour = materials.appearanceColour(y);
+            stats_.appearanceColours.push_back({y, *yarn.appearance, *colour});
+        }
+        if (yarn.vertexColours.empty())
+            entryMaterial[y] = materials.material(y, colour);
         else if (!read.empty()) materials.material(y, read.front().colours.front());
     }
     // The whole geometry's estimate first: the overlap check samples the

@@ -80,7 +80,21 @@ struct SceneBuildStats {
     double seconds = 0;           // building time, model loading included
     // Per yarn entry, the overlap check (checkYarnOverlap; empty when it could not run).
     std::vector<YarnEntryOverlap> yarnOverlap;
+    // The yarn entries with an "appearance" and the C_TT found for each.
+    struct AppearanceColour {
+        size_t yarn = 0;
+        Rgb appearance;  // sRGB, as the scene gives it
+        Rgb cTT;         // the fiber colour every mode draws the yarn with
+    };
+    std::vector<AppearanceColour> appearanceColours;
 };
+
+// One line per yarn entry with an "appearance": the C_TT it is drawn with
+// ("scene.json: yarns[2]: appearance (sRGB 0.85, 0.55, 0.3) is C_TT ...").
+std::vector<std::string> appearanceNotes(const std::string& sceneName,
+                                         const SceneBuildStats& stats);
+// The "appearance" list of IMAGE.json: {"yarn", "appearance" (sRGB), "c_tt"} per entry.
+nlohmann::json appearanceJson(const SceneBuildStats& stats);
 
 struct SceneOptions {
     // A drawing mode for every yarn (a registered name, yarn_mode.h), over

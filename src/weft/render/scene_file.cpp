@@ -18,6 +18,7 @@
 #include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/json_reader.h"
+#include "weft/core/text_parse.h"
 #include "weft/render/scene_reader.h"
 #include "weft/render/yarn_mode.h"
 
@@ -83,8 +84,23 @@ RenderDesc readRender(const JsonObjectReader& scene) {
     return d;
 }
 
+// "appearance": [r, g, b] in [0, 1] or "#rrggbb", both sRGB-encoded.
+Rgb readAppearance(const JsonObjectReader& r) {
+    const json& v = r.value("appearance");
+    if (!v.is_string()) {
+        const std::vector<double> c =
+            r.numbers("appearance", 3, NumberRange::closed(0, 1), "(r, g, b), sRGB");
+        return Rgb(c[0], c[1], c[2]);
+    }
+    const std::optional<Rgb> hex = parseHexColour(v.get<std::string>());
+    if (!hex)
+        r.fail("appearance", "expected an sRGB colour, [r, g, b] in [0, 1] or \"#rrggbb\", got " +
+                                 describeJson(v));
+    return *hex;
+}
+
 YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
-    r.allowKeys({"curves", "scale", "radius", "plies", "ply_twist", "model", "colour",
+    r.allowKeys({"curves", "scale", "radius", "plies", "ply_twist", "model", "colour", "appearance",
                  "vertex_colours", "mode"});
     YarnDesc y;
     y.curves = readFileName(r, "curves", baseDir, {".bcc", ".txt", ".obj"});
@@ -98,7 +114,18 @@ YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
         const std::vector<double> c = r.numbers("colour", 3, NumberRange::closed(0, 1), "(r, g, b)");
         y.colour = Rgb(c[0], c[1], c[2]);
     }
+    if (r.has("appearance")) {
+        if (y.colour)
+            r.fail("appearance",
+                   "give a yarn either \"colour\" (the fiber's C_TT) or \"appearance\" (the "
+                   "colour it should look), not both");
+        y.appearance = readAppearance(r);
+    }
     if (r.has("vertex_colours")) {
+        if (y.appearance)
+            r.fail("vertex_colours",
+                   "give a yarn either \"appearance\" (one colour) or \"vertex_colours\" (a "
+                   "C_TT per curve point), not both");
         if (y.colour)
             r.fail("vertex_colours",
                    "give a yarn either \"colour\" (one colour) or \"vertex_colours\" (a colour "
@@ -170,6 +197,7 @@ json toJson(const SceneDesc& scene) {
                    {"model", y.model}};
         if (y.radius) yj["radius"] = *y.radius;
         if (y.colour) yj["colour"] = rgbJson(*y.colour);
+        if (y.appearance) yj["appearance"] = rgbJson(*y.appearance);
         if (!y.vertexColours.empty()) yj["vertex_colours"] = y.vertexColours;
         // Written only when given, so that a scene without modes keeps its hash.
         if (!y.mode.empty()) yj["mode"] = y.mode;

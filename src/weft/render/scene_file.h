@@ -69,6 +69,12 @@ struct YarnDesc {
     // model's. Fiber and dual mode use it with any model; neural mode needs a
     // colour-conditioned model (docs/colour.md).
     std::optional<Rgb> colour;
+    // The colour the yarn should look (docs/colour.md, "Colour by
+    // appearance"): sRGB-encoded, each channel in [0, 1] ("#rrggbb" in the
+    // file is read as its bytes / 255). The scene finds the C_TT that gives it
+    // from a colour model's appearance table, for every mode. Excludes
+    // "colour" and "vertex_colours".
+    std::optional<Rgb> appearance;
     // Resolved path of a vertex colour file (curves.h readVertexColours): a
     // C_TT per control point, interpolated along the curve (dyed and
     // space-dyed yarns); "" when absent. Excludes "colour".

@@ -100,6 +100,8 @@ std::vector<std::string> differences(const SceneDesc& a, const SceneDesc& b) {
         check(x.plyTwist == y.plyTwist, p + "ply_twist");
         check(x.model == y.model, p + "model");
         check(x.mode == y.mode, p + "mode");
+        check(x.colour == y.colour, p + "colour");
+        check(x.appearance == y.appearance, p + "appearance");
     }
     return d;
 }
@@ -289,7 +291,7 @@ TEST(SceneFile, UnknownKeysAreNamedWithTheirPath) {
     expectInputError(
         [] { parseJson(fullWith("/yarns/1/twist", 1)); },
         {"yarns[1]: unknown key \"twist\" (allowed: curves, scale, radius, plies, ply_twist, "
-         "model, colour, vertex_colours, mode)"});
+         "model, colour, appearance, vertex_colours, mode)"});
     // A scene parsed from memory without a name is called "scene".
     expectInputError([] { parseScene(fullWith("/film/depth", 8), "", ""); },
                      {"scene: film: unknown key \"depth\""});
@@ -622,6 +624,46 @@ TEST(SceneFile, VertexColoursAreAFileBesideTheCurvesAndExcludeColour) {
     expectInputError(
         [&] { parseSceneText(yarn + R"("vertex_colours": 3}]})", "scene.json", ""); },
         {"yarns[0].vertex_colours", "file name"});
+}
+
+// "appearance" (docs/colour.md): sRGB as [r, g, b] or "#rrggbb", written
+// back as numbers and only when given (so a scene without it keeps its hash),
+// excluding "colour" and "vertex_colours".
+TEST(SceneFile, AppearanceIsAnSrgbColourExcludingColourAndVertexColours) {
+    const std::string yarn = R"({"camera": {"from": [0, 0, 1], "to": [0, 0, 0]},
+        "yarns": [{"curves": "knit.bcc", "model": "m.json", )";
+    const SceneDesc hex = parseSceneText(yarn + R"("appearance": "#FF8000"}]})", "s.json", "");
+    ASSERT_TRUE(hex.yarns[0].appearance);
+    EXPECT_EQ(*hex.yarns[0].appearance, Rgb(1.0, 128 / 255.0, 0.0));
+    const SceneDesc array =
+        parseSceneText(yarn + R"("appearance": [1, 0.50196078431372548, 0]}]})", "s.json", "");
+    EXPECT_EQ(*array.yarns[0].appearance, *hex.yarns[0].appearance);
+    EXPECT_EQ(toJson(array), toJson(hex));  // what the scene hash reads besides the files
+    EXPECT_EQ(*parseScene(toJson(hex), "again.json", "").yarns[0].appearance,
+              *hex.yarns[0].appearance);
+    EXPECT_FALSE(toJson(parseSceneText(yarn + "\"plies\": 1}]}", "s.json", ""))["yarns"][0]
+                     .contains("appearance"));
+    expectInputError(
+        [&] { parseSceneText(yarn + R"("appearance": "#ff80"}]})", "s.json", ""); },
+        {"s.json: yarns[0].appearance", "#rrggbb", "\"#ff80\""});
+    expectInputError(
+        [&] { parseSceneText(yarn + R"("appearance": "#gg8000"}]})", "s.json", ""); },
+        {"yarns[0].appearance", "#rrggbb"});
+    expectInputError(
+        [&] { parseSceneText(yarn + R"("appearance": [1.5, 0, 0]}]})", "s.json", ""); },
+        {"yarns[0].appearance", "[0, 1]"});
+    expectInputError(
+        [&] {
+            parseSceneText(yarn + R"("appearance": [1, 0, 0], "colour": [1, 0, 0]}]})", "s.json",
+                           "");
+        },
+        {"yarns[0].appearance", "not both"});
+    expectInputError(
+        [&] {
+            parseSceneText(yarn + R"("appearance": [1, 0, 0], "vertex_colours": "c.txt"}]})",
+                           "s.json", "");
+        },
+        {"yarns[0].vertex_colours", "not both"});
 }
 
 TEST_F(SceneFileTest, LoadSceneResolvesAgainstTheSceneFolder) {

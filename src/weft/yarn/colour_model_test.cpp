@@ -58,7 +58,7 @@ TEST(ColourModel, FoldedNetworkEqualsTheConditionedHead) {
     const YarnModel model = conditionedModel();
     ASSERT_NO_THROW(model.validate());
     Rng rng(1, 2);
-    for (const Rgb colour : {Rgb(0.25, 0.5, 0.99), Rgb(0.6, 0.6, 0.6), Rgb(0.1, 1.0, 0.3)}) {
+    for (const Rgb colour : {Rgb(0.25, 0.5, 0.99), Rgb(0.6, 0.6, 0.6), Rgb(0.2, 1.0, 0.3)}) {
         const YarnModel one = model.forColour(colour, "test");
         EXPECT_EQ(one.fiber.cTT, colour);
         EXPECT_FALSE(one.colour.has_value());
@@ -97,12 +97,16 @@ TEST(ColourModel, FileFormIsVersionTwoAndOldFilesStillLoad) {
     wrong["colour"]["functions"].erase(2);
     testing::expectInputError([&] { yarnModelFromJson(wrong, "model.json"); }, {"m_net"});
     nlohmann::json future = j;
-    future["version"] = 4;
+    future["version"] = 5;
     testing::expectInputError([&] { yarnModelFromJson(future, "model.json"); },
-                              {"unsupported version 4", "1 to 3"});
+                              {"unsupported version 5", "1 to 4"});
     testing::expectInputError([&] { plain.forColour(Rgb(0.5), "scene.json: yarns[0]"); },
                               {"scene.json: yarns[0]", "fitted for one colour", "--colour-range"});
-    testing::expectInputError([&] { model.forColour(Rgb(0.5, 1.5, 0.5), "x"); }, {"1.5", "[0, 1]"});
+    testing::expectInputError([&] { model.forColour(Rgb(0.5, 1.5, 0.5), "x"); },
+                              {"x: C_TT 1.5", "colour range [0.2, 1]", "appearance"});
+    // Below the range too: no silent clamp to its end (issue 42).
+    testing::expectInputError([&] { model.forColour(Rgb(0.5, 0.1, 0.5), "x"); },
+                              {"x: C_TT 0.1", "colour range [0.2, 1]"});
 }
 
 // A calibration by colour of two nodes for the conditioned model: node g

@@ -13,8 +13,8 @@ Vec3 upperSide(const YarnIncident& in, const Vec3& wo) { return in.mirrored ? mi
 
 YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
                    const YarnBsdfOptions& options)
-    : YarnBsdf(model.colour ? model.forColour(model.fiber.cTT, source) : model, source, options,
-               OneColour{}) {}
+    : YarnBsdf(model.colour ? model.forColour(model.ownColourInRange(), source) : model, source,
+               options, OneColour{}) {}
 
 YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
                    const YarnBsdfOptions& options, OneColour)

@@ -54,7 +54,7 @@ class YarnBsdf final : public Bsdf {
 
     // Validates the model once (YarnEvaluator; InputError naming `source`).
     // A colour-conditioned model (yarn_model.h) is rendered at its own
-    // gathered colour, model.forColour(model.fiber.cTT); pass
+    // gathered colour, model.forColour(model.ownColourInRange()); pass
     // model.forColour(cTT) for another colour.
     explicit YarnBsdf(const YarnModel& model, const std::string& source = "yarn model",
                       const YarnBsdfOptions& options = {});

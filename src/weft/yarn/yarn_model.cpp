@@ -348,6 +348,23 @@ void SamplingParams::validate() const {
     checkRange(kappaM, kUnitRange, "sampling.kappa_m");
 }
 
+namespace {
+
+// An appearance table's ends are the colour range's, so that every colour
+// the model takes has an appearance and no node lies outside.
+void checkAppearanceSpansRange(const AppearanceTable& table, const ColourRange& range,
+                               const std::string& what) {
+    table.validate(what);
+    if (std::fabs(table.cTT.front() - range.hi) > 1e-12 ||
+        std::fabs(table.cTT.back() - range.lo) > 1e-12)
+        throw InputError(what + ".c_tt: its nodes must span the colour range [" +
+                         formatNumber(range.lo) + ", " + formatNumber(range.hi) +
+                         "] from its bright end, got " + formatNumber(table.cTT.front()) + " to " +
+                         formatNumber(table.cTT.back()));
+}
+
+}  // namespace
+
 void YarnModel::validate() const {
     tNet.validate("t_net", 3, 1, OutputFunction::Sigmoid, "P(T|wi) must lie in [0, 1]");
     if (colour) {
@@ -357,10 +374,12 @@ void YarnModel::validate() const {
             throw InputError("colour: a conditioned model has no ablation and no "
                              "energy_calibration of one colour");
         if (!colourCalibration.empty()) colourCalibration.validate("energy_calibration");
+        if (appearance) checkAppearanceSpansRange(*appearance, colour->range(), "appearance");
     } else {
         mNet.validate("m_net", 6, 3, OutputFunction::Exp, "S_M must be non-negative");
         if (!colourCalibration.empty())
             throw InputError("energy_calibration: only a conditioned model has one by colour");
+        if (appearance) throw InputError("appearance: only a colour model has an appearance table");
     }
     rLobe.validate();
     sampling.validate();
@@ -373,16 +392,30 @@ YarnModel YarnModel::forColour(const Rgb& cTT, const std::string& what) const {
                          formatNumber(fiber.cTT.b) +
                          "); for other colours fit it with weft fit --colour-range from a gather "
                          "made with --any-colour");
+    const ColourRange& range = colour->range();
     for (int c = 0; c < 3; ++c)
-        if (!(cTT[c] >= 0 && cTT[c] <= 1))
-            throw InputError(what + ": C_TT " + formatNumber(cTT[c]) + " is out of range: allowed [0, 1]");
+        if (!(cTT[c] >= range.lo && cTT[c] <= range.hi))
+            throw InputError(what + ": C_TT " + formatNumber(cTT[c]) +
+                             " is out of this model's colour range [" + formatNumber(range.lo) +
+                             ", " + formatNumber(range.hi) +
+                             "] (weft fit --colour-range); give the yarn's \"appearance\" instead "
+                             "to find a C_TT it reaches (docs/colour.md)");
     YarnModel m = *this;
     m.fiber.cTT = cTT;
     m.mNet = foldColourIntoNetwork(mNet, *colour, cTT);
     m.calibration = colourCalibration.at(cTT);
     m.colour.reset();
     m.colourCalibration = {};
+    m.appearance.reset();
     return m;
+}
+
+Rgb YarnModel::ownColourInRange() const {
+    if (!colour) return fiber.cTT;
+    const ColourRange& range = colour->range();
+    Rgb own = fiber.cTT;
+    for (int c = 0; c < 3; ++c) own[c] = std::clamp(own[c], range.lo, range.hi);
+    return own;
 }
 
 const char* yarnAblationName(YarnAblation ablation) {
@@ -426,9 +459,9 @@ nlohmann::json yarnModelToJson(const YarnModel& model) {
                        {"m", m}};
     }
     // Version 1 for a model of one colour, 2 for a conditioned one, 3 when it
-    // has an energy calibration by colour: older readers refuse what they
-    // cannot read.
-    const int version = model.colour ? (byColour.empty() ? 2 : 3) : 1;
+    // has an energy calibration by colour, 4 with an appearance table: older
+    // readers refuse what they cannot read.
+    const int version = model.appearance ? 4 : model.colour ? (byColour.empty() ? 2 : 3) : 1;
     json document = {{"format", kYarnModelFormat},
                      {"version", version},
                      {"fiber", model.fiber.toJson()},
@@ -450,6 +483,7 @@ nlohmann::json yarnModelToJson(const YarnModel& model) {
     if (model.ablation != YarnAblation::None)
         document["ablation"] = yarnAblationName(model.ablation);
     if (model.colour) document["colour"] = model.colour->toJson();
+    if (model.appearance) document["appearance"] = model.appearance->toJson();
     return document;
 }
 
@@ -471,7 +505,10 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
                               " (supported: 1 to " + std::to_string(kYarnModelVersion) + ")");
     // energy_calibration may be absent (files written before it existed);
     // ablation is absent for the full model; colour needs version 2.
-    if (version >= 2)
+    if (version >= 4)
+        r.allowKeys({"format", "version", "ablation", "fiber", "ply", "t_net", "m_net", "r_lobe",
+                     "sampling", "energy_calibration", "fit", "colour", "appearance"});
+    else if (version >= 2)
         r.allowKeys({"format", "version", "ablation", "fiber", "ply", "t_net", "m_net", "r_lobe",
                      "sampling", "energy_calibration", "fit", "colour"});
     else
@@ -485,9 +522,9 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     // Version 3 exists for a conditioned model's calibration by colour: the
     // writer writes it only with a colour block, which it requires.
     if (version >= 3 && !r.has("colour"))
-        r.fail("colour",
-               "missing: a version 3 model is a colour-conditioned one (its "
-               "energy_calibration by colour); a model of one colour is version 1");
+        r.fail("colour", "missing: a version " + std::to_string(version) +
+                             " model is a colour-conditioned one (its energy_calibration by "
+                             "colour); a model of one colour is version 1");
     if (version >= 2 && r.has("colour"))
         model.colour = ColourBasis::fromJson(r.value("colour"), source + ": colour");
     model.mNet = readNetwork(r, "m_net", 6, model.colour ? 3 * model.colour->functions() : 3);
@@ -498,6 +535,11 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     r.object("fit");  // an object, written back as is
     model.fit = r.value("fit");
     if (r.has("ablation")) model.ablation = readAblation(r);
+    if (version >= 4 && r.has("appearance")) {
+        model.appearance = AppearanceTable::fromJson(r.value("appearance"), source);
+        checkAppearanceSpansRange(*model.appearance, model.colour->range(),
+                                  source + ": appearance");
+    }
     return model;
 }
 

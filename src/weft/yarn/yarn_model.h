@@ -21,9 +21,12 @@
 //             Version 3: its energy_calibration may be the by-colour form
 //             (ColourCalibration: "c_tt" node colours and per node the rows
 //             of r and m).
-// Version 1 and 2 files still load; the writer writes version 1 unless the
+//   appearance  version 4, optional, conditioned models only: the colour the
+//             yarn looks at greys across the colour range (appearance_table.h),
+//             which "appearance" in a scene inverts to a C_TT.
+// Version 1 to 3 files still load; the writer writes version 1 unless the
 // model is conditioned, 2 for a conditioned model without a calibration, 3
-// with one.
+// with one, 4 with an appearance table.
 // Networks: {"layers": [{"weight": [[in numbers] x out rows], "bias": [out],
 // "prelu": [out] or null}, ...], "output": "sigmoid" | "exp" | "identity"};
 // layer l computes y = W x + b, then the PReLU when present. Network inputs
@@ -37,15 +40,16 @@
 
 #include "weft/core/rgb.h"
 #include "weft/fiber/fiber_params.h"
+#include "weft/ply/ply.h"
+#include "weft/yarn/appearance_table.h"
 #include "weft/yarn/colour_basis.h"
 #include "weft/yarn/energy_calibration.h"
 #include "weft/yarn/network.h"
-#include "weft/ply/ply.h"
 
 namespace weft {
 
 inline constexpr const char* kYarnModelFormat = "weft-yarn-model";
-inline constexpr int kYarnModelVersion = 3;  // the newest; 1 and 2 are read too
+inline constexpr int kYarnModelVersion = 4;  // the newest; 1 to 3 are read too
 
 // The R lobe (paper eq. 8): (1 - P(T|wi)) S_f(wi~, wo~) in the surface fiber
 // frame (tangent tilted by tiltDeg = atan(pi alpha) about n), zero unless both
@@ -101,6 +105,9 @@ struct YarnModel {
     // `calibration` is empty, forColour() makes it from colourCalibration.
     std::optional<ColourBasis> colour;
     ColourCalibration colourCalibration;
+    // A conditioned model's appearance at greys spanning its colour range
+    // (version 4; computeAppearanceTable in yarn_appearance.h makes it).
+    std::optional<AppearanceTable> appearance;
 
     // What the renderer needs beyond the file's syntax (InputError naming the
     // key): the networks' shapes (t_net 3 -> 1, m_net 6 -> 3) and output
@@ -109,13 +116,18 @@ struct YarnModel {
     // both call it.
     void validate() const;
 
-    // The ordinary model of one fiber colour C_TT (each channel in [0, 1],
-    // clamped into the model's colour range for M): fiber.cTT = cTT, and the
-    // colour functions at cTT folded into m_net's last layer
-    // (foldColourIntoNetwork), so that it renders exactly like a model
-    // fitted for that colour alone and costs the same. InputError naming
-    // `what` for a model that is not conditioned or a colour out of [0, 1].
+    // The ordinary model of one fiber colour C_TT (each channel within the
+    // model's colour range): fiber.cTT = cTT, and the colour functions at cTT
+    // folded into m_net's last layer (foldColourIntoNetwork), so that it
+    // renders exactly like a model fitted for that colour alone and costs the
+    // same. InputError naming `what` for a model that is not conditioned or a
+    // channel out of its colour range (never a silent clamp).
     YarnModel forColour(const Rgb& cTT, const std::string& what) const;
+    // The colour a conditioned model is drawn at when a yarn gives none: its
+    // gathered C_TT, each channel moved into the colour range (a range fitted
+    // narrower than the gathered colour, e.g. polyester's green 0 with
+    // [0.3, 0.999]).
+    Rgb ownColourInRange() const;
 
     // Whether S_T (the T network) and S_R (the analytic lobe) are part of the BSDF.
     bool hasTransmissionLobe() const { return ablation != YarnAblation::Naive; }

@@ -347,8 +347,8 @@ TEST(YarnModel, NetworksMustStayFiniteOverTheirDomain) {
 
 TEST(YarnModel, VersionAndFormat) {
     json j = yarnModelToJson(sampleModel());
-    j["version"] = 4;
-    expectModelError(j, {"version: unsupported version 4 (supported: 1 to 3)"});
+    j["version"] = 5;
+    expectModelError(j, {"version: unsupported version 5 (supported: 1 to 4)"});
     j["version"] = 0;
     expectModelError(j, {"version: unsupported version 0"});
     // Version 2 adds the optional "colour" block; without it a file reads the same.

@@ -163,7 +163,7 @@ TEST(YarnAppearance, ModelFileKeepsTheTableAndChecksItsSpan) {
 // does (two fits from two gathers of the same ply: an independent check of
 // the conditioned fit and its calibration by colour).
 TEST(YarnAppearance, ShippedColourModelsLookLikeTheirDedicatedModels) {
-    for (const char* name : {"fleece", "gabardine"}) {
+    for (const char* name : {"fleece", "gabardine", "cotton"}) {
         const std::string dir = std::string(WEFT_SOURCE_DIR) + "/models/";
         const YarnModel colour = loadYarnModel(dir + name + "-colour.json");
         const YarnModel dedicated = loadYarnModel(dir + name + ".json");

@@ -163,7 +163,7 @@ TEST(YarnAppearance, ModelFileKeepsTheTableAndChecksItsSpan) {
 // does (two fits from two gathers of the same ply: an independent check of
 // the conditioned fit and its calibration by colour).
 TEST(YarnAppearance, ShippedColourModelsLookLikeTheirDedicatedModels) {
-    for (const char* name : {"fleece", "gabardine", "cotton"}) {
+    for (const char* name : {"fleece", "gabardine", "cotton", "polyester"}) {
         const std::string dir = std::string(WEFT_SOURCE_DIR) + "/models/";
         const YarnModel colour = loadYarnModel(dir + name + "-colour.json");
         const YarnModel dedicated = loadYarnModel(dir + name + ".json");
@@ -172,12 +172,18 @@ TEST(YarnAppearance, ShippedColourModelsLookLikeTheirDedicatedModels) {
         EXPECT_EQ(colour.ply.density, dedicated.ply.density) << name;
         EXPECT_EQ(colour.ply.twist, dedicated.ply.twist) << name;
         ASSERT_TRUE(colour.appearance) << name;
-        const Rgb own = dedicated.fiber.cTT;
-        const Rgb a = yarnAppearance(YarnBsdf(colour.forColour(own, name), name));
+        // The dedicated model's C_TT, moved into the colour range (polyester's
+        // green 0 becomes 0.05: that channel is not compared).
+        const Rgb own = colour.ownColourInRange();
+        const Rgb a = colour.appearance->appearanceAt(own);  // its table: within 0.05 %
         const Rgb b = yarnAppearance(YarnBsdf(dedicated, name));
         // Measured for fleece: 0.0660 / 0.1891 / 0.6316 against 0.0660 / 0.1889 /
         // 0.6168 (blue 2.4 % apart; each fit's albedo error is 1-4 %, models/README.md).
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c], b[c], 0.04 * b[c]) << name << " " << c << ": " << a[c] << " vs " << b[c];
+        for (int c = 0; c < 3; ++c) {
+            if (own[c] != dedicated.fiber.cTT[c]) continue;
+            EXPECT_NEAR(a[c], b[c], 0.04 * b[c])
+                << name << " " << c << ": " << a[c] << " vs " << b[c];
+        }
     }
 }
 

@@ -129,7 +129,7 @@ def now():
 
 # ---- Paths in recorded results -------------------------------------------------------------
 
-TMP_PLACEHOLDER = "<tmp>"
+TMP_MARKER = "<tmp>"
 
 
 def _within(path, folder):
@@ -156,7 +156,7 @@ def portable_path(path):
     for tmp in _temp_roots():
         if _within(p, tmp) and p != tmp:
             parts = os.path.relpath(p, tmp).split(os.sep)
-            return "/".join([TMP_PLACEHOLDER] + (parts[1:] if len(parts) > 1 else parts))
+            return "/".join([TMP_MARKER] + (parts[1:] if len(parts) > 1 else parts))
     folder = os.path.dirname(p)
     while folder not in ("/", ""):
         if os.path.exists(os.path.join(folder, ".git")):

@@ -28,7 +28,6 @@ struct AppearanceTable {
     std::vector<double> cTT;      // node greys, decreasing (u = sqrt(-ln C_TT) increasing)
     std::vector<Rgb> appearance;  // A at each node, per channel
 
-    bool empty() const { return cTT.empty(); }
     // The appearance of channel c for C_TT,c = cTT (within the table's range).
     double appearanceAt(int channel, double cTT) const;
     Rgb appearanceAt(const Rgb& cTT) const;

@@ -12,6 +12,7 @@
 #include "weft/core/rng.h"
 #include "weft/fit/metrics.h"
 #include "weft/fit/mlp.h"
+#include "weft/fit/mlp_batch.h"
 #include "weft/fit/model_maps.h"
 #include "weft/yarn/colour_basis.h"
 
@@ -42,22 +43,25 @@ struct ChunkRows {
 };
 
 // Trains `net` with Adam. fill(rng, x, target) writes one chunk of samples
-// (columns) drawn with rng; lossAndGradient(x, target, gradient) returns the
-// chunk's mean loss and its gradient. The chunks of a step run in parallel in
-// `arena`, or one after the other when it is null. Returns the loss curve.
+// (x.capacity() of them) drawn with rng; lossAndGradient(batch, x, target,
+// gradient) returns the chunk's mean loss and its gradient, with `batch` the
+// chunk's training passes (mlp_batch.h). The chunks of a step run in parallel
+// in `arena`, or one after the other when it is null. Returns the loss curve.
 template <typename Fill, typename LossAndGradient>
 LossCurve train(Mlp<float>& net, const NetworkTraining& cfg, uint64_t seed, uint64_t netId,
                 tbb::task_arena* arena, Progress& progress, bool parallelRestarts,
                 const ChunkRows& rows, const Fill& fill, const LossAndGradient& lossAndGradient) {
-    using Matrix = Mlp<float>::Matrix;
     std::vector<int> chunkSize(kChunks, cfg.batch / kChunks);
     for (int c = 0; c < cfg.batch % kChunks; ++c) ++chunkSize[c];
-    std::vector<Matrix> x(kChunks), target(kChunks);
+    std::vector<BatchRows> x, target;
+    std::vector<MlpBatch> batches;
     std::vector<std::vector<float>> gradient(kChunks);
     std::vector<float> chunkLoss(kChunks), total(net.parameters().size());
     for (int c = 0; c < kChunks; ++c) {
-        x[c].resize(rows.inputs + rows.extraInputs, chunkSize[c]);
-        target[c].resize(rows.targets, chunkSize[c]);
+        const int capacity = std::max(1, chunkSize[c]);
+        x.emplace_back(rows.inputs + rows.extraInputs, capacity);
+        target.emplace_back(rows.targets, capacity);
+        batches.emplace_back(net, capacity);
     }
     Adam<float> adam(net.parameters().size(), cfg.learningRate);
     const int64_t logEvery = std::max<int64_t>(1, cfg.steps / 200);
@@ -69,7 +73,7 @@ LossCurve train(Mlp<float>& net, const NetworkTraining& cfg, uint64_t seed, uint
             if (chunkSize[c] == 0) return;
             Rng rng((netId << 48) ^ (static_cast<uint64_t>(step) * kChunks + c), seed);
             fill(rng, x[c], target[c]);
-            chunkLoss[c] = lossAndGradient(x[c], target[c], gradient[c]);
+            chunkLoss[c] = lossAndGradient(batches[c], x[c], target[c], gradient[c]);
         };
         if (arena) arena->execute([&] { tbb::parallel_for(0, kChunks, chunk); });
         else for (int c = 0; c < kChunks; ++c) chunk(c);
@@ -102,12 +106,11 @@ template <typename Fill>
 LossCurve trainPlain(Mlp<float>& net, const NetworkTraining& cfg, uint64_t seed, uint64_t netId,
                      tbb::task_arena* arena, Progress& progress, bool parallelRestarts,
                      const Fill& fill) {
-    const Mlp<float>::Vector noWeights;
     return train(net, cfg, seed, netId, arena, progress, parallelRestarts,
                  {net.inputs(), net.outputs()}, fill,
-                 [&](const Mlp<float>::Matrix& x, const Mlp<float>::Matrix& target,
+                 [&](MlpBatch& batch, const BatchRows& x, const BatchRows& target,
                      std::vector<float>& gradient) {
-                     return net.lossAndGradient(x, target, cfg.loss, noWeights, gradient);
+                     return batch.lossAndGradient(x, target, x.capacity(), cfg.loss, gradient);
                  });
 }
 
@@ -176,16 +179,17 @@ NetworkWeights fitTransmissionNetwork(const RdmData& rdm, const FitConfig& confi
             const uint64_t netSeed = mixBits(seed + 0x9e3779b97f4a7c15ULL * static_cast<uint64_t>(r));
             nets[r] = Mlp<float>(widthsOf(3, config.t.hidden, 1), OutputFunction::Sigmoid, netSeed);
             curves[r] = trainPlain(nets[r], config.t, netSeed, 1, nullptr, progress, restarts > 1,
-                              [&](Rng& rng, Mlp<float>::Matrix& x, Mlp<float>::Matrix& target) {
-                                  for (Eigen::Index k = 0; k < x.cols(); ++k) {
-                                      const size_t i = drawFromCdf(cdf, rng.uniform());
-                                      const double u1 = rng.uniform(), u2 = rng.uniform();
-                                      setInputColumn(x, k,
-                                                config.jitter ? bins.incidentDirectionIn(i, u1, u2)
+                                   [&](Rng& rng, BatchRows& x, BatchRows& target) {
+                                       for (int k = 0; k < x.capacity(); ++k) {
+                                           const size_t i = drawFromCdf(cdf, rng.uniform());
+                                           const double u1 = rng.uniform(), u2 = rng.uniform();
+                                           setInputColumn(x, k,
+                                                          config.jitter
+                                                              ? bins.incidentDirectionIn(i, u1, u2)
                                                               : bins.incidentCentre(i));
-                                      target(0, k) = static_cast<float>(rdm.pT[i]);
-                                  }
-                              });
+                                           target(0, k) = static_cast<float>(rdm.pT[i]);
+                                       }
+                                   });
             rmse[r] = transmissionError(transmissionMap(nets[r].weights(), bins), rdm).weighted;
         });
     });
@@ -205,8 +209,8 @@ NetworkWeights fitMultipleScatteringNetwork(const RdmData& rdm, const FitConfig&
     Mlp<float> net(widthsOf(6, config.m.hidden, 3), OutputFunction::Exp, seed);
     Progress progress("fit M", static_cast<uint64_t>(config.m.steps), quiet);
     *curve = trainPlain(net, config.m, seed, 2, &arena, progress, false,
-                        [&](Rng& rng, Mlp<float>::Matrix& x, Mlp<float>::Matrix& target) {
-                            for (Eigen::Index k = 0; k < x.cols(); ++k) {
+                        [&](Rng& rng, BatchRows& x, BatchRows& target) {
+                            for (int k = 0; k < x.capacity(); ++k) {
                                 const MSample m = drawMSample(rng, bins, rowCdf, config.jitter);
                                 setInputColumn(x, k, m.wi, m.wo);
                                 const float* t = &rdm.rdmM[(m.i * nOut + m.o) * 3];
@@ -227,14 +231,14 @@ NetworkWeights fitColourConditionedMNetwork(const ColourTargets& targets,
     const ColourRange range = basis.range();
     Mlp<float> net(widthsOf(6, config.m.hidden, 3 * functions), OutputFunction::Identity, seed);
     Progress progress("fit M (any colour)", static_cast<uint64_t>(config.m.steps), quiet);
-    using Matrix = Mlp<float>::Matrix;
     // Inputs: (wi, wo); extra rows: the sample's C_TT per channel, uniform in the range.
-    const auto fill = [&](Rng& rng, Matrix& x, Matrix& target) {
-        for (Eigen::Index k = 0; k < x.cols(); ++k) {
+    const auto fill = [&](Rng& rng, BatchRows& x, BatchRows& target) {
+        for (int k = 0; k < x.capacity(); ++k) {
             const MSample m = drawMSample(rng, bins, rowCdf, config.jitter);
             setInputColumn(x, k, m.wi, m.wo);
             Rgb colour;
-            for (int c = 0; c < 3; ++c) colour[c] = range.lo + (range.hi - range.lo) * rng.uniform();
+            for (int c = 0; c < 3; ++c)
+                colour[c] = range.lo + (range.hi - range.lo) * rng.uniform();
             const Rgb t = targets.value(m.i, m.o, colour);
             for (int c = 0; c < 3; ++c) {
                 x(6 + c, k) = static_cast<float>(colour[c]);
@@ -243,26 +247,25 @@ NetworkWeights fitColourConditionedMNetwork(const ColourTargets& targets,
         }
     };
     // The loss on M_c = exp(sum_j a_jc phi_j(C_TT,c)) (yarn/colour_basis.h).
-    const auto lossAndGradient = [&](const Matrix& x, const Matrix& target,
+    const auto lossAndGradient = [&](MlpBatch& passes, const BatchRows& x, const BatchRows& target,
                                      std::vector<float>& gradient) {
-        const Eigen::Index batch = x.cols();
-        const Mlp<float>::Tape tape = net.forwardTape(x.topRows(6));
-        Matrix dy(tape.y.rows(), batch);
+        const int batch = x.capacity();
+        passes.forward(x, batch);
         double total = 0;
         double phi[ColourBasis::kMaxFunctions];
-        for (Eigen::Index k = 0; k < batch; ++k)
+        for (int k = 0; k < batch; ++k)
             for (int c = 0; c < 3; ++c) {
                 basis.eval(x(6 + c, k), phi);
                 double z = 0;
-                for (int j = 0; j < functions; ++j) z += tape.y(3 * j + c, k) * phi[j];
+                for (int j = 0; j < functions; ++j) z += passes.output(3 * j + c)[k] * phi[j];
                 const float y = static_cast<float>(std::exp(std::min(z, 80.0)));
                 const auto [diff, dDiff] = lossResidual(config.m.loss, y, target(c, k));
                 total += static_cast<double>(diff) * diff;
                 const double dz = 2.0 * diff * dDiff * y / static_cast<double>(batch);
                 for (int j = 0; j < functions; ++j)
-                    dy(3 * j + c, k) = static_cast<float>(dz * phi[j]);
+                    passes.outputGradient(3 * j + c)[k] = static_cast<float>(dz * phi[j]);
             }
-        net.backward(tape, dy, gradient);
+        passes.backward(gradient);
         return static_cast<float>(total / static_cast<double>(batch));
     };
     *curve = train(net, config.m, seed, 3, &arena, progress, false, {6, 3, 3}, fill,

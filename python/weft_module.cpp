@@ -31,29 +31,32 @@
 #include <type_traits>
 #include <vector>
 
+#include "weft/core/curves.h"
 #include "weft/core/error.h"
-#include "weft/core/limits.h"
 #include "weft/core/file.h"
 #include "weft/core/json_file.h"
+#include "weft/core/json_message.h"
+#include "weft/core/limits.h"
 #include "weft/core/rng.h"
+#include "weft/core/text_parse.h"
+#include "weft/eval/scene_gen.h"
 #include "weft/fiber/fiber_bcsdf.h"
 #include "weft/fiber/fiber_params.h"
 #include "weft/fit/fit.h"
-#include "weft/yarn/yarn_model.h"
 #include "weft/gather/colour_paths.h"
 #include "weft/gather/gather.h"
 #include "weft/gather/gather_merge.h"
 #include "weft/gather/rdm_io.h"
 #include "weft/ply/ply.h"
 #include "weft/render/curve_report.h"
-#include "weft/core/curves.h"
 #include "weft/render/render_merge.h"
 #include "weft/render/renderer.h"
-#include "weft/eval/scene_gen.h"
 #include "weft/render/scene.h"
 #include "weft/render/scene_file.h"
 #include "weft/yarn/material_preset.h"
+#include "weft/yarn/yarn_appearance.h"
 #include "weft/yarn/yarn_bsdf.h"
+#include "weft/yarn/yarn_model.h"
 
 namespace py = pybind11;
 using nlohmann::json;
@@ -216,6 +219,29 @@ py::sequence sequenceArg(const py::object& h, const std::string& name, size_t co
     if (!py::isinstance<py::sequence>(h) || py::isinstance<py::str>(h) || py::len(h) != count)
         throw InputError(name + ": expected " + what + ", got " + py::repr(h).cast<std::string>());
     return h.cast<py::sequence>();
+}
+
+// A colour (r, g, b), each a number in [0, 1]; InputError naming `name`.
+Rgb colourArg(const py::object& h, const std::string& name) {
+    const std::string what = "(r, g, b) with each value in [0, 1]";
+    const py::sequence s = sequenceArg(h, name, 3, what);
+    Rgb colour;
+    for (int c = 0; c < 3; ++c) {
+        const py::object v = s[c];
+        const bool number = (py::isinstance<py::float_>(v) || py::isinstance<py::int_>(v)) &&
+                            !py::isinstance<py::bool_>(v);
+        colour[c] = number ? v.cast<double>() : -1.0;
+        if (!std::isfinite(colour[c]) || colour[c] < 0 || colour[c] > 1)
+            throw InputError(name + ": expected " + what + ", got " +
+                             py::repr(h).cast<std::string>());
+    }
+    return colour;
+}
+
+// An sRGB colour: "#rrggbb" or "R,G,B", or (r, g, b) in [0, 1]; InputError naming `name`.
+Rgb srgbArg(const py::object& h, const std::string& name) {
+    if (py::isinstance<py::str>(h)) return parseSrgbColour(h.cast<std::string>(), name);
+    return colourArg(h, name);
 }
 
 // ---------------------------------------------------------------------------
@@ -891,7 +917,8 @@ py::object pyCurvesInfo(const py::object& pathArg, const py::object& radiusArg) 
 py::object pyScene(const std::string& kindName, const py::object& model, const py::object& out,
                    const py::object& size, double radius, const py::object& plies, double plyTwist,
                    const py::object& width, const py::object& height, const py::object& spp,
-                   const py::object& envmap, const py::object& colours, const py::object& stripe,
+                   const py::object& envmap, const py::object& colours,
+                   const py::object& appearances, const py::object& stripe,
                    const py::object& dyeLength) {
     const eval::SceneKind kind = eval::parseSceneKind(kindName);
     eval::SceneOptions o;
@@ -916,6 +943,15 @@ py::object pyScene(const std::string& kindName, const py::object& model, const p
                                  std::to_string(c.size()) + " values");
             o.colours.emplace_back(c[0], c[1], c[2]);
         }
+    if (!appearances.is_none()) {
+        if (!py::isinstance<py::sequence>(appearances) || py::isinstance<py::str>(appearances))
+            throw InputError(
+                "appearances: expected a list of sRGB colours (\"#rrggbb\" or "
+                "(r, g, b) in [0, 1])");
+        const py::sequence list = appearances.cast<py::sequence>();
+        for (size_t k = 0; k < py::len(list); ++k)
+            o.appearances.push_back(srgbArg(list[k], jsonIndexPath("appearances", k)));
+    }
     checkOutputsSpareInputs({{"model", o.model}, {"envmap", o.envmap}}, {}, {}, {{"out", dir}});
     json summary;
     std::vector<std::string> warnings;
@@ -924,10 +960,27 @@ py::object pyScene(const std::string& kindName, const py::object& model, const p
         const eval::GeneratedScene generated = eval::generateScene(kind, o);
         eval::writeScene(generated, dir);
         summary = eval::sceneSummary(generated, kind, dir, &warnings);
+        warnings.insert(warnings.end(), generated.colourWarnings.begin(),
+                        generated.colourWarnings.end());
     }
     for (const std::string& w : warnings)
         if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw py::error_already_set();
     return pyFromJson(summary);
+}
+
+py::object pyYarnAppearance(const py::object& modelArg, const py::object& appearance,
+                            const py::object& cTT) {
+    const std::string path = pathOf(modelArg, "model");
+    std::optional<Rgb> srgb, fiber;
+    if (!appearance.is_none()) srgb = srgbArg(appearance, "appearance");
+    if (!cTT.is_none()) fiber = colourArg(cTT, "c_tt");
+    json report;
+    {
+        py::gil_scoped_release release;
+        const YarnModel model = readUserJson(path, [&] { return loadYarnModel(path); });
+        report = appearanceReport(model, path, srgb, fiber, "appearance", "c_tt");
+    }
+    return pyFromJson(report);
 }
 
 }  // namespace
@@ -1152,11 +1205,22 @@ PYBIND11_MODULE(weft, m) {
           py::arg("size") = 6, py::arg("radius") = 0.01, py::arg("plies") = 3,
           py::arg("ply_twist") = 0.3, py::arg("width") = 512, py::arg("height") = 512,
           py::arg("spp") = 64, py::arg("envmap") = py::none(), py::arg("colours") = py::none(),
-          py::arg("stripe") = py::none(), py::arg("dye_length") = py::none(),
+          py::arg("appearances") = py::none(), py::arg("stripe") = py::none(),
+          py::arg("dye_length") = py::none(),
           "`weft scene`: writes the generated scene folder `out` (\"closeup\", \"weave\" or "
           "\"knit\") and returns its summary dict; colours=[(r, g, b)] colours every yarn, two "
-          "colours make a striped knit or a check weave (stripe yarns per stripe, default 2), or with "
-          "dye_length=L space-dyed yarns (the colour alternating every L yarn radii).");
+          "colours make a striped knit or a check weave (stripe yarns per stripe, default 2), or "
+          "with "
+          "dye_length=L space-dyed yarns (the colour alternating every L yarn radii); "
+          "appearances=[\"#rrggbb\" or (r, g, b)] instead gives the sRGB colours the yarns should "
+          "look (docs/colour.md, \"Colour by appearance\"). Warnings (overlapping yarns, colours a "
+          "neural render would refuse) are UserWarnings.");
+
+    m.def("yarn_appearance", &pyYarnAppearance, py::arg("model"), py::kw_only(),
+          py::arg("appearance") = py::none(), py::arg("c_tt") = py::none(),
+          "`weft yarn appearance`: a colour model's darkest and brightest appearance per "
+          "channel, and with appearance=\"#rrggbb\" or (r, g, b) (sRGB) the fiber colour c_tt "
+          "that gives it, or with c_tt=(r, g, b) its appearance (docs/colour.md).");
 
     m.def("render", &pyRender, py::arg("scene"), py::kw_only(), py::arg("mode") = py::none(),
           py::arg("spp") = py::none(), py::arg("seconds") = py::none(), py::arg("threads") = 0,

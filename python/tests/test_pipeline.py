@@ -186,10 +186,59 @@ def test_colour_range_fit(tmp_path):
         weft.fit(tmp_path / "ac", config=SHORT_FIT, colour_range=(0.3, 0.9), colour_functions=1)
 
 
+def test_yarn_appearance_matches_cli_and_inverts(cli, root):
+    model = root / "tests" / "data" / "fleece-colour-small.json"
+    reach = weft.yarn_appearance(model)
+    assert reach == json.loads(cli("yarn", "appearance", "--model", model))
+    wanted = "#c08a6e"
+    found = weft.yarn_appearance(model, appearance=wanted)
+    assert found == json.loads(cli("yarn", "appearance", "--model", model, "--appearance", wanted))
+    assert found == weft.yarn_appearance(model, appearance=(0xc0 / 255, 0x8a / 255, 0x6e / 255))
+    # The C_TT found gives that appearance, evaluated directly (not by the table).
+    linear = found["appearance"]["linear"]
+    for c in range(3):
+        assert found["appearance_direct"][c] == pytest.approx(linear[c], rel=0.01)
+    back = weft.yarn_appearance(model, c_tt=found["c_tt"])
+    assert back["appearance"]["srgb"] == pytest.approx(found["appearance"]["srgb"], abs=2e-3)
+    with pytest.raises(ValueError, match="not both"):
+        weft.yarn_appearance(model, appearance=wanted, c_tt=(0.5, 0.5, 0.5))
+    with pytest.raises(ValueError, match="appearance"):
+        weft.yarn_appearance(model, appearance="#12345")
+    with pytest.raises(ValueError, match="appearance"):
+        weft.yarn_appearance(model, appearance=(0.5, 1.5, 0.5))
+    with pytest.raises(ValueError, match="c_tt"):
+        weft.yarn_appearance(model, c_tt=(0.5, 0.5))
+    with pytest.raises(ValueError, match="c_tt"):
+        weft.yarn_appearance(model, c_tt=(0.01, 0.5, 0.5))  # below the colour range
+    with pytest.raises(ValueError, match="one colour"):
+        weft.yarn_appearance(root / "tests" / "data" / "fleece-small.json", appearance=wanted)
+
+
+def test_scene_with_appearances_matches_cli(cli, tmp_path, root):
+    model = root / "tests" / "data" / "fleece-colour-small.json"
+    summary = weft.scene("knit", model=model, out=tmp_path / "py", size=2, width=12, height=8,
+                         appearances=["#c08a6e", (0.35, 0.4, 0.6)], stripe=1)
+    cli("scene", "knit", "--model", model, "--out", tmp_path / "cli", "--size", 2, "--width", 12,
+        "--height", 8, "--appearance", "#c08a6e", "0.35,0.4,0.6", "--stripe", 1)
+    py_scene = json.loads((tmp_path / "py" / "scene.json").read_text())
+    assert py_scene == json.loads((tmp_path / "cli" / "scene.json").read_text())
+    assert py_scene["yarns"][1]["appearance"] == [0.35, 0.4, 0.6]
+    assert summary["kind"] == "knit"
+    with pytest.raises(ValueError, match=r"appearances\[0\]"):
+        weft.scene("knit", model=model, out=tmp_path / "bad", appearances=["#zz0000"])
+    with pytest.raises(ValueError, match="appearances"):
+        weft.scene("knit", model=model, out=tmp_path / "bad", appearances="#c08a6e")
+    with pytest.raises(ValueError, match="not both"):
+        weft.scene("knit", model=model, out=tmp_path / "bad", appearances=["#c08a6e"],
+                   colours=[(0.5, 0.5, 0.5)])
+
+
 def test_scene_with_colours_matches_cli(cli, tmp_path, root):
     model = root / "tests" / "data" / "fleece-small.json"
-    summary = weft.scene("knit", model=model, out=tmp_path / "py", size=2, width=12, height=8,
-                         colours=[(0.9, 0.2, 0.1), (0.1, 0.3, 0.8)], stripe=1)
+    # As weft scene prints: a model of one colour will not render these colours in neural mode.
+    with pytest.warns(UserWarning, match="fitted for one colour"):
+        summary = weft.scene("knit", model=model, out=tmp_path / "py", size=2, width=12,
+                             height=8, colours=[(0.9, 0.2, 0.1), (0.1, 0.3, 0.8)], stripe=1)
     assert summary["kind"] == "knit" and len(summary["curves"]) == 2
     assert summary["colours"] == [[0.9, 0.2, 0.1], [0.1, 0.3, 0.8]]
     cli("scene", "knit", "--model", model, "--out", tmp_path / "cli", "--size", 2, "--width", 12,

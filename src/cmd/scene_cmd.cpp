@@ -49,7 +49,7 @@ void runScene(SceneCmdOptions o) {
         for (const std::string& w : warnings)
             std::fprintf(stderr, "weft: warning: %s\n", w.c_str());
     // Printed with --quiet too: the scene as written will not render neural.
-    for (const std::string& w : o.scene.neuralColourWarnings())
+    for (const std::string& w : generated.colourWarnings)
         std::fprintf(stderr, "weft: warning: %s\n", w.c_str());
     std::printf("%s\n", summary.dump().c_str());
 }

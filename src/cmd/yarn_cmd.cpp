@@ -46,53 +46,12 @@ struct AppearanceOptions {
     std::string model, appearance, cTT;
 };
 
-// One JSON line: the model's reach (its darkest and brightest appearance per
-// channel), and the C_TT of --appearance or the appearance of --c-tt, each
-// with the appearance evaluated directly at that C_TT (yarnAppearance, not
-// the table) as a check.
+// One JSON line: appearanceReport (yarn_appearance.h).
 void runAppearance(const AppearanceOptions& o) {
-    if (!o.appearance.empty() && !o.cTT.empty())
-        throw InputError("--appearance and --c-tt: give one of them, not both");
-    const YarnModel model = loadYarnModel(o.model);
-    if (!model.colour)
-        throw InputError(o.model +
-                         ": fitted for one colour; an appearance needs a colour model "
-                         "(models/MATERIAL-colour.json, or weft fit --colour-range)");
-    const AppearanceTable table =
-        model.appearance ? *model.appearance : computeAppearanceTable(model, o.model);
-    const ColourRange& range = model.colour->range();
-    Rgb darkest, brightest;
-    for (int c = 0; c < 3; ++c) darkest[c] = table.darkest(c), brightest[c] = table.brightest(c);
-    nlohmann::json line = {
-        {"model", o.model},
-        {"c_tt_range", {range.lo, range.hi}},
-        {"table", model.appearance ? "stored" : "computed"},
-        {"darkest", {{"linear", rgbJson(darkest)}, {"srgb", rgbJson(linearToSrgb(darkest))}}},
-        {"brightest",
-         {{"linear", rgbJson(brightest)}, {"srgb", rgbJson(linearToSrgb(brightest))}}}};
-    Rgb cTT;
-    std::string flag;
-    if (!o.appearance.empty()) {
-        const Rgb srgb = parseSrgbColour(o.appearance, "--appearance");
-        const Rgb linear = srgbToLinear(srgb);
-        cTT = table.cTTFor(linear, "--appearance");
-        flag = "--appearance";
-        line["appearance"] = {{"srgb", rgbJson(srgb)}, {"linear", rgbJson(linear)}};
-    } else if (!o.cTT.empty()) {
-        cTT = parseColour(o.cTT, "--c-tt");
-        flag = "--c-tt";
-    }
-    if (!flag.empty()) {
-        const YarnModel one = model.forColour(cTT, flag);  // refuses a C_TT out of the range
-        if (flag == "--c-tt") {
-            const Rgb linear = table.appearanceAt(cTT);
-            line["appearance"] = {{"srgb", rgbJson(linearToSrgb(linear))},
-                                  {"linear", rgbJson(linear)}};
-        }
-        line["c_tt"] = rgbJson(cTT);
-        const YarnBsdf bsdf(one, o.model, YarnBsdfOptions{true, YarnSampling::Cosine});
-        line["appearance_direct"] = rgbJson(yarnAppearance(bsdf));
-    }
+    std::optional<Rgb> appearance, cTT;
+    if (!o.appearance.empty()) appearance = parseSrgbColour(o.appearance, "--appearance");
+    if (!o.cTT.empty()) cTT = parseColour(o.cTT, "--c-tt");
+    const nlohmann::json line = appearanceReport(loadYarnModel(o.model), o.model, appearance, cTT);
     std::printf("%s\n", line.dump().c_str());
 }
 

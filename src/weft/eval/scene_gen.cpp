@@ -123,9 +123,9 @@ struct PatternedCurves {
 // Space-dyed colours (--dye-length): along each curve, colour 0 for
 // L = dyeLength R of arc length from the anchor, then colour 1 for L, and so
 // on both ways; a point takes the colour of the stretch it lies in.
-void spaceDye(CurveSet& set, const std::vector<size_t>& anchor, const SceneOptions& o) {
+void spaceDye(CurveSet& set, const std::vector<size_t>& anchor, const SceneOptions& o,
+              const std::vector<Rgb>& colours) {
     const double stretch = *o.dyeLength * o.radius;
-    const std::vector<Rgb> colours = o.fiberColours();
     for (size_t c = 0; c < set.curves.size(); ++c) {
         Curve& curve = set.curves[c];
         std::vector<double> arc(curve.points.size(), 0.0);
@@ -140,9 +140,10 @@ void spaceDye(CurveSet& set, const std::vector<size_t>& anchor, const SceneOptio
 }
 
 GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera,
-                        const SceneOptions& o) {
+                        const SceneOptions& o, const SceneColours& colours) {
     GeneratedScene g;
     g.endMargin = curves.margin;
+    g.colourWarnings = colours.neuralWarnings;
     render::SceneDesc& s = g.scene;
     s.camera = camera;
     s.film = {o.width, o.height};
@@ -155,7 +156,7 @@ GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera
     yarn.model = absolutePath(o.model);
     if (o.dyeLength) {
         // Space-dyed: one entry, a colour per curve point.
-        spaceDye(curves.set, curves.anchor, o);
+        spaceDye(curves.set, curves.anchor, o, colours.fiber);
         yarn.vertexColours = kVertexColourFile;
         yarn.curves = yarnCurveFile(0, 1);
         s.yarns.push_back(yarn);
@@ -275,7 +276,7 @@ SceneKind parseSceneKind(const std::string& name) {
     throw InputError("unknown scene kind " + jsonString(name) + ": allowed closeup, weave, knit");
 }
 
-void SceneOptions::validate() const {
+SceneColours SceneOptions::validate() const {
     if (model.empty())
         throw InputError("--model is required: the MODEL.json written by `weft fit`");
     checkInt("--size", size, 1, kMaxPatchSize);
@@ -334,37 +335,32 @@ void SceneOptions::validate() const {
         throw InputError("--appearance: " + model +
                          " is fitted for one colour; colour by appearance needs a colour model "
                          "(models/MATERIAL-colour.json, or weft fit --colour-range)");
-    fiberColours();  // each --appearance within the material's reach
-}
-
-std::vector<std::string> SceneOptions::neuralColourWarnings() const {
-    std::vector<std::string> warnings;
-    if (colours.empty()) return warnings;
-    const YarnModel loaded = loadYarnModel(model);
+    SceneColours resolved;
+    if (!appearances.empty()) {
+        // Each --appearance within the material's reach.
+        const AppearanceTable table =
+            loaded.appearance ? *loaded.appearance : computeAppearanceTable(loaded, model);
+        for (const Rgb& srgb : appearances)
+            resolved.fiber.push_back(table.cTTFor(srgbToLinear(srgb), "--appearance"));
+        return resolved;
+    }
+    resolved.fiber = colours;
+    if (colours.empty()) return resolved;
     const std::string render = "weft render in neural mode (the default) will refuse this scene; ";
     if (!loaded.colour) {
-        warnings.push_back("--colours: " + model + " is fitted for one colour: " + render +
-                           "use a colour model (models/MATERIAL-colour.json, weft fit "
-                           "--colour-range) or render with --mode fiber or dual");
-        return warnings;
+        resolved.neuralWarnings.push_back(
+            "--colours: " + model + " is fitted for one colour: " + render +
+            "use a colour model (models/MATERIAL-colour.json, weft fit --colour-range) or render "
+            "with --mode fiber or dual");
+        return resolved;
     }
     for (const Rgb& c : colours) try {
             loaded.forColour(c, "--colours");
         } catch (const InputError& e) {
-            warnings.push_back(std::string(e.what()) + ": " + render + "or use --appearance");
+            resolved.neuralWarnings.push_back(std::string(e.what()) + ": " + render +
+                                              "or use --appearance");
         }
-    return warnings;
-}
-
-std::vector<Rgb> SceneOptions::fiberColours() const {
-    if (appearances.empty()) return colours;
-    const YarnModel loaded = loadYarnModel(model);
-    const AppearanceTable table =
-        loaded.appearance ? *loaded.appearance : computeAppearanceTable(loaded, model);
-    std::vector<Rgb> out;
-    for (const Rgb& srgb : appearances)
-        out.push_back(table.cTTFor(srgbToLinear(srgb), "--appearance"));
-    return out;
+    return resolved;
 }
 
 WeaveGeometry weaveGeometry(double radius) {
@@ -470,7 +466,7 @@ render::CameraDesc frameCover(double x0, double x1, double y0, double y1, const 
 }
 
 GeneratedScene closeupScene(const SceneOptions& o) {
-    o.validate();
+    const SceneColours colours = o.validate();
     checkFilmShape(SceneKind::Closeup, o);
     if (o.colourCount() == 2 && !o.dyeLength)
         throw InputError(
@@ -501,11 +497,11 @@ GeneratedScene closeupScene(const SceneOptions& o) {
     const render::CameraDesc camera =
         frameBox(padded(bounds(yarn(0, kWholeCurves).set), o.radius), kCloseupForward, kFovDeg, o.width, o.height,
                  kCloseupFill);
-    return assemble(extendEndsOutOfView(yarn, camera, o), camera, o);
+    return assemble(extendEndsOutOfView(yarn, camera, o), camera, o, colours);
 }
 
 GeneratedScene weaveScene(const SceneOptions& o) {
-    o.validate();
+    const SceneColours colours = o.validate();
     checkFilmShape(SceneKind::Weave, o);
     const WeaveGeometry g = weaveGeometry(o.radius);
     const double d = g.spacing, a = g.amplitude, k = kPi / d;
@@ -545,11 +541,11 @@ GeneratedScene weaveScene(const SceneOptions& o) {
     const double lo = -0.5 * d, hi = (n - 0.5) * d;
     const render::CameraDesc camera =
         frameCover(lo, hi, lo, hi, kPatchForward, kFovDeg, o.width, o.height);
-    return assemble(extendEndsOutOfView(weave, camera, o), camera, o);
+    return assemble(extendEndsOutOfView(weave, camera, o), camera, o, colours);
 }
 
 GeneratedScene knitScene(const SceneOptions& o) {
-    o.validate();
+    const SceneColours colours = o.validate();
     checkFilmShape(SceneKind::Knit, o);
     const KnitGeometry g = knitGeometry(o.radius);
     const int n = o.size;
@@ -575,7 +571,7 @@ GeneratedScene knitScene(const SceneOptions& o) {
     const render::CameraDesc camera =
         frameCover(0, kTwoPi * n * s, -0.5 * g.rowSpacing * s, (n - 0.5) * g.rowSpacing * s,
                    kPatchForward, kFovDeg, o.width, o.height);
-    return assemble(extendEndsOutOfView(knit, camera, o), camera, o);
+    return assemble(extendEndsOutOfView(knit, camera, o), camera, o, colours);
 }
 
 GeneratedScene generateScene(SceneKind kind, const SceneOptions& options) {

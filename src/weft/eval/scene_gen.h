@@ -80,6 +80,17 @@ inline constexpr int kDefaultStripe = 2;
 // The vertex colour file of a space-dyed scene.
 inline constexpr const char* kVertexColourFile = "colours.txt";
 
+// The yarns' colours as SceneOptions::validate() resolves them.
+struct SceneColours {
+    // The fiber colours C_TT: --colours, or the C_TT of each --appearance
+    // (the model's appearance table).
+    std::vector<Rgb> fiber;
+    // What a neural render of the scene would refuse about --colours (a
+    // model of one colour, a colour outside the model's colour range): the
+    // warnings weft scene prints (fiber and dual mode take any colour).
+    std::vector<std::string> neuralWarnings;
+};
+
 struct SceneOptions {
     std::string model;         // --model: MODEL.json from `weft fit`; must exist and load
     int size = 6;              // --size N: weave N x N yarns, knit N courses x N loops; [1, 100]
@@ -103,19 +114,12 @@ struct SceneOptions {
     std::optional<double> dyeLength;
 
     // Range checks and the flags' combinations, then the model is loaded
-    // (loadYarnModel) and the envmap checked for its extension and
+    // (loadYarnModel, once) and the envmap checked for its extension and
     // readability; --appearance needs a colour model and each colour within
-    // its reach; InputError naming the flag.
-    void validate() const;
-    // What a neural render of the scene would refuse about --colours (a
-    // model of one colour, a colour outside the model's colour range): the
-    // warnings weft scene prints (fiber and dual mode take any colour).
-    std::vector<std::string> neuralColourWarnings() const;
+    // its reach; InputError naming the flag. Returns the yarns' colours.
+    SceneColours validate() const;
     // The number of colours given (--colours or --appearance): 0, 1 or 2.
     size_t colourCount() const { return std::max(colours.size(), appearances.size()); }
-    // The fiber colours C_TT of the yarns: --colours, or the C_TT of each
-    // --appearance (the model's appearance table).
-    std::vector<Rgb> fiberColours() const;
     int stripeWidth() const { return stripe.value_or(kDefaultStripe); }
 };
 
@@ -132,6 +136,8 @@ struct GeneratedScene {
     // (radii for the close-up, yarns and spacings for the weave, courses and
     // loops for the knit; docs/scenes.md), in [0, kMaxEndMargin].
     int endMargin = 0;
+    // SceneColours::neuralWarnings of the options it was made with.
+    std::vector<std::string> colourWarnings;
 };
 
 // "yarns.txt" for a scene with one yarn entry, else "yarns-1.txt", "yarns-2.txt", ...

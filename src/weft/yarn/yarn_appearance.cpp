@@ -6,6 +6,8 @@
 #include <cmath>
 
 #include "weft/core/error.h"
+#include "weft/core/image.h"
+#include "weft/core/json_message.h"
 #include "weft/core/math.h"
 #include "weft/core/quadrature.h"
 #include "weft/yarn/yarn_integrals.h"
@@ -110,6 +112,50 @@ AppearanceTable computeAppearanceTable(const YarnModel& conditioned, const std::
     if (largestAdjustment) *largestAdjustment = adjusted;
     table.validate(source + ": its appearance");
     return table;
+}
+
+nlohmann::json appearanceReport(const YarnModel& model, const std::string& source,
+                                const std::optional<Rgb>& srgbAppearance,
+                                const std::optional<Rgb>& cTT, const std::string& appearanceField,
+                                const std::string& cTTField) {
+    if (srgbAppearance && cTT)
+        throw InputError(appearanceField + " and " + cTTField + ": give one of them, not both");
+    if (!model.colour)
+        throw InputError(source +
+                         ": fitted for one colour; an appearance needs a colour model "
+                         "(models/MATERIAL-colour.json, or weft fit --colour-range)");
+    const AppearanceTable table =
+        model.appearance ? *model.appearance : computeAppearanceTable(model, source);
+    const ColourRange& range = model.colour->range();
+    Rgb darkest, brightest;
+    for (int c = 0; c < 3; ++c) darkest[c] = table.darkest(c), brightest[c] = table.brightest(c);
+    nlohmann::json report = {
+        {"model", source},
+        {"c_tt_range", {range.lo, range.hi}},
+        {"table", model.appearance ? "stored" : "computed"},
+        {"darkest", {{"linear", rgbJson(darkest)}, {"srgb", rgbJson(linearToSrgb(darkest))}}},
+        {"brightest",
+         {{"linear", rgbJson(brightest)}, {"srgb", rgbJson(linearToSrgb(brightest))}}}};
+    if (!srgbAppearance && !cTT) return report;
+    Rgb fiber;
+    if (srgbAppearance) {
+        const Rgb linear = srgbToLinear(*srgbAppearance);
+        fiber = table.cTTFor(linear, appearanceField);
+        report["appearance"] = {{"srgb", rgbJson(*srgbAppearance)}, {"linear", rgbJson(linear)}};
+    } else {
+        fiber = *cTT;
+    }
+    // forColour refuses a C_TT outside the colour range.
+    const YarnModel one = model.forColour(fiber, srgbAppearance ? appearanceField : cTTField);
+    if (cTT) {
+        const Rgb linear = table.appearanceAt(fiber);
+        report["appearance"] = {{"srgb", rgbJson(linearToSrgb(linear))},
+                                {"linear", rgbJson(linear)}};
+    }
+    report["c_tt"] = rgbJson(fiber);
+    const YarnBsdf bsdf(one, source, YarnBsdfOptions{true, YarnSampling::Cosine});
+    report["appearance_direct"] = rgbJson(yarnAppearance(bsdf));
+    return report;
 }
 
 }  // namespace weft

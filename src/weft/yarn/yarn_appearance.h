@@ -26,6 +26,8 @@
 // of greys serves every colour (appearance_table.h).
 #pragma once
 
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "weft/core/rgb.h"
@@ -51,5 +53,19 @@ Rgb yarnAppearance(const YarnBsdf& bsdf, int refinement = 1);
 AppearanceTable computeAppearanceTable(const YarnModel& conditioned, const std::string& source,
                                        int nodes = AppearanceTable::kDefaultNodes,
                                        double* largestAdjustment = nullptr);
+
+// What weft yarn appearance prints (docs/cli.md): a colour model's reach
+// (its darkest and brightest appearance per channel, linear and sRGB) and,
+// given an sRGB appearance, the C_TT that gives it, or, given a C_TT, its
+// appearance; either with the appearance evaluated directly at that C_TT
+// (yarnAppearance, not the table) as a check. The table is the model's, or
+// computed for a model file older than version 4. InputError naming `source`
+// for a model of one colour, naming `appearanceField` for an appearance out
+// of reach and `cTTField` for a C_TT outside the colour range.
+nlohmann::json appearanceReport(const YarnModel& model, const std::string& source,
+                                const std::optional<Rgb>& srgbAppearance,
+                                const std::optional<Rgb>& cTT,
+                                const std::string& appearanceField = "--appearance",
+                                const std::string& cTTField = "--c-tt");
 
 }  // namespace weft

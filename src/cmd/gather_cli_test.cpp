@@ -336,6 +336,60 @@ TEST_F(GatherCliTest, AnyColourGatherRecoloursToAnyCTT) {
     for (const std::string& name : listing()) EXPECT_TRUE(name.rfind("bad", 0) != 0) << name;
 }
 
+// weft gather family (docs/family.md): two shards into one folder make the
+// family; each point is a gather folder the other commands read; bad options
+// are exit 2 naming them.
+TEST_F(GatherCliTest, FamilyShardsGatherTheYarnsOfTheBox) {
+    for (const char* shard : {"0/2", "1/2"}) {
+        const RunResult r = gather(std::string("family --points 3 --paths 400 --bins 3,8,6,12 "
+                                               "--seed 2 --quiet --out fam --shard ") +
+                                   shard);
+        ASSERT_EQ(r.status, 0) << r.err;
+        const nlohmann::json line = nlohmann::json::parse(r.out);
+        EXPECT_EQ(line.at("shard"), shard);
+        EXPECT_EQ(line.at("points_gathered"),
+                  line.at("end_point").get<int>() - line.at("first_point").get<int>());
+    }
+    const nlohmann::json family = nlohmann::json::parse(readFile(path("fam/family.json")));
+    ASSERT_EQ(family.at("yarns").size(), 3u);
+    for (const nlohmann::json& yarn : family.at("yarns")) {
+        const std::string folder = "fam/" + yarn.at("folder").get<std::string>();
+        const nlohmann::json m = meta(folder);
+        EXPECT_EQ(m.at("ply").at("fibers"), yarn.at("fibers"));
+        EXPECT_EQ(m.at("fiber").at("c_r"), yarn.at("c_r"));
+        EXPECT_TRUE(m.at("any_colour").get<bool>());
+        EXPECT_EQ(run("gather recolour " + folder + " --c-tt 0.4,0.5,0.6 --out " +
+                      yarn.at("folder").get<std::string>().substr(7))
+                      .status,
+                  0);
+    }
+    // A point is recorded for any colour: the fit asks for a recoloured gather.
+    writeText("tiny.json", R"({"t_net": {"steps": 20, "restarts": 1, "batch": 64},
+                               "m_net": {"hidden": [8], "steps": 20, "batch": 64}})");
+    expectUserError(run("fit --rdm fam/points/00001 --config tiny.json --out m.json --quiet"),
+                    {"fam/points/00001", "family gather", "weft gather recolour"});
+    // A rerun keeps every point.
+    const RunResult again = gather(
+        "family --points 3 --paths 400 --bins 3,8,6,12 --seed 2 "
+        "--quiet --out fam");
+    ASSERT_EQ(again.status, 0) << again.err;
+    EXPECT_EQ(nlohmann::json::parse(again.out).at("points_kept"), 3);
+    writeText("box.json", R"({"fibers": [300, 200], "density": [0.2, 0.4], "twist": [0, 0.3],
+        "beta_r_deg": [1, 8], "beta_tt_deg": [10, 28], "gamma_tt_deg": [19, 39], "c_r": [0, 1]})");
+    expectUserError(gather("family --box box.json --points 3 --paths 400 --out bad"),
+                    {"box.json", "fibers", "lo <= hi"});
+    writeText("box.json", R"({"fibers": [200, 300], "density": [0.2, 1.5], "twist": [0, 0.3],
+        "beta_r_deg": [1, 8], "beta_tt_deg": [10, 28], "gamma_tt_deg": [19, 39], "c_r": [0, 1]})");
+    expectUserError(gather("family --box box.json --points 3 --paths 400 --out bad"),
+                    {"box", "density", "(0, 1)"});
+    expectUserError(gather("family --points 0 --paths 400 --out bad"), {"--points", "[1, 65536]"});
+    expectUserError(gather("family --points 3 --paths 400 --shard 3/4 --out bad"), {"--shard"});
+    expectUserError(gather("family --points 3 --paths 400 --seed 9 --out fam"),
+                    {"fam/family.json", "another family"});
+    expectUserError(gather("family --points 3 --paths 400 --box missing.json --out bad"),
+                    {"missing.json"});
+}
+
 // ---------------------------------------------------------------------------
 // Hostile gather files (issue 41, items 3 and 9): each reproducer ends in exit
 // status 2, a message naming the file and the field or row, and nothing written.

@@ -8,6 +8,7 @@
 #include "weft/core/file.h"
 #include "weft/core/text_parse.h"
 #include "weft/gather/colour_paths.h"
+#include "weft/gather/family.h"
 #include "weft/gather/gather.h"
 #include "weft/gather/gather_merge.h"
 #include "weft/gather/rdm_image.h"
@@ -134,6 +135,42 @@ void runGatherRecolour(const RecolourCliOptions& c) {
     printGatherSummary(c.out, result);
 }
 
+struct FamilyCliOptions {
+    std::string box, bins = "11,45,15,30", shard, out;
+    int points = 0, maxDepth = 1000, threads = 0, segmentsPerTwist = 128;
+    int64_t paths = 0;
+    uint64_t seed = 0;
+    bool quiet = false;
+    CLI::Option* shardOpt = nullptr;
+};
+
+void runGatherFamily(const FamilyCliOptions& c) {
+    FamilyGatherOptions o;
+    if (!c.box.empty()) o.box = FamilyBox::fromJsonFile(c.box);
+    o.points = c.points;
+    o.pathsPerPoint = c.paths;
+    o.seed = c.seed;
+    o.bins = RdmBins::parse(c.bins);
+    o.maxDepth = c.maxDepth;
+    o.threads = c.threads;
+    o.segmentsPerTwist = c.segmentsPerTwist;
+    o.quiet = c.quiet;
+    if (c.shardOpt->count()) o.shard = Shard::parse(c.shard, "--shard");
+    o.validate();
+    checkOutputsSpareInputs({{"--box", c.box}}, {}, {}, {});
+    const FamilyGatherSummary s = gatherFamily(o, c.out);
+    nlohmann::json line = {{"out", c.out},
+                           {"points", o.points},
+                           {"shard", o.shard.toString()},
+                           {"first_point", o.shard.begin(o.points)},
+                           {"end_point", o.shard.end(o.points)},
+                           {"points_gathered", s.pointsGathered},
+                           {"points_kept", s.pointsKept},
+                           {"paths", s.paths},
+                           {"seconds", s.seconds}};
+    std::printf("%s\n", line.dump().c_str());
+}
+
 }  // namespace
 
 void addGatherCommand(CLI::App& app) {
@@ -189,9 +226,42 @@ void addGatherCommand(CLI::App& app) {
     recolour->add_option("--out", ro->out, "output gather directory (written atomically)")
         ->required();
     recolour->callback([ro] { runGatherRecolour(*ro); });
+    auto fo = std::make_shared<FamilyCliOptions>();
+    CLI::App* family = gather->add_subcommand(
+        "family",
+        "Gather the yarns of a family: --points plies spread over a box of yarn "
+        "parameters (fiber count, density, twist, the fiber's lobe widths and C_R), "
+        "each an any-colour gather of --paths walks in DIR/points/NNNNN "
+        "(docs/family.md)");
+    family->add_option("--box", fo->box,
+                       "BOX.json: {\"fibers\": [lo, hi], \"density\": [lo, hi], \"twist\": ..., "
+                       "\"beta_r_deg\", \"beta_tt_deg\", \"gamma_tt_deg\", \"c_r\"} (default: "
+                       "the box of docs/family.md, which holds the five presets)");
+    family->add_option("--points", fo->points, "yarns of the box, in [1, 65536]")->required();
+    family->add_option("--paths", fo->paths, "random walks per yarn, in [1, 2^31]")->required();
+    addSeedOption(*family, fo->seed, "random seed of the points and of every yarn's walks");
+    family->add_option("--bins", fo->bins, "each yarn's RDM resolution TI,PI,TO,PO")
+        ->default_val("11,45,15,30");
+    family->add_option("--max-depth", fo->maxDepth, "fiber interactions per path before truncation")
+        ->default_val(1000);
+    family->add_option("--threads", fo->threads, "worker threads (0: all cores)")->default_val(0);
+    family
+        ->add_option("--segments-per-twist", fo->segmentsPerTwist,
+                     "polyline segments per twist period of the traced fibers (>= 16)")
+        ->default_val(128);
+    fo->shardOpt = family->add_option(
+        "--shard", fo->shard,
+        "K/N: gather only shard K (0..N-1) of N of the points, into the same --out as the "
+        "other shards (docs/cluster.md)");
+    family->add_flag("--quiet", fo->quiet, "no progress output");
+    family
+        ->add_option("--out", fo->out,
+                     "family directory (created; points already gathered there are kept)")
+        ->required();
+    family->callback([fo] { runGatherFamily(*fo); });
     gather->require_subcommand(0, 1);
-    gather->callback([o, merge, recolour] {
-        if (!merge->parsed() && !recolour->parsed()) runGather(*o);
+    gather->callback([o, merge, recolour, family] {
+        if (!merge->parsed() && !recolour->parsed() && !family->parsed()) runGather(*o);
     });
 
     struct SliceOptions {

@@ -336,7 +336,10 @@ GatherResult gatherRdm(const GatherOptions& o) {
 }
 
 void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& out,
-                 const nlohmann::json& extraMeta) {
+                 const nlohmann::json& extraMeta, GatherFiles files) {
+    if (files == GatherFiles::Records && !o.anyColour)
+        throw std::logic_error("writeGather: only an any-colour gather has records of its own");
+    const bool all = files == GatherFiles::All;
     const auto file = [&](const char* name) {
         return (std::filesystem::path(out.path()) / name).string();
     };
@@ -345,14 +348,16 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
     writeNpy(file("count.npy"), r.count.data(), {ti, pi});
     writeNpy(file("count_t.npy"), r.countT.data(), {ti, pi});
     writeNpy(file("p_t.npy"), r.pT.data(), {ti, pi});
-    writeNpy(file("rdm_r.npy"), r.rdmR.data(), {ti, pi, to, po, 3});
-    writeNpy(file("rdm_m.npy"), r.rdmM.data(), {ti, pi, to, po, 3});
+    if (all) {
+        writeNpy(file("rdm_r.npy"), r.rdmR.data(), {ti, pi, to, po, 3});
+        writeNpy(file("rdm_m.npy"), r.rdmM.data(), {ti, pi, to, po, 3});
+    }
     writeNpy(file("truncated.npy"), r.truncated.data(), {ti, pi, 3});
     writeNpy(file("depth.npy"), r.depth.data(), {r.depth.size()});
     if (!r.exitDistance.empty())
         writeNpy(file("exit_distance.npy"), r.exitDistance.data(),
                  {static_cast<size_t>(kExitDistanceBins) + 1, 3});
-    writePlyLines(file("ply.txt"), r.plyLines, r.fiberRadius);
+    if (all) writePlyLines(file("ply.txt"), r.plyLines, r.fiberRadius);
     if (o.anyColour) writeColourPaths(out.path(), r.colourPaths);
     nlohmann::json meta = gatherMetadata(r, o);
     meta.update(extraMeta);

@@ -178,13 +178,19 @@ GatherResult gatherRdm(const GatherOptions& options);
 
 class TempDirCommit;
 
+// What writeGather writes: everything, or (a family's point, family.h) the
+// records an any-colour gather needs for any C_TT, without the RDM arrays of
+// one colour (rdm_r.npy, rdm_m.npy) and the traced fibers (ply.txt).
+enum class GatherFiles { All, Records };
+
 // Writes count.npy, count_t.npy, p_t.npy, rdm_r.npy, rdm_m.npy, truncated.npy,
 // depth.npy, ply.txt, the paths_*.npy of an any-colour gather and meta.json
 // (gatherMetadata updated with `extraMeta`) into the temporary directory and
 // renames it into place. Create `out` before gathering so that an
 // unwritable destination fails at once.
 void writeGather(const GatherResult& result, const GatherOptions& options, TempDirCommit& out,
-                 const nlohmann::json& extraMeta = nlohmann::json::object());
+                 const nlohmann::json& extraMeta = nlohmann::json::object(),
+                 GatherFiles files = GatherFiles::All);
 // ply.txt: the traced fiber centre lines as a curve file (core/curves.h).
 void writePlyLines(const std::string& path, const std::vector<std::vector<Vec3>>& lines,
                    double fiberRadius);

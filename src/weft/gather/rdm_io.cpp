@@ -15,6 +15,12 @@ namespace weft {
 
 RdmData loadRdm(const std::string& dir) {
     const GatherFolder f = readGatherFolder(dir, GatherFolderKind::Gather);
+    // A family's point records its walks for any C_TT only (gather/family.h).
+    if (f.meta.contains("family"))
+        throw InputError(dir +
+                         " is a point of a family gather: its walks are recorded for any "
+                         "C_TT, without the RDM arrays of one colour; weft gather recolour " +
+                         dir + " --c-tt R,G,B --out DIR writes its gather of one colour");
     checkDistinctFiles(f.files());
     RdmData d;
     d.dir = dir;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "weft/core/error.h"
+#include "weft/core/family_box.h"
 #include "weft/core/test_util.h"
 
 namespace weft {
@@ -36,6 +37,17 @@ TEST(MaterialPreset, FindReturnsThePresetOrListsTheNames) {
         [] { findMaterialPreset("wool"); },
         {"unknown preset \"wool\"", "(allowed: fleece, silk, polyester, cotton, gabardine)"});
     EXPECT_THROW(findMaterialPreset("Fleece"), InputError);  // names are case-sensitive
+}
+
+// The family box of issue 42 (docs/family.md) holds the five materials of the paper.
+TEST(MaterialPreset, TheDefaultFamilyBoxHoldsEveryPreset) {
+    const FamilyBox box;
+    for (const MaterialPreset& preset : materialPresets()) {
+        const YarnPoint p{preset.ply.fibers,     preset.ply.density,     preset.ply.twist,
+                          preset.fiber.betaRDeg, preset.fiber.betaTTDeg, preset.fiber.gammaTTDeg,
+                          preset.fiber.cR};
+        EXPECT_NO_THROW(box.check(p, std::string(preset.name))) << preset.name;
+    }
 }
 
 }  // namespace

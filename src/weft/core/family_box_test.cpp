@@ -1,0 +1,84 @@
+#include "weft/core/family_box.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "weft/core/test_util.h"
+
+namespace weft {
+namespace {
+
+using testing::expectInputError;
+
+// Fleece (paper Table 3): inside the default box.
+YarnPoint fleece() { return {300, 0.30, 0.24, 7.238, 10.000, 25.989, Rgb(0.040, 0.087, 0.087)}; }
+
+TEST(FamilyBox, ChecksNameTheFieldTheValueAndTheRange) {
+    const FamilyBox box;
+    YarnPoint p = fleece();
+    p.twist = 0.5;
+    expectInputError([&] { box.check(p, "scene.json: yarns[2].yarn"); },
+                     {"scene.json: yarns[2].yarn", "twist", "0.5", "[0, 0.3]"});
+    p = fleece();
+    p.cR.b = 1.5;
+    expectInputError([&] { box.check(p, "yarn"); }, {"c_r[2]", "1.5", "[0, 1]"});
+    p = fleece();
+    p.fibers = 100;
+    expectInputError([&] { box.check(p, "yarn"); }, {"fibers", "100", "[200, 600]"});
+}
+
+TEST(FamilyBox, JsonRoundTripAndStrictReading) {
+    FamilyBox box;
+    box.twist = {0.1, 0.2};
+    box.cR = {0.3, 0.3};
+    const FamilyBox back = FamilyBox::fromJson(box.toJson(), "box.json");
+    EXPECT_EQ(back.toJson(), box.toJson());
+    nlohmann::json j = box.toJson();
+    j["density"] = {0.4, 0.2};
+    expectInputError([&] { FamilyBox::fromJson(j, "box.json"); },
+                     {"box.json", "density", "lo <= hi"});
+    j = box.toJson();
+    j["fibers"] = {200.5, 300};
+    expectInputError([&] { FamilyBox::fromJson(j, "box.json"); }, {"fibers", "whole numbers"});
+    j = box.toJson();
+    j["beta_r_deg"] = {1, NAN};
+    expectInputError([&] { FamilyBox::fromJson(j, "box.json"); }, {"box.json", "beta_r_deg"});
+    j = box.toJson();
+    j["colour"] = {0, 1};
+    expectInputError([&] { FamilyBox::fromJson(j, "box.json"); }, {"colour"});
+    j = box.toJson();
+    j.erase("twist");
+    expectInputError([&] { FamilyBox::fromJson(j, "box.json"); }, {"twist"});
+    j = box.toJson();
+    j["twist"] = {0.1};
+    expectInputError([&] { FamilyBox::fromJson(j, "box.json"); }, {"twist", "[lo, hi]"});
+}
+
+// The points are spread like a low-discrepancy set, not like random ones: in
+// the base-3 dimension (density) 81 points fall one per stratum of 1/81 but
+// for the one point Halton index 81 moves (81 random points leave about 30
+// strata empty); every point lies in the box, and another seed moves them.
+TEST(FamilyPoints, SpreadOverTheBoxAndDependOnTheSeed) {
+    const FamilyBox box;
+    const std::vector<YarnPoint> points = familyPoints(box, 81, 7);
+    std::vector<int> perStratum(81, 0);
+    for (const YarnPoint& p : points) {
+        EXPECT_NO_THROW(box.check(p, "point"));
+        const double u = (p.density - box.density.lo) / (box.density.hi - box.density.lo);
+        ++perStratum[std::min(80, static_cast<int>(u * 81))];
+    }
+    int empty = 0;
+    for (int n : perStratum) {
+        EXPECT_LE(n, 2);
+        empty += n == 0;
+    }
+    EXPECT_LE(empty, 1);
+    EXPECT_EQ(familyPoints(box, 81, 7), points);
+    EXPECT_NE(familyPoints(box, 81, 8), points);
+    // The C_R channels are separate dimensions.
+    EXPECT_NE(points[3].cR.r, points[3].cR.g);
+}
+
+}  // namespace
+}  // namespace weft

@@ -18,16 +18,48 @@ namespace weft::cmd {
 
 namespace {
 
+// The options of the walks that weft gather and weft gather family share.
+struct WalkCliOptions {
+    std::string bins, shard;
+    int maxDepth = 1000, threads = 0, segmentsPerTwist = 128;
+    bool quiet = false;
+    CLI::Option* shardOpt = nullptr;
+
+    void add(CLI::App& cmd, const std::string& defaultBins, const std::string& binsHelp,
+             const std::string& shardHelp) {
+        bins = defaultBins;
+        cmd.add_option("--bins", bins, binsHelp)->default_val(defaultBins);
+        cmd.add_option("--max-depth", maxDepth, "fiber interactions per path before truncation")
+            ->default_val(1000);
+        cmd.add_option("--threads", threads, "worker threads (0: all cores)")->default_val(0);
+        cmd.add_option("--segments-per-twist", segmentsPerTwist,
+                       "polyline segments per twist period of the traced fibers (>= 16)")
+            ->default_val(128);
+        shardOpt = cmd.add_option("--shard", shard, shardHelp);
+        cmd.add_flag("--quiet", quiet, "no progress output");
+    }
+    // Into GatherOptions or FamilyGatherOptions (the same fields).
+    template <typename Options>
+    void applyTo(Options& o) const {
+        o.bins = RdmBins::parse(bins);
+        o.maxDepth = maxDepth;
+        o.threads = threads;
+        o.segmentsPerTwist = segmentsPerTwist;
+        o.quiet = quiet;
+        if (shardOpt->count()) o.shard = Shard::parse(shard, "--shard");
+    }
+};
+
 struct GatherCliOptions {
     MaterialOptions material;
     PlyGeometryOptions geometry;
+    WalkCliOptions walks;
     int64_t paths = 0;
     uint64_t seed = 0, plySeed = 0;
     CLI::Option* plySeedOpt = nullptr;
-    std::string bins = "22,90,45,90", out, shard;
-    CLI::Option *pathsOpt = nullptr, *shardOpt = nullptr;
-    int maxDepth = 1000, threads = 0, segmentsPerTwist = 128;
-    bool quiet = false, anyColour = false;
+    std::string out;
+    CLI::Option* pathsOpt = nullptr;
+    bool anyColour = false;
 };
 
 // The one-line JSON summary of a gather or a merge.
@@ -73,18 +105,13 @@ void runGather(const GatherCliOptions& c) {
     o.paths = c.paths;
     o.seed = c.seed;
     if (c.plySeedOpt->count()) o.plySeed = c.plySeed;
-    o.bins = RdmBins::parse(c.bins);
-    o.maxDepth = c.maxDepth;
-    o.threads = c.threads;
-    o.segmentsPerTwist = c.segmentsPerTwist;
-    o.quiet = c.quiet;
+    c.walks.applyTo(o);
     o.anyColour = c.anyColour;
-    if (c.shardOpt->count()) o.shard = Shard::parse(c.shard, "--shard");
     o.validate();
     checkOutputsSpareInputs({{"--params", c.material.paramsFile}}, {}, {}, {{"--out", c.out}});
     // Before the (long) gather: a bad destination fails now, not after it.
     TempDirCommit out(c.out);
-    if (c.shardOpt->count()) {
+    if (c.walks.shardOpt->count()) {
         // A part for `weft gather merge` (gather_merge.h), even for 0/1.
         const GatherSums sums = gatherSums(o);
         writeGatherPart(sums, o, out);
@@ -136,12 +163,11 @@ void runGatherRecolour(const RecolourCliOptions& c) {
 }
 
 struct FamilyCliOptions {
-    std::string box, bins = "11,45,15,30", shard, out;
-    int points = 0, maxDepth = 1000, threads = 0, segmentsPerTwist = 128;
+    WalkCliOptions walks;
+    std::string box, out;
+    int points = 0;
     int64_t paths = 0;
     uint64_t seed = 0;
-    bool quiet = false;
-    CLI::Option* shardOpt = nullptr;
 };
 
 void runGatherFamily(const FamilyCliOptions& c) {
@@ -150,12 +176,7 @@ void runGatherFamily(const FamilyCliOptions& c) {
     o.points = c.points;
     o.pathsPerPoint = c.paths;
     o.seed = c.seed;
-    o.bins = RdmBins::parse(c.bins);
-    o.maxDepth = c.maxDepth;
-    o.threads = c.threads;
-    o.segmentsPerTwist = c.segmentsPerTwist;
-    o.quiet = c.quiet;
-    if (c.shardOpt->count()) o.shard = Shard::parse(c.shard, "--shard");
+    c.walks.applyTo(o);
     o.validate();
     checkOutputsSpareInputs({{"--box", c.box}}, {}, {}, {});
     const FamilyGatherSummary s = gatherFamily(o, c.out);
@@ -188,23 +209,14 @@ void addGatherCommand(CLI::App& app) {
                                   "random seed of the fiber placement only (default: --seed); "
                                   "fix it to compare walks on one ply",
                                   "--ply-seed");
-    gather->add_option("--bins", o->bins, "RDM resolution TI,PI,TO,PO (theta_i, phi_i, theta_o, phi_o)")
-        ->default_val("22,90,45,90");
-    gather->add_option("--max-depth", o->maxDepth, "fiber interactions per path before truncation")
-        ->default_val(1000);
-    gather->add_option("--threads", o->threads, "worker threads (0: all cores)")->default_val(0);
-    gather->add_option("--segments-per-twist", o->segmentsPerTwist,
-                       "polyline segments per twist period of the traced fibers (>= 16)")
-        ->default_val(128);
-    o->shardOpt = gather->add_option(
-        "--shard", o->shard,
-        "K/N: walk only shard K (0..N-1) of N, paths [K P/N, (K+1) P/N), and write a part "
-        "for weft gather merge (docs/cluster.md)");
+    o->walks.add(*gather, "22,90,45,90",
+                 "RDM resolution TI,PI,TO,PO (theta_i, phi_i, theta_o, phi_o)",
+                 "K/N: walk only shard K (0..N-1) of N, paths [K P/N, (K+1) P/N), and write a "
+                 "part for weft gather merge (docs/cluster.md)");
     gather->add_flag("--any-colour", o->anyColour,
                      "choose fiber lobes independently of C_TT and record every path (25 bytes "
                      "each), so that weft gather recolour gives the RDM of any C_TT "
                      "(docs/gather.md)");
-    gather->add_flag("--quiet", o->quiet, "no progress output");
     gather->add_option("--out", o->out, "output directory (written atomically; required)");
 
     auto mo = std::make_shared<MergeCliOptions>();
@@ -240,20 +252,9 @@ void addGatherCommand(CLI::App& app) {
     family->add_option("--points", fo->points, "yarns of the box, in [1, 65536]")->required();
     family->add_option("--paths", fo->paths, "random walks per yarn, in [1, 2^31]")->required();
     addSeedOption(*family, fo->seed, "random seed of the points and of every yarn's walks");
-    family->add_option("--bins", fo->bins, "each yarn's RDM resolution TI,PI,TO,PO")
-        ->default_val("11,45,15,30");
-    family->add_option("--max-depth", fo->maxDepth, "fiber interactions per path before truncation")
-        ->default_val(1000);
-    family->add_option("--threads", fo->threads, "worker threads (0: all cores)")->default_val(0);
-    family
-        ->add_option("--segments-per-twist", fo->segmentsPerTwist,
-                     "polyline segments per twist period of the traced fibers (>= 16)")
-        ->default_val(128);
-    fo->shardOpt = family->add_option(
-        "--shard", fo->shard,
-        "K/N: gather only shard K (0..N-1) of N of the points, into the same --out as the "
-        "other shards (docs/cluster.md)");
-    family->add_flag("--quiet", fo->quiet, "no progress output");
+    fo->walks.add(*family, "11,45,15,30", "each yarn's RDM resolution TI,PI,TO,PO",
+                  "K/N: gather only shard K (0..N-1) of N of the points, into the same --out as "
+                  "the other shards (docs/cluster.md)");
     family
         ->add_option("--out", fo->out,
                      "family directory (created; points already gathered there are kept)")

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
 #include "weft/core/error.h"
 #include "weft/core/math.h"
@@ -37,6 +38,9 @@ YarnBsdf bsdfOf(const Rgb& cTT) {
 // eval / pdf), T samples counted out of both; A = E[weight of R, M] /
 // E[1 - P(T)], each term's estimate independent of the quadrature's nodes.
 TEST(YarnAppearance, QuadratureAgreesWithAMonteCarloEstimate) {
+    if (testing::sampleScale() < 1)
+        GTEST_SKIP() << "minutes under the sanitizers: the Release run checks the quadrature, "
+                        "and TheColourFoundLooksAsAsked runs the same code here";
     const YarnBsdf bsdf(colourModel().forColour(Rgb(0.9, 0.6, 0.35), "test"), "test");
     const Rgb quadrature = yarnAppearance(bsdf);
     Rng rng(11, 3);
@@ -62,6 +66,10 @@ TEST(YarnAppearance, QuadratureAgreesWithAMonteCarloEstimate) {
 // Channel c depends on C_TT,c alone: a colour's appearance is each channel's
 // grey's, which is what lets a table of greys serve every colour.
 TEST(YarnAppearance, EachChannelDependsOnItsOwnColourAlone) {
+    if (testing::sampleScale() < 1)
+        GTEST_SKIP() << "three appearance integrals take minutes under the sanitizers: the "
+                        "Release run checks this, and TheColourFoundLooksAsAsked runs the same "
+                        "code here";
     // y differs from x in green only, z in red and blue only: x's red and
     // blue must equal y's, and x's green z's.
     const Rgb x = yarnAppearance(bsdfOf(Rgb(0.95, 0.6, 0.3)));
@@ -96,7 +104,11 @@ TEST(YarnAppearance, StoredTableMatchesTheModel) {
     const double pooled =
         colourModel().fit.at("colour").at("appearance").at("monotone_adjustment").get<double>();
     EXPECT_LT(pooled, 0.01);
-    for (const size_t node : {size_t(0), stored.cTT.size() / 3}) {
+    // The first node, and one a third of the way up but under the sanitizers
+    // (where one appearance integral takes about a minute).
+    std::vector<size_t> nodes = {0};
+    if (testing::sampleScale() == 1) nodes.push_back(stored.cTT.size() / 3);
+    for (const size_t node : nodes) {
         const Rgb direct = yarnAppearance(bsdfOf(Rgb(stored.cTT[node])));
         for (int c = 0; c < 3; ++c)
             EXPECT_NEAR(direct[c], stored.appearance[node][c], pooled + 1e-6) << node << " " << c;
@@ -163,7 +175,10 @@ TEST(YarnAppearance, ModelFileKeepsTheTableAndChecksItsSpan) {
 // does (two fits from two gathers of the same ply: an independent check of
 // the conditioned fit and its calibration by colour).
 TEST(YarnAppearance, ShippedColourModelsLookLikeTheirDedicatedModels) {
-    for (const char* name : {"fleece", "gabardine", "cotton", "polyester"}) {
+    // Fleece alone under the sanitizers (about a minute per material there).
+    std::vector<const char*> names = {"fleece"};
+    if (testing::sampleScale() == 1) names.insert(names.end(), {"gabardine", "cotton", "polyester"});
+    for (const char* name : names) {
         const std::string dir = std::string(WEFT_SOURCE_DIR) + "/models/";
         const YarnModel colour = loadYarnModel(dir + name + "-colour.json");
         const YarnModel dedicated = loadYarnModel(dir + name + ".json");

@@ -12,7 +12,7 @@ GATHER_ARRAYS = ["count", "count_t", "p_t", "rdm_r", "rdm_m", "truncated", "dept
 WALK_ARRAYS = GATHER_ARRAYS + ["exit_distance"]
 # A fit that trains for a few hundred steps (as src/cmd/fit_cli_test.cpp).
 SHORT_FIT = {"t_net": {"steps": 200, "restarts": 2, "batch": 64},
-             "m_net": {"hidden": [8, 8], "steps": 200, "batch": 64}}
+             "m_net": {"hidden": [8, 8], "steps": 200, "batch": 64}, "appearance_nodes": 9}
 
 
 def test_gather_matches_cli_and_fit_runs(cli, tmp_path):
@@ -178,7 +178,7 @@ def test_colour_range_fit(tmp_path):
     # Version 3: its energy calibration is by colour, one per node colour.
     model = json.load(open(tmp_path / "any.json"))
     assert model["version"] == 4  # with its appearance table (docs/colour.md)
-    assert len(model["appearance"]["c_tt"]) == 49
+    assert len(model["appearance"]["c_tt"]) == 9  # SHORT_FIT's appearance_nodes
     assert len(model["energy_calibration"]["c_tt"]) == len(colour["energy_calibration"]["nodes"]) == 7
     with pytest.raises(ValueError, match="colour_range"):
         weft.fit(tmp_path / "ac", config=SHORT_FIT, colour_range=(0.5, 0.4))

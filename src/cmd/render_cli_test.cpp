@@ -358,7 +358,7 @@ TEST_F(RenderCliTest, YarnColourInEveryMode) {
     // A conditioned model: without a colour it renders its gathered colour,
     // which "colour" then reproduces exactly.
     writeFileAtomic(path("short.json"), R"({"t_net": {"steps": 100, "batch": 64},
-        "m_net": {"hidden": [8, 8], "steps": 100, "batch": 64}})");
+        "m_net": {"hidden": [8, 8], "steps": 100, "batch": 64}, "appearance_nodes": 5})");
     ASSERT_EQ(run("gather --preset fleece --paths 3000 --bins 4,8,6,12 --any-colour --quiet "
                   "--out ac")
                   .status,

@@ -72,14 +72,13 @@ void finishFit(YarnModel& model, const RdmData& rdm, const FitConfig& config, in
 
 // 6. A colour model's appearance table (yarn_appearance.h), which a scene's
 // "appearance" inverts to a C_TT; its seconds go into `colourRecord`.
-void tabulateAppearance(YarnModel& model, int threads, bool quiet, nlohmann::json& colourRecord) {
+void tabulateAppearance(YarnModel& model, int nodes, int threads, bool quiet,
+                        nlohmann::json& colourRecord) {
     const auto start = Clock::now();
     tbb::task_arena arena(threads);
     double adjusted = 0;
-    arena.execute([&] {
-        model.appearance =
-            computeAppearanceTable(model, "fit", AppearanceTable::kDefaultNodes, &adjusted);
-    });
+    arena.execute(
+        [&] { model.appearance = computeAppearanceTable(model, "fit", nodes, &adjusted); });
     const double seconds = secondsSince(start);
     colourRecord["appearance"] = {{"nodes", model.appearance->cTT.size()},
                                   {"monotone_adjustment", adjusted},
@@ -302,7 +301,7 @@ FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_
         YarnModel own = model.forColour(model.ownColourInRange(), "fit");
         finishFit(own, rdm, oneColour, threads, quiet, rFit, mFit, report);
         model.sampling = own.sampling;
-        tabulateAppearance(model, threads, quiet, report.colour);
+        tabulateAppearance(model, config.appearanceNodes, threads, quiet, report.colour);
     } else {
         // 4-5. Energy calibration and sampling lobe.
         finishFit(model, rdm, config, threads, quiet, rFit, mFit, report);
@@ -389,7 +388,7 @@ FitResult recalibrateConditioned(const YarnModel& fitted, const RdmData& rdm,
     model.sampling = own.sampling;
     report.colour = fitted.fit.value("colour", nlohmann::json::object());
     report.colour["energy_calibration"] = colourCalibrationRecord(model.colourCalibration, nodes);
-    tabulateAppearance(model, threads, quiet, report.colour);
+    tabulateAppearance(model, config.appearanceNodes, threads, quiet, report.colour);
     report.seconds = secondsSince(t0);
     nlohmann::json record = fitted.fit;
     record["colour"] = report.colour;

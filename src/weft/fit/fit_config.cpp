@@ -43,7 +43,8 @@ NetworkTraining trainingFromJson(JsonObjectReader r, NetworkTraining t) {
 
 FitConfig FitConfig::fromJson(const nlohmann::json& j, const std::string& source) {
     JsonObjectReader r(j, source);
-    r.allowKeys({"t_net", "m_net", "jitter", "masking", "threads", "energy_calibration_degree"});
+    r.allowKeys({"t_net", "m_net", "jitter", "masking", "threads", "energy_calibration_degree",
+                 "appearance_nodes"});
     FitConfig c;
     if (r.has("t_net")) c.t = trainingFromJson(r.object("t_net"), c.t);
     if (r.has("m_net")) c.m = trainingFromJson(r.object("m_net"), c.m);
@@ -52,6 +53,9 @@ FitConfig FitConfig::fromJson(const nlohmann::json& j, const std::string& source
     if (r.has("energy_calibration_degree"))
         c.calibrationDegree = static_cast<int>(r.integer(
             "energy_calibration_degree", {-1, EnergyCalibration::kMaxDegree, "(-1: off)"}));
+    if (r.has("appearance_nodes"))
+        c.appearanceNodes =
+            static_cast<int>(r.integer("appearance_nodes", {2, AppearanceTable::kMaxNodes}));
     if (r.has("threads"))
         c.threads = static_cast<int>(r.integer("threads", {0, 1024, "(0: all cores)"}));
     c.validate(source);
@@ -75,6 +79,7 @@ nlohmann::json FitConfig::toJson() const {
             {"jitter", jitter},
             {"masking", masking},
             {"energy_calibration_degree", calibrationDegree},
+            {"appearance_nodes", appearanceNodes},
             {"threads", threads}};
 }
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "weft/fit/mlp.h"
+#include "weft/yarn/appearance_table.h"
 
 namespace weft {
 
@@ -31,6 +32,8 @@ struct FitConfig {
     bool jitter = true;     // train on random directions inside the bins (else bin centres)
     bool masking = true;    // fit the R masking term (else plain eq. 8)
     int calibrationDegree = 8;  // energy calibration polynomial degree; -1: none
+    // A colour model's appearance table: greys over the colour range (step 6).
+    int appearanceNodes = AppearanceTable::kDefaultNodes;
     int threads = 0;        // 0: all cores; never changes the result
 
     // Strict reading (unknown keys are errors naming the key); missing keys

@@ -30,7 +30,7 @@ TEST(FitConfig, DefaultsRoundTripAndStrictKeys) {
     EXPECT_EQ(partial.m.steps, defaults.m.steps);
     expectConfigError({{"epochs", 3}},
                       "fit.json: unknown key \"epochs\" (allowed: t_net, m_net, jitter, masking, "
-                      "threads, energy_calibration_degree)");
+                      "threads, energy_calibration_degree, appearance_nodes)");
     expectConfigError(
         {{"t_net", {{"epoch", 3}}}},
         "fit.json: t_net: unknown key \"epoch\" (allowed: hidden, steps, restarts, batch, "
@@ -62,6 +62,8 @@ TEST(FitConfig, DefaultsRoundTripAndStrictKeys) {
         {{"energy_calibration_degree", -2}},
         "fit.json: energy_calibration_degree = -2 is out of range: allowed [-1, 12] (-1: "
         "off)");
+    expectConfigError({{"appearance_nodes", 1}},
+                      "fit.json: appearance_nodes = 1 is out of range: allowed [2, 257]");
     expectConfigError(nlohmann::json::array(), "fit.json: expected an object, got an array of 0");
 }
 

@@ -144,8 +144,9 @@ AppearanceTable AppearanceTable::fromJson(const nlohmann::json& j, const std::st
     const nlohmann::json& c = r.value("c_tt");
     const nlohmann::json& rgb = r.value("rgb");
     if (!c.is_array() || !rgb.is_array() || c.size() != rgb.size() || c.size() < 2 ||
-        c.size() > 257)
-        r.fail("expected \"c_tt\" and \"rgb\" arrays of the same length, 2 to 257");
+        c.size() > static_cast<size_t>(kMaxNodes))
+        r.fail("expected \"c_tt\" and \"rgb\" arrays of the same length, 2 to " +
+               std::to_string(kMaxNodes));
     AppearanceTable table;
     for (size_t i = 0; i < c.size(); ++i) {
         table.cTT.push_back(readJsonNumber(c[i], source, jsonIndexPath(r.pathOf("c_tt"), i),

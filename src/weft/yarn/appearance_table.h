@@ -22,6 +22,7 @@ namespace weft {
 // A conditioned model's appearance at greys across its colour range.
 struct AppearanceTable {
     static constexpr int kDefaultNodes = 49;  // 8 per interval of the fit's 7 calibration nodes
+    static constexpr int kMaxNodes = 257;     // the most a model file may hold
     // The largest appearance a file may hold: 1 for a lossless yarn, and a
     // fitted model's own error may put a channel a little above.
     static constexpr double kMaxAppearance = 1.1;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "weft/core/json_file.h"
+#include "weft/core/test_util.h"
 #include "weft/yarn/yarn_bsdf.h"
 
 namespace weft {
@@ -27,7 +28,10 @@ TEST(YarnBsdfValues, ShippedModelsEvaluateAsBefore) {
     const nlohmann::json saved =
         readJsonFile(std::string(WEFT_SOURCE_DIR) + "/tests/data/yarn-bsdf-values.json");
     ASSERT_EQ(saved.size(), 7u);
+    int index = 0;
     for (const auto& [file, values] : saved.items()) {
+        // Every third model under the (slow) sanitizers: each builds its tables.
+        if (testing::sampleScale() < 1 && index++ % 3 != 0) continue;
         SCOPED_TRACE(file);
         const YarnBsdf bsdf = YarnBsdf::load(modelPath(file));
         for (const nlohmann::json& row : values.at("pairs")) {

@@ -21,10 +21,11 @@ using testing::expectUserError;
 using testing::RunResult;
 
 // A fit that trains for a few hundred steps: enough to exercise every stage.
-// 9 appearance nodes: the default 49 took most of a colour fit's time here.
+// 3 appearance nodes: the default 49 took most of a colour fit's time here
+// (minutes under the sanitizers).
 const char* const kShortConfig =
     R"({"t_net": {"steps": 200, "restarts": 2, "batch": 64},
-        "m_net": {"hidden": [8, 8], "steps": 200, "batch": 64}, "appearance_nodes": 9})";
+        "m_net": {"hidden": [8, 8], "steps": 200, "batch": 64}, "appearance_nodes": 3})";
 
 class FitCliTest : public testing::CliTestBase {
 protected:
@@ -59,8 +60,8 @@ TEST_F(FitCliTest, ColourRangeFitsAModelForAnyColour) {
     // Version 4: with its appearance table (docs/colour.md, "Colour by appearance").
     EXPECT_EQ(nlohmann::json::parse(readFile(path("any.json"))).at("version"), 4);
     ASSERT_TRUE(model.appearance.has_value());
-    EXPECT_EQ(model.appearance->cTT.size(), 9u);
-    EXPECT_EQ(summary.at("colour").at("appearance").at("nodes"), 9);
+    EXPECT_EQ(model.appearance->cTT.size(), 3u);
+    EXPECT_EQ(summary.at("colour").at("appearance").at("nodes"), 3);
     EXPECT_EQ(summary.at("colour").at("energy_calibration").at("nodes").size(), 7u);
     // It renders, checks and makes scenes like any model (at its gathered colour).
     ASSERT_EQ(run("yarn check --model any.json --rdm ac --out check").status, 0);

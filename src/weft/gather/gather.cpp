@@ -361,6 +361,7 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
     if (o.anyColour) writeColourPaths(out.path(), r.colourPaths);
     nlohmann::json meta = gatherMetadata(r, o);
     meta.update(extraMeta);
+    if (!all) meta["files"] = kGatherRecordsOnly;
     writeFileAtomic(file("meta.json"), meta.dump(2) + "\n");
     out.commit();
 }

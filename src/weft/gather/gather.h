@@ -181,7 +181,9 @@ class TempDirCommit;
 // What writeGather writes: everything, or (a family's point, family.h) the
 // records an any-colour gather needs for any C_TT, without the RDM arrays of
 // one colour (rdm_r.npy, rdm_m.npy) and the traced fibers (ply.txt).
+// A gather of records says so in its meta.json: "files": kGatherRecordsOnly.
 enum class GatherFiles { All, Records };
+inline constexpr const char* kGatherRecordsOnly = "records";
 
 // Writes count.npy, count_t.npy, p_t.npy, rdm_r.npy, rdm_m.npy, truncated.npy,
 // depth.npy, ply.txt, the paths_*.npy of an any-colour gather and meta.json

@@ -69,6 +69,10 @@ int64_t GatherFolder::paths() const {
     return options.shard.end(options.paths) - options.shard.begin(options.paths);
 }
 
+bool GatherFolder::recordsOnly() const {
+    return meta.is_object() && meta.contains("files") && meta.at("files") == kGatherRecordsOnly;
+}
+
 std::vector<std::string> GatherFolder::files() const {
     std::vector<const char*> names = {"meta.json", "count.npy", "count_t.npy", "depth.npy",
                                       "ply.txt"};
@@ -178,9 +182,9 @@ void checkTracedPly(const GatherFolder& f, const GatherSums& traced) {
                              value.dump() + ": it was not traced on that ply");
     }
     const std::string plyPath = f.file("ply.txt");
-    // A family's point keeps no ply.txt (gather/family.h): the lines traced
-    // from its fields are the ply, and a recolouring writes them.
-    if (f.meta.contains("family") && !std::filesystem::exists(plyPath)) return;
+    // A gather of records keeps no ply.txt: the lines traced from its fields
+    // are the ply, and a recolouring writes them.
+    if (f.recordsOnly()) return;
     const std::string have = readFile(plyPath);
     const std::string want = formatPlyLines(traced.plyLines, traced.fiberRadius, plyPath);
     if (have == want) return;

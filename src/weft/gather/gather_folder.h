@@ -58,6 +58,9 @@ struct GatherFolder {
     int64_t paths() const;
     // The files a reader of this folder reads, for checkDistinctFiles.
     std::vector<std::string> files() const;
+    // Written with GatherFiles::Records (gather.h): an any-colour gather's
+    // records without the RDM arrays of one colour and ply.txt.
+    bool recordsOnly() const;
 };
 
 // InputError naming metaPath unless `meta` is a whole weft gather of format

@@ -15,11 +15,11 @@ namespace weft {
 
 RdmData loadRdm(const std::string& dir) {
     const GatherFolder f = readGatherFolder(dir, GatherFolderKind::Gather);
-    // A family's point records its walks for any C_TT only (gather/family.h).
-    if (f.meta.contains("family"))
+    // Records for any C_TT only (a point of a family gather, gather/family.h).
+    if (f.recordsOnly())
         throw InputError(dir +
-                         " is a point of a family gather: its walks are recorded for any "
-                         "C_TT, without the RDM arrays of one colour; weft gather recolour " +
+                         " holds an any-colour gather's records only (a point of a family "
+                         "gather), without the RDM arrays of one colour; weft gather recolour " +
                          dir + " --c-tt R,G,B --out DIR writes its gather of one colour");
     checkDistinctFiles(f.files());
     RdmData d;

@@ -44,6 +44,7 @@
 #include "weft/fiber/fiber_params.h"
 #include "weft/fit/fit.h"
 #include "weft/gather/colour_paths.h"
+#include "weft/gather/family.h"
 #include "weft/gather/gather.h"
 #include "weft/gather/gather_merge.h"
 #include "weft/gather/rdm_io.h"
@@ -512,6 +513,50 @@ Shard shardOf(const py::object& shard) {
 
 py::dict gatherDict(const GatherResult& r, const GatherOptions& o, const std::string& outPath);
 
+// The walk arguments gather() and gather_family() share, into GatherOptions
+// or FamilyGatherOptions (the same fields).
+template <typename Options>
+void walkArgs(Options& o, const py::object& bins, const py::object& maxDepth,
+              const py::object& threads, const py::object& segmentsPerTwist,
+              const py::object& shard) {
+    const py::sequence binCounts =
+        sequenceArg(bins, "bins", 4, "four counts (theta_i, phi_i, theta_o, phi_o)");
+    int counts[4];
+    for (size_t k = 0; k < 4; ++k)
+        counts[k] = intArg(binCounts[k], "bins[" + std::to_string(k) + "]", 1, 4096);
+    o.bins = {counts[0], counts[1], counts[2], counts[3]};
+    o.maxDepth = intArg(maxDepth, "max_depth", 1, 1000000);
+    o.threads = intArg(threads, "threads", 0, 1024);
+    o.segmentsPerTwist = intArg(segmentsPerTwist, "segments_per_twist", 16, 65536);
+    if (!shard.is_none()) o.shard = shardOf(shard);
+}
+
+py::object pyGatherFamily(const py::object& points, const py::object& paths, const py::object& out,
+                          const py::object& box, const py::object& seed, const py::object& bins,
+                          const py::object& maxDepth, const py::object& threads,
+                          const py::object& segmentsPerTwist, const py::object& shard, bool quiet) {
+    FamilyGatherOptions o;
+    o.points = intArg(points, "points", 1, kMaxFamilyPoints);
+    o.pathsPerPoint = integerArg<int64_t>(paths, "paths", 1, kMaxPaths);
+    o.seed = seedArg(seed, "seed");
+    walkArgs(o, bins, maxDepth, threads, segmentsPerTwist, shard);
+    // A dict in BOX.json's layout, or the path of one.
+    if (py::isinstance<py::dict>(box))
+        o.box =
+            readUserJson("box", [&] { return FamilyBox::fromJson(jsonFromPy(box, "box"), "box"); });
+    else if (!box.is_none())
+        o.box = FamilyBox::fromJsonFile(pathOf(box, "box"));
+    o.quiet = quiet;
+    o.validate();
+    const std::string dir = pathOf(out, "out");
+    json summary;
+    {
+        py::gil_scoped_release release;
+        summary = familyGatherSummaryJson(o, gatherFamily(o, dir), dir);
+    }
+    return pyFromJson(summary);
+}
+
 // A shard's integer sums (gather_merge.h's part files) and statistics.
 py::dict gatherPartDict(const GatherSums& s, const GatherOptions& o, const std::string& outPath) {
     const py::ssize_t ti = s.bins.thetaI, pi = s.bins.phiI, to = s.bins.thetaO, po = s.bins.phiO;
@@ -546,17 +591,8 @@ py::dict pyGather(const py::object& preset, const py::object& params, const py::
     o.paths = integerArg<int64_t>(paths, "paths", 1, kMaxPaths);
     o.seed = seedArg(seed, "seed");
     if (!plySeed.is_none()) o.plySeed = seedArg(plySeed, "ply_seed");
-    const py::sequence binCounts =
-        sequenceArg(bins, "bins", 4, "four counts (theta_i, phi_i, theta_o, phi_o)");
-    int counts[4];
-    for (size_t k = 0; k < 4; ++k)
-        counts[k] = intArg(binCounts[k], "bins[" + std::to_string(k) + "]", 1, 4096);
-    o.bins = {counts[0], counts[1], counts[2], counts[3]};
-    o.maxDepth = intArg(maxDepth, "max_depth", 1, 1000000);
-    o.threads = intArg(threads, "threads", 0, 1024);
-    o.segmentsPerTwist = intArg(segmentsPerTwist, "segments_per_twist", 16, 65536);
+    walkArgs(o, bins, maxDepth, threads, segmentsPerTwist, shard);
     const int fiberCount = fibers.is_none() ? 0 : intArg(fibers, "fibers", 1, kMaxPlyFibers);
-    if (!shard.is_none()) o.shard = shardOf(shard);
     const bool geometry = !fibers.is_none() || !density.is_none() || !twist.is_none();
     if (!preset.is_none()) {
         if (!params.is_none() || geometry)
@@ -1179,6 +1215,17 @@ PYBIND11_MODULE(weft, m) {
           "`weft gather recolour`: the gather of another fiber colour c_tt=(r, g, b) from a "
           "gather folder written with any_colour=True; returns gather()'s dict (stats has "
           "recoloured_from); out=DIR writes the gather folder.");
+
+    m.def("gather_family", &pyGatherFamily, py::kw_only(), py::arg("points"), py::arg("paths"),
+          py::arg("out"), py::arg("box") = py::none(), py::arg("seed") = 0,
+          py::arg("bins") = std::vector<int>{11, 45, 15, 30}, py::arg("max_depth") = 1000,
+          py::arg("threads") = 0, py::arg("segments_per_twist") = 128,
+          py::arg("shard") = py::none(), py::arg("quiet") = true,
+          "`weft gather family` (docs/family.md): the yarns of a family, points spread over a "
+          "box of yarn parameters (box: a dict in BOX.json's layout or its path; None: the "
+          "default box), each an any-colour gather of `paths` walks in out/points/NNNNN, and "
+          "out/family.json; shard=(k, n) gathers shard k of n of the points into the same out. "
+          "Returns the summary dict.");
 
     m.def("gather_merge", &gatherMerge, py::arg("parts"), py::kw_only(),
           py::arg("out") = py::none(),

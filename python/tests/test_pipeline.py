@@ -186,6 +186,36 @@ def test_colour_range_fit(tmp_path):
         weft.fit(tmp_path / "ac", config=SHORT_FIT, colour_range=(0.3, 0.9), colour_functions=1)
 
 
+def test_gather_family_matches_cli(cli, tmp_path):
+    args = dict(points=3, paths=300, seed=4, bins=(3, 8, 6, 12))
+    summary = weft.gather_family(out=tmp_path / "py", **args)
+    assert summary["points_gathered"] == 3 and summary["shard"] == "0/1"
+    cli("gather", "family", "--points", 3, "--paths", 300, "--seed", 4, "--bins", "3,8,6,12",
+        "--quiet", "--out", tmp_path / "cli")
+    assert (tmp_path / "py" / "family.json").read_bytes() == \
+        (tmp_path / "cli" / "family.json").read_bytes()
+    for k in range(3):
+        name = "points/%05d/paths_weight.npy" % k
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
+    # Shard 1 of 2 into the CLI's folder keeps what is there.
+    again = weft.gather_family(out=tmp_path / "cli", shard=(1, 2), **args)
+    assert again["points_kept"] == again["end_point"] - again["first_point"] == 2
+    box = {"fibers": [300, 300], "density": [0.3, 0.3], "twist": [0.24, 0.24],
+           "beta_r_deg": [7.238, 7.238], "beta_tt_deg": [10, 10], "gamma_tt_deg": [25.989, 25.989],
+           "c_r": [0.05, 0.05]}
+    one = weft.gather_family(out=tmp_path / "fixed", box=box, points=1, paths=300)
+    assert one["points_gathered"] == 1
+    family = json.loads((tmp_path / "fixed" / "family.json").read_text())
+    assert family["yarns"][0]["fibers"] == 300 and family["yarns"][0]["c_r"] == [0.05] * 3
+    with pytest.raises(ValueError, match="points"):
+        weft.gather_family(out=tmp_path / "bad", points=0, paths=300)
+    with pytest.raises(ValueError, match="density"):
+        weft.gather_family(out=tmp_path / "bad", points=1, paths=300,
+                           box=dict(box, density=[0.5, 0.4]))
+    with pytest.raises(ValueError, match="another family"):
+        weft.gather_family(out=tmp_path / "py", points=3, paths=300, seed=5, bins=(3, 8, 6, 12))
+
+
 def test_yarn_appearance_matches_cli_and_inverts(cli, root):
     model = root / "tests" / "data" / "fleece-colour-small.json"
     reach = weft.yarn_appearance(model)

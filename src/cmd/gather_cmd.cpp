@@ -180,15 +180,7 @@ void runGatherFamily(const FamilyCliOptions& c) {
     o.validate();
     checkOutputsSpareInputs({{"--box", c.box}}, {}, {}, {});
     const FamilyGatherSummary s = gatherFamily(o, c.out);
-    nlohmann::json line = {{"out", c.out},
-                           {"points", o.points},
-                           {"shard", o.shard.toString()},
-                           {"first_point", o.shard.begin(o.points)},
-                           {"end_point", o.shard.end(o.points)},
-                           {"points_gathered", s.pointsGathered},
-                           {"points_kept", s.pointsKept},
-                           {"paths", s.paths},
-                           {"seconds", s.seconds}};
+    const nlohmann::json line = familyGatherSummaryJson(o, s, c.out);
     std::printf("%s\n", line.dump().c_str());
 }
 

@@ -174,6 +174,19 @@ FamilyGatherSummary gatherFamily(const FamilyGatherOptions& options, const std::
     return summary;
 }
 
+nlohmann::json familyGatherSummaryJson(const FamilyGatherOptions& o, const FamilyGatherSummary& s,
+                                       const std::string& dir) {
+    return {{"out", dir},
+            {"points", o.points},
+            {"shard", o.shard.toString()},
+            {"first_point", o.shard.begin(o.points)},
+            {"end_point", o.shard.end(o.points)},
+            {"points_gathered", s.pointsGathered},
+            {"points_kept", s.pointsKept},
+            {"paths", s.paths},
+            {"seconds", s.seconds}};
+}
+
 std::string FamilyGather::pointDir(int k) const {
     return dir + "/" + FamilyGatherOptions::pointFolder(k);
 }

@@ -75,6 +75,12 @@ struct FamilyGatherSummary {
     double seconds = 0;
 };
 
+// The summary line of weft gather family (and the dict of weft.gather_family):
+// out, points, shard, first_point, end_point, points_gathered, points_kept,
+// paths, seconds.
+nlohmann::json familyGatherSummaryJson(const FamilyGatherOptions& options,
+                                       const FamilyGatherSummary& summary, const std::string& dir);
+
 // Gathers the points of options.shard into DIR (created if missing) and
 // writes DIR/family.json; keeps a point folder already there with the same
 // inputs and refuses (InputError naming it) one with other inputs.

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "weft/core/bsdf.h"
+#include "weft/core/family_box.h"
 #include "weft/core/npy.h"
 #include "weft/core/rng.h"
 #include "weft/fiber/fiber_params.h"
@@ -101,5 +102,9 @@ void addCompareCommand(CLI::App& app);
 void addSceneCommand(CLI::App& app);
 void addMontageCommand(CLI::App& app);
 void addCurvesCommands(CLI::App& app);
+
+// A yarn of a family (core/family_box.h) from a flag's value: inline JSON
+// (starting with "{") or a JSON file; InputError naming the flag or file.
+YarnPoint readYarnPointArgument(const std::string& text, const std::string& flag);
 
 }  // namespace weft::cmd

@@ -7,9 +7,11 @@
 #include <string>
 
 #include "commands.h"
-#include "weft/core/file.h"
 #include "weft/core/error.h"
+#include "weft/core/file.h"
+#include "weft/core/json_file.h"
 #include "weft/core/limits.h"
+#include "weft/fit/family_fit.h"
 #include "weft/fit/fit.h"
 #include "weft/gather/colour_paths.h"
 
@@ -129,6 +131,50 @@ void runFit(const FitCliOptions& c) {
     std::printf("%s\n", summary.dump().c_str());
 }
 
+struct FamilyFitCliOptions {
+    std::string gather, out, config, colourRange = "0.3,0.999";
+    uint64_t seed = 0;
+    int threads = -1, colourFunctions = 6;
+    bool quiet = false, printConfig = false;
+};
+
+void runFitFamily(const FamilyFitCliOptions& c) {
+    FamilyFitOptions options;
+    if (!c.config.empty()) {
+        // The family's defaults, then the file's keys over them.
+        nlohmann::json merged = options.config.toJson();
+        merged.merge_patch(readJsonFile(c.config));
+        options.config = FitConfig::fromJson(merged, c.config);
+    }
+    if (c.threads >= 0) options.config.threads = c.threads;
+    if (c.printConfig) {
+        std::printf("%s\n", options.config.toJson().dump(2).c_str());
+        return;
+    }
+    if (c.gather.empty() || c.out.empty())
+        throw InputError("weft fit family needs --gather DIR and --out FAMILY.json");
+    checkRange("--threads", options.config.threads, 0, 1024);
+    options.range = parseColourRange(c.colourRange, "--colour-range");
+    checkRange("--colour-functions =", c.colourFunctions, 2, ColourBasis::kMaxFunctions);
+    options.functions = c.colourFunctions;
+    options.seed = c.seed;
+    options.quiet = c.quiet;
+    checkOutputsSpareInputs({{"--config", c.config}}, {{"--out", c.out}}, {{"--gather", c.gather}},
+                            {});
+    requireParentDirectory(c.out, "--out");
+    const FamilyGather gather = loadFamilyGather(c.gather);
+    const FamilyFitResult fit = fitFamilyModel(gather, options);
+    saveFamilyModel(fit.model, c.out);
+    const nlohmann::json& r = fit.model.fit;
+    nlohmann::ordered_json summary = {{"out", c.out},
+                                      {"yarns", gather.points.size()},
+                                      {"t_rmse", r.at("t_rmse")},
+                                      {"masking", r.value("masking", nlohmann::json())},
+                                      {"seconds", r.at("seconds")},
+                                      {"m_samples_per_second", r.at("m_samples_per_second")}};
+    std::printf("%s\n", summary.dump().c_str());
+}
+
 }  // namespace
 
 void addFitCommand(CLI::App& app) {
@@ -167,7 +213,31 @@ void addFitCommand(CLI::App& app) {
     fit->add_flag("--print-config", o->printConfig,
                   "print the configuration in effect as JSON and exit");
     fit->add_flag("--quiet", o->quiet, "no progress output");
-    fit->callback([o] { runFit(*o); });
+    auto fo = std::make_shared<FamilyFitCliOptions>();
+    CLI::App* family = fit->add_subcommand(
+        "family",
+        "Fit a family model (FAMILY.json: one model for every yarn of a box of yarn parameters) "
+        "to a family gather written by weft gather family (docs/family.md)");
+    family->add_option("--gather", fo->gather, "family gather directory (weft gather family)");
+    family->add_option("--out", fo->out, "output family model (.json, written atomically)");
+    family->add_option("--config", fo->config,
+                       "training configuration FIT.json over the family's defaults (--print-config "
+                       "shows them; energy_calibration_degree must stay -1)");
+    addSeedOption(*family, fo->seed, "random seed of network initialisation and training samples");
+    family->add_option("--threads", fo->threads, "worker threads (0: all cores)");
+    family->add_option("--colour-range", fo->colourRange,
+                       "LO,HI: the fiber colours C_TT the model covers, per channel "
+                       "(0 < LO < HI <= 1; default 0.3,0.999)");
+    family->add_option("--colour-functions", fo->colourFunctions,
+                       "the number K of colour functions (2..12, default 6)");
+    family->add_flag("--print-config", fo->printConfig,
+                     "print the configuration in effect as JSON and exit");
+    family->add_flag("--quiet", fo->quiet, "no progress output");
+    family->callback([fo] { runFitFamily(*fo); });
+    fit->require_subcommand(0, 1);
+    fit->callback([o, family] {
+        if (!family->parsed()) runFit(*o);
+    });
 }
 
 }  // namespace weft::cmd

@@ -527,5 +527,52 @@ TEST_F(RenderCliTest, BadInputIsNamed) {
     EXPECT_FALSE(std::filesystem::exists(path("a.exr")));
 }
 
+// A family model (docs/family.md): each yarn gives its own parameters and
+// renders exactly as the model `weft yarn at` writes for them; a yarn
+// outside the box, a family model without "yarn" and "yarn" with a model of
+// one yarn are refused, naming the entry and the field.
+TEST_F(RenderCliTest, FamilyYarnsRenderWithTheirOwnParameters) {
+    const std::string family = std::string(WEFT_SOURCE_DIR) + "/models/family.json";
+    const std::string tight =
+        R"({"fibers": 250, "density": 0.38, "twist": 0.28, "beta_r_deg": 2, "beta_tt_deg": 12,
+            "gamma_tt_deg": 21, "c_r": [0.2, 0.3, 0.4]})";
+    const auto scene = [&](const std::string& name, const std::string& model,
+                           const std::string& yarnKey) {
+        writeFileAtomic(path(name), R"({
+            "camera": {"from": [0, 0, 1], "to": [0, 0, 0], "fov_deg": 8},
+            "film": {"width": 16, "height": 12},
+            "render": {"spp": 2, "seed": 1},
+            "yarns": [{"curves": "yarn.txt", "radius": 0.03, "plies": 3, "ply_twist": 0.3,
+                       "colour": [0.8, 0.5, 0.3], "model": ")" +
+                                        model + "\"" + yarnKey + R"(}]
+        })");
+    };
+    scene("fam.json", family, ", \"yarn\": " + tight);
+    RunResult r = run("render fam.json --spp 2 --threads 2 --quiet --out family.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = run("yarn at --family " + family + " --yarn '" + tight + "' --out tight.json");
+    ASSERT_EQ(r.status, 0) << r.err;
+    scene("one-yarn.json", path("tight.json"), "");
+    r = run("render one-yarn.json --spp 2 --threads 2 --quiet --out at.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const Image a = readImage(path("family.exr")), b = readImage(path("at.exr"));
+    EXPECT_EQ(a.pixels, b.pixels);
+    double sum = 0;
+    for (float v : a.pixels) sum += v;
+    EXPECT_GT(sum, 0.0);
+
+    scene("outside.json", family, R"(, "yarn": {"fibers": 300, "density": 0.3, "twist": 0.5,
+          "beta_r_deg": 2, "beta_tt_deg": 12, "gamma_tt_deg": 21, "c_r": [0.2, 0.3, 0.4]})");
+    expectUserError(run("render outside.json --spp 1 --out o.exr"),
+                    {"outside.json: yarns[0].yarn", "twist", "0.5", "[0, 0.3]"});
+    scene("none.json", family, "");
+    expectUserError(run("render none.json --spp 1 --out o.exr"),
+                    {"none.json: yarns[0]", "family model", "\"yarn\""});
+    scene("one.json", kFleece, ", \"yarn\": " + tight);
+    expectUserError(run("render one.json --spp 1 --out o.exr"),
+                    {"one.json: yarns[0].yarn", "model of one yarn"});
+    EXPECT_FALSE(std::filesystem::exists(path("o.exr")));
+}
+
 }  // namespace
 }  // namespace weft

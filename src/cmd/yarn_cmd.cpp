@@ -11,11 +11,14 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/image.h"
+#include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/npy.h"
 #include "weft/core/text_parse.h"
 #include "weft/fit/model_check.h"
 #include "weft/gather/rdm_io.h"
+#include "weft/yarn/family_model.h"
+#include "weft/yarn/material_preset.h"
 #include "weft/yarn/yarn_appearance.h"
 #include "weft/yarn/yarn_bsdf.h"
 
@@ -109,7 +112,38 @@ void runCheck(const CheckOptions& o) {
     std::printf("%s\n", line.dump().c_str());
 }
 
+struct AtOptions {
+    std::string family, yarn, preset, out;
+};
+
+// weft yarn at: the ordinary colour model of one yarn of a family model.
+void runAt(const AtOptions& o) {
+    if (o.yarn.empty() == o.preset.empty())
+        throw InputError("weft yarn at needs one of --yarn YARN and --preset NAME");
+    checkOutputsSpareInputs({{"--family", o.family}}, {{"--out", o.out}}, {}, {});
+    const FamilyModel family = loadFamilyModel(o.family);
+    const YarnPoint point = o.preset.empty() ? readYarnPointArgument(o.yarn, "--yarn")
+                                             : yarnPointOf(findMaterialPreset(o.preset));
+    const YarnModel model = family.at(point, o.preset.empty() ? "--yarn" : "--preset " + o.preset);
+    saveYarnModel(model, o.out);
+    std::printf("%s\n", nlohmann::json({{"out", o.out}, {"yarn", point.toJson()}}).dump().c_str());
+}
+
 }  // namespace
+
+YarnPoint readYarnPointArgument(const std::string& text, const std::string& flag) {
+    // Inline JSON (an object) or the file holding it.
+    if (!text.empty() && text.front() == '{') {
+        nlohmann::json j;
+        try {
+            j = nlohmann::json::parse(text);
+        } catch (const nlohmann::json::parse_error& e) {
+            throw InputError(flag + ": malformed JSON (" + e.what() + ")");
+        }
+        return YarnPoint::fromJson(j, flag, "");
+    }
+    return YarnPoint::fromJson(readJsonFile(text), text, "");
+}
 
 void addYarnCommands(CLI::App& app) {
     CLI::App* yarn = app.add_subcommand(
@@ -186,6 +220,21 @@ void addYarnCommands(CLI::App& app) {
     appearance->add_option("--c-tt", appearanceOpts->cTT,
                            "R,G,B within the model's colour range: the appearance of this C_TT");
     appearance->callback([appearanceOpts] { runAppearance(*appearanceOpts); });
+
+    auto atOpts = std::make_shared<AtOptions>();
+    CLI::App* at = yarn->add_subcommand(
+        "at",
+        "write the ordinary colour model of one yarn of a family model (weft fit family): any "
+        "N, rho, alpha, beta_R, beta_TT, gamma_TT and C_R inside its box, no gather or fit "
+        "(docs/family.md)");
+    at->add_option("--family", atOpts->family, "family model (weft fit family)")->required();
+    at->add_option("--yarn", atOpts->yarn,
+                   "the yarn: YARN.json or inline {\"fibers\": N, \"density\": RHO, \"twist\": "
+                   "ALPHA, \"beta_r_deg\", \"beta_tt_deg\", \"gamma_tt_deg\", \"c_r\": [r, g, b]}");
+    at->add_option("--preset", atOpts->preset,
+                   "the yarn of a material preset (fleece, silk, polyester, cotton, gabardine)");
+    at->add_option("--out", atOpts->out, "output model (.json, written atomically)")->required();
+    at->callback([atOpts] { runAt(*atOpts); });
 }
 
 }  // namespace weft::cmd

@@ -118,6 +118,21 @@ YarnPoint FamilyBox::at(const std::array<double, kDimensions>& u) const {
     return p;
 }
 
+std::array<double, FamilyBox::kDimensions> FamilyBox::normalised(const YarnPoint& p) const {
+    const auto q = [](double v, const ParameterRange& r) {
+        return r.hi > r.lo ? 2.0 * (v - r.lo) / (r.hi - r.lo) - 1.0 : 0.0;
+    };
+    return {q(p.fibers, fibers),
+            q(p.density, density),
+            q(p.twist, twist),
+            q(p.betaRDeg, betaRDeg),
+            q(p.betaTTDeg, betaTTDeg),
+            q(p.gammaTTDeg, gammaTTDeg),
+            q(p.cR.r, cR),
+            q(p.cR.g, cR),
+            q(p.cR.b, cR)};
+}
+
 void FamilyBox::check(const YarnPoint& p, const std::string& source) const {
     const auto inside = [&](const char* field, double v, const ParameterRange& r) {
         if (!(v >= r.lo && v <= r.hi))

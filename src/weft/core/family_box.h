@@ -63,6 +63,10 @@ struct FamilyBox {
 
     // The yarn at u in [0, 1)^kDimensions (N rounded to the nearest integer).
     YarnPoint at(const std::array<double, kDimensions>& u) const;
+    // A family model's network inputs for p (yarn/family_model.h): each
+    // parameter, in unit-cube order, mapped from its range to [-1, 1]
+    // linearly (0 for a range of zero width).
+    std::array<double, kDimensions> normalised(const YarnPoint& p) const;
     // InputError naming `source`, the field, its value and the box's range
     // when p lies outside.
     void check(const YarnPoint& p, const std::string& source) const;

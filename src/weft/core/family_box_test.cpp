@@ -28,6 +28,23 @@ TEST(FamilyBox, ChecksNameTheFieldTheValueAndTheRange) {
     expectInputError([&] { box.check(p, "yarn"); }, {"fibers", "100", "[200, 600]"});
 }
 
+TEST(FamilyBox, NormalisedInputsMapEachRangeOntoMinusOneToOne) {
+    FamilyBox box;
+    box.twist = {0.1, 0.1};  // zero width: input 0
+    const YarnPoint lo = box.at({0, 0, 0, 0, 0, 0, 0, 0, 0});
+    YarnPoint hi = lo;
+    hi.fibers = 600, hi.density = 0.4, hi.betaRDeg = 8, hi.betaTTDeg = 28, hi.gammaTTDeg = 39;
+    hi.cR = Rgb(1, 0.5, 0);
+    const auto qLo = box.normalised(lo), qHi = box.normalised(hi);
+    for (int d = 0; d < 6; ++d) EXPECT_EQ(qLo[d], d == 2 ? 0.0 : -1.0) << d;
+    for (int d = 0; d < 6; ++d) EXPECT_EQ(qHi[d], d == 2 ? 0.0 : 1.0) << d;
+    EXPECT_EQ(qHi[6], 1.0);
+    EXPECT_EQ(qHi[7], 0.0);
+    EXPECT_EQ(qHi[8], -1.0);
+    // Fleece's N = 300 is a quarter of the way through [200, 600].
+    EXPECT_DOUBLE_EQ(FamilyBox{}.normalised(fleece())[0], -0.5);
+}
+
 TEST(FamilyBox, JsonRoundTripAndStrictReading) {
     FamilyBox box;
     box.twist = {0.1, 0.2};

@@ -35,6 +35,9 @@ TEST(ColourTargets, MapsEqualTheRecolouredGather) {
     const GatherSums sums = gatherSums(o);
     const ColourTargets targets(sums.colourPaths, o.bins, sums.count);
     const ColourTargets targetsR(sums.colourPaths, o.bins, sums.count, ColourPath::R);
+    // The sparse cell index (a family's) finds the same entries.
+    const ColourTargets sparse(sums.colourPaths, o.bins, sums.count, ColourPath::M,
+                               ColourTargets::CellIndex::Sparse);
     for (const Rgb colour : {Rgb(0.3, 0.6, 0.9), Rgb(0.999, 0.33, 0.354), o.fiber.cTT}) {
         GatherSums recoloured = sums;
         std::fill(recoloured.sumM.begin(), recoloured.sumM.end(), 0);
@@ -46,6 +49,7 @@ TEST(ColourTargets, MapsEqualTheRecolouredGather) {
         plain.fiber.cTT = colour;
         const GatherResult expected = normaliseGather(recoloured, plain);
         for (const auto& [map, truth] : {std::pair{targets.map(colour), &expected.rdmM},
+                                         std::pair{sparse.map(colour), &expected.rdmM},
                                          std::pair{targetsR.map(colour), &expected.rdmR}}) {
             ASSERT_EQ(map.size(), truth->size());
             for (size_t k = 0; k < map.size(); ++k)

@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -10,8 +11,9 @@
 namespace weft {
 
 ColourTargets::ColourTargets(const std::vector<ColourPath>& paths, const RdmBins& bins,
-                             const std::vector<int64_t>& count, ColourPath::Kind kind)
-    : bins_(bins) {
+                             const std::vector<int64_t>& count, ColourPath::Kind kind,
+                             CellIndex index)
+    : bins_(bins), sparse_(index == CellIndex::Sparse) {
     const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
     if (count.size() != nIn) throw std::logic_error("ColourTargets: count does not match the bins");
     // Counting sort by cell: stable, so entries stay in path order within a cell.
@@ -21,7 +23,16 @@ ColourTargets::ColourTargets(const std::vector<ColourPath>& paths, const RdmBins
         if (p.kind == kind) ++perCell[p.incidentBin * nOut + p.outgoingBin + 1], ++m;
     if (m > UINT32_MAX) throw InputError("more than 2^32 recorded paths of one kind");
     for (size_t k = 1; k < perCell.size(); ++k) perCell[k] += perCell[k - 1];
-    cellStart_ = perCell;
+    if (sparse_) {
+        for (size_t cell = 0; cell + 1 < perCell.size(); ++cell)
+            if (perCell[cell + 1] > perCell[cell]) {
+                sparseCells_.push_back(static_cast<uint32_t>(cell));
+                cellStart_.push_back(perCell[cell]);
+            }
+        cellStart_.push_back(static_cast<uint32_t>(m));
+    } else {
+        cellStart_ = perCell;
+    }
     entries_.resize(m);
     for (const ColourPath& p : paths) {
         if (p.kind != kind) continue;
@@ -34,10 +45,18 @@ ColourTargets::ColourTargets(const std::vector<ColourPath>& paths, const RdmBins
     }
 }
 
+std::pair<uint32_t, uint32_t> ColourTargets::cellEntries(size_t cell) const {
+    if (!sparse_) return {cellStart_[cell], cellStart_[cell + 1]};
+    const auto it = std::lower_bound(sparseCells_.begin(), sparseCells_.end(), cell);
+    if (it == sparseCells_.end() || *it != cell) return {0, 0};
+    const size_t k = static_cast<size_t>(it - sparseCells_.begin());
+    return {cellStart_[k], cellStart_[k + 1]};
+}
+
 Rgb ColourTargets::value(size_t i, size_t o, const Rgb& cTT) const {
-    const size_t cell = i * bins_.outgoingCount() + o;
+    const auto [begin, end] = cellEntries(i * bins_.outgoingCount() + o);
     Rgb v;
-    for (uint32_t k = cellStart_[cell]; k < cellStart_[cell + 1]; ++k) {
+    for (uint32_t k = begin; k < end; ++k) {
         const Entry& e = entries_[k];
         for (int c = 0; c < 3; ++c) v[c] += e.weight[c] * std::pow(cTT[c], e.ttEvents);
     }

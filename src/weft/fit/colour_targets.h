@@ -7,10 +7,13 @@
 // rdm_m (docs/design.md 5), for any colour and without a map per colour. With the
 // paper's 16M paths over 8M cells a cell holds a few paths, so a value costs a
 // few multiplications: the training of a colour-conditioned M network draws
-// a new colour for every sample. Memory: 16 bytes per M path and 4 per cell.
+// a new colour for every sample. Memory: 16 bytes per M path and 4 per cell;
+// with CellIndex::Sparse (a family's many small gathers, fit/family_fit.h)
+// 8 per cell that holds a path, found by binary search.
 #pragma once
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "weft/core/rgb.h"
@@ -23,8 +26,10 @@ class ColourTargets {
   public:
     // The M paths of `paths` (others are skipped; with kind = R, the R paths
     // and so RDM_R) for a gather with `bins` and per-incident-bin path counts `count`.
+    enum class CellIndex { Dense, Sparse };
     ColourTargets(const std::vector<ColourPath>& paths, const RdmBins& bins,
-                  const std::vector<int64_t>& count, ColourPath::Kind kind = ColourPath::M);
+                  const std::vector<int64_t>& count, ColourPath::Kind kind = ColourPath::M,
+                  CellIndex index = CellIndex::Dense);
 
     const RdmBins& bins() const { return bins_; }
     size_t paths() const { return entries_.size(); }
@@ -39,8 +44,15 @@ class ColourTargets {
         int32_t ttEvents;
         float weight[3];  // W0 / count(i) / solidAngle(o)
     };
+    // Entries [first, second) of a cell.
+    std::pair<uint32_t, uint32_t> cellEntries(size_t cell) const;
+
     RdmBins bins_;
-    std::vector<uint32_t> cellStart_;  // nIn * nOut + 1 offsets into entries_
+    // Dense: nIn * nOut + 1 offsets into entries_. Sparse: one offset per cell
+    // of sparseCells_ (the cells that hold entries, ascending) and the end.
+    std::vector<uint32_t> cellStart_;
+    std::vector<uint32_t> sparseCells_;
+    bool sparse_ = false;
     std::vector<Entry> entries_;
 };
 

@@ -157,6 +157,32 @@ MSample drawMSample(Rng& rng, const RdmBins& bins, const std::vector<double>& ro
     return m;
 }
 
+// The loss of a colour-conditioned M network on M_c = exp(sum_j a_jc
+// phi_j(C_TT,c)) (yarn/colour_basis.h), the sample's C_TT in rows
+// colourRow.. of x; its gradient into `gradient`.
+float conditionedLossAndGradient(MlpBatch& passes, const BatchRows& x, const BatchRows& target,
+                                 int colourRow, const ColourBasis& basis, Loss loss,
+                                 std::vector<float>& gradient) {
+    const int batch = x.capacity(), functions = basis.functions();
+    passes.forward(x, batch);
+    double total = 0;
+    double phi[ColourBasis::kMaxFunctions];
+    for (int k = 0; k < batch; ++k)
+        for (int c = 0; c < 3; ++c) {
+            basis.eval(x(colourRow + c, k), phi);
+            double z = 0;
+            for (int j = 0; j < functions; ++j) z += passes.output(3 * j + c)[k] * phi[j];
+            const float y = static_cast<float>(std::exp(std::min(z, 80.0)));
+            const auto [diff, dDiff] = lossResidual(loss, y, target(c, k));
+            total += static_cast<double>(diff) * diff;
+            const double dz = 2.0 * diff * dDiff * y / static_cast<double>(batch);
+            for (int j = 0; j < functions; ++j)
+                passes.outputGradient(3 * j + c)[k] = static_cast<float>(dz * phi[j]);
+        }
+    passes.backward(gradient);
+    return static_cast<float>(total / static_cast<double>(batch));
+}
+
 // The 3-7-7-1 network is small for the sharp grazing-angle edge of P(T | wi)
 // and its result depends on the initialisation: train `restarts` networks
 // from different seeds (in parallel, each on one thread) and keep the best.
@@ -227,9 +253,9 @@ NetworkWeights fitColourConditionedMNetwork(const ColourTargets& targets,
                                             LossCurve* curve) {
     const RdmBins& bins = targets.bins();
     const std::vector<double> rowCdf = outgoingRowCdf(bins);
-    const int functions = basis.functions();
     const ColourRange range = basis.range();
-    Mlp<float> net(widthsOf(6, config.m.hidden, 3 * functions), OutputFunction::Identity, seed);
+    Mlp<float> net(widthsOf(6, config.m.hidden, 3 * basis.functions()), OutputFunction::Identity,
+                   seed);
     Progress progress("fit M (any colour)", static_cast<uint64_t>(config.m.steps), quiet);
     // Inputs: (wi, wo); extra rows: the sample's C_TT per channel, uniform in the range.
     const auto fill = [&](Rng& rng, BatchRows& x, BatchRows& target) {
@@ -246,29 +272,117 @@ NetworkWeights fitColourConditionedMNetwork(const ColourTargets& targets,
             }
         }
     };
-    // The loss on M_c = exp(sum_j a_jc phi_j(C_TT,c)) (yarn/colour_basis.h).
     const auto lossAndGradient = [&](MlpBatch& passes, const BatchRows& x, const BatchRows& target,
                                      std::vector<float>& gradient) {
-        const int batch = x.capacity();
-        passes.forward(x, batch);
-        double total = 0;
-        double phi[ColourBasis::kMaxFunctions];
-        for (int k = 0; k < batch; ++k)
-            for (int c = 0; c < 3; ++c) {
-                basis.eval(x(6 + c, k), phi);
-                double z = 0;
-                for (int j = 0; j < functions; ++j) z += passes.output(3 * j + c)[k] * phi[j];
-                const float y = static_cast<float>(std::exp(std::min(z, 80.0)));
-                const auto [diff, dDiff] = lossResidual(config.m.loss, y, target(c, k));
-                total += static_cast<double>(diff) * diff;
-                const double dz = 2.0 * diff * dDiff * y / static_cast<double>(batch);
-                for (int j = 0; j < functions; ++j)
-                    passes.outputGradient(3 * j + c)[k] = static_cast<float>(dz * phi[j]);
-            }
-        passes.backward(gradient);
-        return static_cast<float>(total / static_cast<double>(batch));
+        return conditionedLossAndGradient(passes, x, target, 6, basis, config.m.loss, gradient);
     };
-    *curve = train(net, config.m, seed, 3, &arena, progress, false, {6, 3, 3}, fill,
+    *curve =
+        train(net, config.m, seed, 3, &arena, progress, false, {6, 3, 3}, fill, lossAndGradient);
+    progress.finish();
+    return net.weights();
+}
+
+namespace {
+
+// Path-count-weighted RMS error of a family T network over every yarn's incident bins.
+double familyTransmissionError(const NetworkWeights& net,
+                               const std::vector<FamilyTrainingPoint>& points,
+                               const RdmBins& bins) {
+    double sum = 0, weight = 0;
+    for (const FamilyTrainingPoint& p : points) {
+        const NetworkWeights folded =
+            foldConstantInputs(net, 3, {p.inputs[0], p.inputs[1], p.inputs[2]});
+        const std::vector<double> pT = transmissionMap(folded, bins);
+        for (size_t i = 0; i < pT.size(); ++i) {
+            const double count = p.incidentCdf[i] - (i ? p.incidentCdf[i - 1] : 0.0);
+            sum += count * (pT[i] - p.pT[i]) * (pT[i] - p.pT[i]);
+            weight += count;
+        }
+    }
+    return weight > 0 ? std::sqrt(sum / weight) : 0.0;
+}
+
+size_t drawPoint(Rng& rng, size_t count) {
+    return std::min<size_t>(count - 1,
+                            static_cast<size_t>(rng.uniform() * static_cast<double>(count)));
+}
+
+}  // namespace
+
+NetworkWeights fitFamilyTransmissionNetwork(const std::vector<FamilyTrainingPoint>& points,
+                                            const RdmBins& bins, const FitConfig& config,
+                                            uint64_t seed, tbb::task_arena& arena, bool quiet,
+                                            LossCurve* curve, double* error) {
+    if (points.empty()) throw InputError("a family fit needs at least one yarn");
+    const int restarts = config.t.restarts;
+    std::vector<Mlp<float>> nets(restarts);
+    std::vector<LossCurve> curves(restarts);
+    std::vector<double> rmse(restarts);
+    Progress progress("fit T (family)", static_cast<uint64_t>(config.t.steps) * restarts, quiet);
+    arena.execute([&] {
+        tbb::parallel_for(0, restarts, [&](int r) {
+            const uint64_t netSeed =
+                mixBits(seed + 0x9e3779b97f4a7c15ULL * static_cast<uint64_t>(r));
+            nets[r] = Mlp<float>(widthsOf(6, config.t.hidden, 1), OutputFunction::Sigmoid, netSeed);
+            curves[r] = trainPlain(
+                nets[r], config.t, netSeed, 4, nullptr, progress, restarts > 1,
+                [&](Rng& rng, BatchRows& x, BatchRows& target) {
+                    for (int k = 0; k < x.capacity(); ++k) {
+                        const FamilyTrainingPoint& p = points[drawPoint(rng, points.size())];
+                        const size_t i = drawFromCdf(p.incidentCdf, rng.uniform());
+                        const double u1 = rng.uniform(), u2 = rng.uniform();
+                        setInputColumn(x, k,
+                                       config.jitter ? bins.incidentDirectionIn(i, u1, u2)
+                                                     : bins.incidentCentre(i));
+                        for (int d = 0; d < 3; ++d) x(3 + d, k) = p.inputs[d];
+                        target(0, k) = static_cast<float>(p.pT[i]);
+                    }
+                });
+            rmse[r] = familyTransmissionError(nets[r].weights(), points, bins);
+        });
+    });
+    const int best = static_cast<int>(std::min_element(rmse.begin(), rmse.end()) - rmse.begin());
+    progress.setStatus("best rmse " + std::to_string(rmse[best]));
+    progress.finish();
+    *curve = curves[best];
+    *error = rmse[best];
+    return nets[best].weights();
+}
+
+NetworkWeights fitFamilyMNetwork(const std::vector<FamilyTrainingPoint>& points,
+                                 const ColourBasis& basis, const FitConfig& config, uint64_t seed,
+                                 tbb::task_arena& arena, bool quiet, LossCurve* curve) {
+    if (points.empty()) throw InputError("a family fit needs at least one yarn");
+    const RdmBins& bins = points.front().m->bins();
+    const std::vector<double> rowCdf = outgoingRowCdf(bins);
+    const ColourRange range = basis.range();
+    constexpr int kInputs = 6 + FamilyBox::kDimensions;
+    Mlp<float> net(widthsOf(kInputs, config.m.hidden, 3 * basis.functions()),
+                   OutputFunction::Identity, seed);
+    Progress progress("fit M (family)", static_cast<uint64_t>(config.m.steps), quiet);
+    // Inputs: (wi, wo) and the yarn's parameters; extra rows: C_TT per channel.
+    const auto fill = [&](Rng& rng, BatchRows& x, BatchRows& target) {
+        for (int k = 0; k < x.capacity(); ++k) {
+            const FamilyTrainingPoint& p = points[drawPoint(rng, points.size())];
+            const MSample m = drawMSample(rng, bins, rowCdf, config.jitter);
+            setInputColumn(x, k, m.wi, m.wo);
+            for (int d = 0; d < FamilyBox::kDimensions; ++d) x(6 + d, k) = p.inputs[d];
+            Rgb colour;
+            for (int c = 0; c < 3; ++c)
+                colour[c] = range.lo + (range.hi - range.lo) * rng.uniform();
+            const Rgb t = p.m->value(m.i, m.o, colour);
+            for (int c = 0; c < 3; ++c) {
+                x(kInputs + c, k) = static_cast<float>(colour[c]);
+                target(c, k) = static_cast<float>(t[c]);
+            }
+        }
+    };
+    const auto lossAndGradient = [&](MlpBatch& passes, const BatchRows& x, const BatchRows& target,
+                                     std::vector<float>& gradient) {
+        return conditionedLossAndGradient(passes, x, target, kInputs, basis, config.m.loss,
+                                          gradient);
+    };
+    *curve = train(net, config.m, seed, 5, &arena, progress, false, {kInputs, 3, 3}, fill,
                    lossAndGradient);
     progress.finish();
     return net.weights();

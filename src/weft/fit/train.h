@@ -13,9 +13,11 @@
 
 #include <tbb/task_arena.h>
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
+#include "weft/core/family_box.h"
 #include "weft/fit/colour_targets.h"
 #include "weft/fit/fit_config.h"
 #include "weft/gather/rdm_io.h"
@@ -38,6 +40,30 @@ NetworkWeights fitColourConditionedMNetwork(const ColourTargets& targets,
                                             const ColourBasis& basis, const FitConfig& config,
                                             uint64_t seed, tbb::task_arena& arena, bool quiet,
                                             LossCurve* curve);
+// One yarn of a family fit (family_fit.h): its parameters as network inputs
+// (FamilyBox::normalised) and its gather's data on the family's bins.
+struct FamilyTrainingPoint {
+    std::array<float, FamilyBox::kDimensions> inputs{};
+    std::vector<double> incidentCdf;   // cumulative path counts over incident bins
+    std::vector<double> pT;            // P(T | incident bin)
+    const ColourTargets* m = nullptr;  // its M records
+};
+
+// The family's T network (kFamilyTInputs -> 1, sigmoid): as T above, with
+// the yarn drawn uniformly for every sample and its N, rho, alpha as inputs
+// after wi. `error` receives the kept restart's path-count-weighted RMS error
+// over all yarns' incident bins.
+NetworkWeights fitFamilyTransmissionNetwork(const std::vector<FamilyTrainingPoint>& points,
+                                            const RdmBins& bins, const FitConfig& config,
+                                            uint64_t seed, tbb::task_arena& arena, bool quiet,
+                                            LossCurve* curve, double* error);
+// The family's M network (kFamilyMInputs -> 3K): as the colour-conditioned M
+// network, with the yarn drawn uniformly for every sample and its nine
+// parameters as inputs after (wi, wo).
+NetworkWeights fitFamilyMNetwork(const std::vector<FamilyTrainingPoint>& points,
+                                 const ColourBasis& basis, const FitConfig& config, uint64_t seed,
+                                 tbb::task_arena& arena, bool quiet, LossCurve* curve);
+
 NetworkWeights fitMultipleScatteringNetwork(const RdmData& rdm, const FitConfig& config,
                                            uint64_t seed, tbb::task_arena& arena, bool quiet,
                                            LossCurve* curve);

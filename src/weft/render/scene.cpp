@@ -11,6 +11,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/image.h"
+#include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/limits.h"
 #include "weft/core/math.h"
@@ -19,6 +20,7 @@
 #include "weft/render/curves.h"
 #include "weft/render/environment_light.h"
 #include "weft/render/yarn_geometry.h"
+#include "weft/yarn/family_model.h"
 #include "weft/yarn/yarn_appearance.h"
 #include "weft/yarn/yarn_model.h"
 
@@ -124,12 +126,35 @@ class SceneMaterials {
                    std::vector<uint8_t>* plyFrame)
         : desc_(desc), modes_(modes), options_(options), bsdfs_(bsdfs), plyFrame_(plyFrame) {}
 
-    // The model of yarn entry y as its file holds it (each file loaded once).
+    // The model of yarn entry y: as its file holds it, or a family model's
+    // yarn at the entry's "yarn" (docs/family.md); each file read once, each
+    // family yarn made once.
     const YarnModel& model(size_t y) {
-        const std::string& path = desc_.yarns[y].model;
-        auto it = models_.find(path);
-        if (it == models_.end()) it = models_.emplace(path, loadYarnModel(path)).first;
-        return it->second;
+        const YarnDesc& yarn = desc_.yarns[y];
+        const std::string key = modelKey(y);
+        auto it = models_.find(key);
+        if (it != models_.end()) return it->second;
+        auto family = families_.find(yarn.model);
+        if (family == families_.end()) {
+            const nlohmann::json document = readJsonFile(yarn.model);
+            if (isFamilyModelDocument(document)) {
+                family =
+                    families_.emplace(yarn.model, familyModelFromJson(document, yarn.model)).first;
+            } else {
+                if (yarn.yarn)
+                    throw InputError(entryName(y) + ".yarn: " + yarn.model +
+                                     " is a model of one yarn; only a family model (weft fit "
+                                     "family) takes yarn parameters");
+                return models_.emplace(key, yarnModelFromJson(document, yarn.model)).first->second;
+            }
+        }
+        if (!yarn.yarn)
+            throw InputError(entryName(y) + ": " + yarn.model +
+                             " is a family model: give the yarn's parameters in \"yarn\" "
+                             "({\"fibers\", \"density\", \"twist\", \"beta_r_deg\", "
+                             "\"beta_tt_deg\", \"gamma_tt_deg\", \"c_r\"}; docs/family.md)");
+        return models_.emplace(key, family->second.at(*yarn.yarn, entryName(y) + ".yarn"))
+            .first->second;
     }
 
     // The C_TT that makes yarn entry y look its "appearance"
@@ -143,10 +168,10 @@ class SceneMaterials {
             throw InputError(what + ": " + yarn.model +
                              " is fitted for one colour; colour by appearance needs a colour "
                              "model (models/MATERIAL-colour.json, or weft fit --colour-range)");
-        auto it = tables_.find(yarn.model);
+        auto it = tables_.find(modelKey(y));
         if (it == tables_.end())
             it = tables_
-                     .emplace(yarn.model,
+                     .emplace(modelKey(y),
                               m.appearance ? *m.appearance : computeAppearanceTable(m, yarn.model))
                      .first;
         const Rgb& srgb = *yarn.appearance;
@@ -160,7 +185,7 @@ class SceneMaterials {
         if (colour && last_ && last_->y == y && last_->colour == *colour) return last_->material;
         const std::vector<double> colourKey =
             colour ? std::vector<double>{colour->r, colour->g, colour->b} : std::vector<double>{};
-        auto [it, inserted] = index_.try_emplace({yarn.model, colourKey, mode.name()}, 0);
+        auto [it, inserted] = index_.try_emplace({modelKey(y), colourKey, mode.name()}, 0);
         if (inserted) {
             if (bsdfs_->size() >= static_cast<size_t>(kMaxSceneMaterials))
                 throw InputError(entryName(y) + ": more than " + std::to_string(kMaxSceneMaterials) +
@@ -177,6 +202,12 @@ class SceneMaterials {
     }
 
   private:
+    // A model's key: its file, and a family yarn's parameters.
+    std::string modelKey(size_t y) const {
+        const YarnDesc& yarn = desc_.yarns[y];
+        return yarn.yarn ? yarn.model + "\n" + yarn.yarn->toJson().dump() : yarn.model;
+    }
+
     std::string entryName(size_t y) const {
         return (desc_.path.empty() ? std::string("scene") : desc_.path) + ": yarns[" +
                std::to_string(y) + "]";
@@ -188,6 +219,7 @@ class SceneMaterials {
     std::vector<std::unique_ptr<Bsdf>>* bsdfs_;
     std::vector<uint8_t>* plyFrame_;
     std::map<std::string, YarnModel> models_;
+    std::map<std::string, FamilyModel> families_;
     std::map<std::string, AppearanceTable> tables_;
     std::map<std::tuple<std::string, std::vector<double>, std::string>, int> index_;
     // The last coloured lookup: neighbouring segments mostly share a colour.

@@ -100,11 +100,12 @@ Rgb readAppearance(const JsonObjectReader& r) {
 }
 
 YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
-    r.allowKeys({"curves", "scale", "radius", "plies", "ply_twist", "model", "colour", "appearance",
-                 "vertex_colours", "mode"});
+    r.allowKeys({"curves", "scale", "radius", "plies", "ply_twist", "model", "yarn", "colour",
+                 "appearance", "vertex_colours", "mode"});
     YarnDesc y;
     y.curves = readFileName(r, "curves", baseDir, {".bcc", ".txt", ".obj"});
     y.model = readFileName(r, "model", baseDir, {});
+    if (r.has("yarn")) y.yarn = YarnPoint::fromJson(r.value("yarn"), r.source(), r.pathOf("yarn"));
     if (r.has("scale")) y.scale = r.number("scale", sceneLengthRange());
     if (r.has("radius")) y.radius = r.number("radius", sceneLengthRange());
     if (r.has("plies")) y.plies = static_cast<int>(r.integer("plies", {1, kMaxPlies}));
@@ -196,6 +197,7 @@ json toJson(const SceneDesc& scene) {
                    {"ply_twist", y.plyTwist},
                    {"model", y.model}};
         if (y.radius) yj["radius"] = *y.radius;
+        if (y.yarn) yj["yarn"] = y.yarn->toJson();
         if (y.colour) yj["colour"] = rgbJson(*y.colour);
         if (y.appearance) yj["appearance"] = rgbJson(*y.appearance);
         if (!y.vertexColours.empty()) yj["vertex_colours"] = y.vertexColours;

@@ -30,6 +30,7 @@
 #include <string_view>
 #include <vector>
 
+#include "weft/core/family_box.h"
 #include "weft/core/file.h"
 #include "weft/core/rgb.h"
 #include "weft/core/sample_stream.h"
@@ -65,6 +66,9 @@ struct YarnDesc {
     int plies = 1;                 // [1, 16]
     double plyTwist = 0;           // finite, |ply_twist| <= 100; sign: + right-handed
     std::string model;             // resolved path of a MODEL.json from `weft fit` (required)
+    // A family model's yarn (docs/family.md): required with a family model
+    // (weft fit family), checked against its box; refused with any other.
+    std::optional<YarnPoint> yarn;
     // The fiber colour C_TT of this yarn, each channel in [0, 1]; absent: the
     // model's. Fiber and dual mode use it with any model; neural mode needs a
     // colour-conditioned model (docs/colour.md).

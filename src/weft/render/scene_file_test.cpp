@@ -291,7 +291,7 @@ TEST(SceneFile, UnknownKeysAreNamedWithTheirPath) {
     expectInputError(
         [] { parseJson(fullWith("/yarns/1/twist", 1)); },
         {"yarns[1]: unknown key \"twist\" (allowed: curves, scale, radius, plies, ply_twist, "
-         "model, colour, appearance, vertex_colours, mode)"});
+         "model, yarn, colour, appearance, vertex_colours, mode)"});
     // A scene parsed from memory without a name is called "scene".
     expectInputError([] { parseScene(fullWith("/film/depth", 8), "", ""); },
                      {"scene: film: unknown key \"depth\""});

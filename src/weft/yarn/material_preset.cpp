@@ -37,4 +37,10 @@ const MaterialPreset& findMaterialPreset(std::string_view name) {
     throw InputError("unknown preset \"" + std::string(name) + "\" (allowed: " + names + ")");
 }
 
+YarnPoint yarnPointOf(const MaterialPreset& preset) {
+    return {preset.ply.fibers,     preset.ply.density,     preset.ply.twist,
+            preset.fiber.betaRDeg, preset.fiber.betaTTDeg, preset.fiber.gammaTTDeg,
+            preset.fiber.cR};
+}
+
 }  // namespace weft

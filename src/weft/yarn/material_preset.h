@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "weft/core/family_box.h"
 #include "weft/fiber/fiber_params.h"
 #include "weft/ply/ply.h"
 
@@ -26,5 +27,7 @@ struct MaterialPreset {
 const std::vector<MaterialPreset>& materialPresets();
 // Throws InputError listing the known names when `name` is unknown.
 const MaterialPreset& findMaterialPreset(std::string_view name);
+// The preset's yarn parameters (a family model's point, core/family_box.h).
+YarnPoint yarnPointOf(const MaterialPreset& preset);
 
 }  // namespace weft

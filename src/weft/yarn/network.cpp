@@ -138,4 +138,26 @@ NetworkWeights NetworkWeights::initialised(const std::vector<int>& widths, Outpu
     return initialised(widths, prelu, output, seed);
 }
 
+NetworkWeights foldConstantInputs(const NetworkWeights& net, int keep,
+                                  const std::vector<double>& constants) {
+    if (net.layers.empty() || keep < 1 || keep + static_cast<int>(constants.size()) != net.inputs())
+        throw std::logic_error("foldConstantInputs: " + std::to_string(keep) + " inputs kept and " +
+                               std::to_string(constants.size()) + " constants for a network of " +
+                               std::to_string(net.inputs()) + " inputs");
+    NetworkWeights folded = net;
+    const NetworkLayer& first = net.layers.front();
+    NetworkLayer& layer = folded.layers.front();
+    layer.in = keep;
+    layer.weight.resize(static_cast<size_t>(keep) * first.out);
+    for (int o = 0; o < first.out; ++o) {
+        double bias = first.bias[o];
+        for (size_t j = 0; j < constants.size(); ++j)
+            bias += static_cast<double>(first.w(o, keep + static_cast<int>(j))) * constants[j];
+        layer.bias[o] = static_cast<float>(bias);
+        for (int j = 0; j < keep; ++j)
+            layer.weight[static_cast<size_t>(o) * keep + j] = first.w(o, j);
+    }
+    return folded;
+}
+
 }  // namespace weft

@@ -66,4 +66,12 @@ struct NetworkWeights {
                                       uint64_t seed);
 };
 
+// `net` with its inputs from `keep` on held at `constants` (one per such
+// input, in order): their columns of the first layer are folded into its
+// bias (in double, rounded once to float), so the result has `keep` inputs
+// and, for every input, the output `net` has with those constants. A family
+// model (family_model.h) becomes an ordinary model of one yarn this way.
+NetworkWeights foldConstantInputs(const NetworkWeights& net, int keep,
+                                  const std::vector<double>& constants);
+
 }  // namespace weft

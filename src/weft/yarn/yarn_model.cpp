@@ -14,6 +14,7 @@
 #include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/json_reader.h"
+#include "weft/yarn/model_json.h"
 #include "weft/yarn/yarn_lobes.h"
 
 namespace weft {
@@ -61,10 +62,12 @@ std::vector<float> readVector(const JsonObjectReader& r, std::string_view key, i
     return out;
 }
 
+}  // namespace
+
 // Reads a network {"layers": [...], "output": name} of `inputs` inputs and
 // `outputs` outputs under the model's key `name` ("t_net").
-NetworkWeights readNetwork(const JsonObjectReader& model, const std::string& name, int inputs,
-                           int outputs) {
+NetworkWeights readModelNetwork(const JsonObjectReader& model, const std::string& name, int inputs,
+                                int outputs) {
     const JsonObjectReader network = model.object(name, {"layers", "output"});
     const json& layers = network.value("layers");
     if (!layers.is_array() || layers.empty())
@@ -124,7 +127,7 @@ NetworkWeights readNetwork(const JsonObjectReader& model, const std::string& nam
     return net;
 }
 
-json networkToJson(const NetworkWeights& net) {
+json modelNetworkToJson(const NetworkWeights& net) {
     // Each float written as the double of the same value: the shortest
     // decimal form of that double parses back to it, and it to the float.
     auto numbers = [](const float* begin, size_t count) {
@@ -146,6 +149,8 @@ json networkToJson(const NetworkWeights& net) {
     }
     return {{"layers", std::move(layers)}, {"output", toString(net.output)}};
 }
+
+namespace {
 
 PlyParams readPly(const JsonObjectReader& model) {
     const JsonObjectReader r = model.object("ply", {"fibers", "density", "twist"});
@@ -172,7 +177,9 @@ RLobeParams readRLobe(const JsonObjectReader& model) {
     return p;
 }
 
-SamplingParams readSampling(const JsonObjectReader& model) {
+}  // namespace
+
+SamplingParams readModelSampling(const JsonObjectReader& model) {
     const JsonObjectReader r =
         model.object("sampling", {"kappa_r", "beta_m_deg", "gamma_m_deg", "kappa_m"});
     SamplingParams p;
@@ -182,6 +189,15 @@ SamplingParams readSampling(const JsonObjectReader& model) {
     p.kappaM = r.number("kappa_m", kUnitRange);
     return p;
 }
+
+json modelSamplingToJson(const SamplingParams& sampling) {
+    return {{"kappa_r", sampling.kappaR},
+            {"beta_m_deg", sampling.betaMDeg},
+            {"gamma_m_deg", sampling.gammaMDeg},
+            {"kappa_m", sampling.kappaM}};
+}
+
+namespace {
 
 // Rows "r" and "m" of one calibration (3 channels of (degree + 1)^2 numbers)
 // from `rows` at JSON path `path`.
@@ -254,14 +270,14 @@ EnergyCalibration readCalibration(const JsonObjectReader& model, bool conditione
 // (JSON objects are unordered; this is for the human reader). Keys not listed
 // (the free-form "fit" block) follow in alphabetical order.
 // clang-format off
-constexpr std::array<std::string_view, 38> kKeyOrder = {
-    "format",      "version",      "ablation", "fiber",      "ply",  "colour", "c_tt_range",
+constexpr std::array<std::string_view, 40> kKeyOrder = {
+    "format",      "version",      "ablation", "box",        "fiber",      "ply",  "colour", "c_tt_range",
     "variable",    "t_net",
     "m_net",       "r_lobe",       "sampling", "energy_calibration", "degree", "r", "m", "fit",
     "layers",      "output",       "weight",   "bias",       "prelu",       "tilt_deg",
     "masking",     "form",         "coefficients", "fibers", "density",     "twist",
     "c_r",         "c_tt",         "beta_r_deg", "beta_tt_deg", "gamma_tt_deg", "kappa_r",
-    "beta_m_deg",  "gamma_m_deg",  "kappa_m"};
+    "beta_m_deg",  "gamma_m_deg",  "kappa_m", "features"};
 // clang-format on
 
 std::vector<std::string> orderedKeys(const json& object, bool layoutOrder) {
@@ -313,6 +329,16 @@ void writeValue(const json& v, int indent, bool layoutOrder, std::string& out) {
         out += v.dump();
     }
 }
+
+}  // namespace
+
+std::string formatModelJson(const nlohmann::json& document) {
+    std::string text;
+    writeValue(document, 0, true, text);
+    return text + "\n";
+}
+
+namespace {
 
 YarnAblation readAblation(const JsonObjectReader& model) {
     constexpr YarnAblation kAblations[] = {YarnAblation::Naive, YarnAblation::NoRLobe};
@@ -469,14 +495,10 @@ nlohmann::json yarnModelToJson(const YarnModel& model) {
                       {{"fibers", model.ply.fibers},
                        {"density", model.ply.density},
                        {"twist", model.ply.twist}}},
-                     {"t_net", networkToJson(model.tNet)},
-                     {"m_net", networkToJson(model.mNet)},
+                     {"t_net", modelNetworkToJson(model.tNet)},
+                     {"m_net", modelNetworkToJson(model.mNet)},
                      {"r_lobe", {{"tilt_deg", model.rLobe.tiltDeg}, {"masking", masking}}},
-                     {"sampling",
-                      {{"kappa_r", model.sampling.kappaR},
-                       {"beta_m_deg", model.sampling.betaMDeg},
-                       {"gamma_m_deg", model.sampling.gammaMDeg},
-                       {"kappa_m", model.sampling.kappaM}}},
+                     {"sampling", modelSamplingToJson(model.sampling)},
                      {"energy_calibration", calibration},
                      {"fit", model.fit}};
     // Absent for the full model, so that its files stay as they were.
@@ -518,7 +540,7 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     YarnModel model;
     model.fiber = FiberParams::fromJson(r.value("fiber"), source, "fiber");
     model.ply = readPly(r);
-    model.tNet = readNetwork(r, "t_net", 3, 1);
+    model.tNet = readModelNetwork(r, "t_net", 3, 1);
     // Version 3 exists for a conditioned model's calibration by colour: the
     // writer writes it only with a colour block, which it requires.
     if (version >= 3 && !r.has("colour"))
@@ -527,9 +549,9 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
                              "colour); a model of one colour is version 1");
     if (version >= 2 && r.has("colour"))
         model.colour = ColourBasis::fromJson(r.value("colour"), source + ": colour");
-    model.mNet = readNetwork(r, "m_net", 6, model.colour ? 3 * model.colour->functions() : 3);
+    model.mNet = readModelNetwork(r, "m_net", 6, model.colour ? 3 * model.colour->functions() : 3);
     model.rLobe = readRLobe(r);
-    model.sampling = readSampling(r);
+    model.sampling = readModelSampling(r);
     model.calibration =
         readCalibration(r, model.colour.has_value(), version, &model.colourCalibration);
     r.object("fit");  // an object, written back as is
@@ -553,9 +575,7 @@ void saveYarnModel(const YarnModel& model, const std::string& path) {
     // diverged fit) would otherwise be written as null, and a shape error
     // would only surface when the file is loaded.
     yarnModelFromJson(j, path);
-    std::string text;
-    writeValue(j, 0, true, text);
-    writeFileAtomic(path, text + "\n");
+    writeFileAtomic(path, formatModelJson(j));
 }
 
 }  // namespace weft

@@ -1,0 +1,170 @@
+// The family model and its file (family_model.h).
+#include "weft/yarn/family_model.h"
+
+#include <cmath>
+
+#include "weft/core/error.h"
+#include "weft/core/file.h"
+#include "weft/core/json_file.h"
+#include "weft/core/json_message.h"
+#include "weft/core/json_reader.h"
+#include "weft/yarn/model_json.h"
+
+namespace weft {
+
+namespace {
+
+using nlohmann::json;
+
+constexpr const char* kMaskingForm = "symmetric-quadratic";
+constexpr const char* kMaskingFeatures = "linear";
+// The fiber colour of a yarn made by at(): the family gather's own (gather/family.h).
+constexpr double kFamilyGatheredCTT = 0.5;
+
+}  // namespace
+
+std::array<double, kFamilyMaskingFeatures> familyMaskingFeatures(const FamilyBox& box,
+                                                                 const YarnPoint& p) {
+    const auto q = box.normalised(p);
+    return {1.0, q[0], q[1], q[2], q[3], q[4], q[5]};
+}
+
+YarnPoint FamilyModel::centre() const {
+    return box.at({0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5});
+}
+
+void FamilyModel::validate() const {
+    box.validate("box");
+    tNet.validate("t_net", kFamilyTInputs, 1, OutputFunction::Sigmoid,
+                  "P(T|wi) must lie in [0, 1]");
+    mNet.validate("m_net", kFamilyMInputs, 3 * colour.functions(), OutputFunction::Identity,
+                  "the colour functions combine its outputs before exp");
+    tNet.checkFiniteOnUnitInputs("t_net");
+    mNet.checkFiniteOnUnitInputs("m_net");
+    if (!masking.empty() && masking.size() != kMaskingCoefficients * kFamilyMaskingFeatures)
+        throw InputError("r_lobe.masking: expected " + std::to_string(kMaskingCoefficients) +
+                         " rows of " + std::to_string(kFamilyMaskingFeatures) + " coefficients");
+    for (double c : masking)
+        if (!std::isfinite(c)) throw InputError("r_lobe.masking: a coefficient is not finite");
+    sampling.validate();
+    // What the renderer needs of every yarn (shapes within its networks'
+    // capacity) holds for all when it holds for one: at() changes biases only.
+    at(centre(), "box centre");
+}
+
+YarnModel FamilyModel::at(const YarnPoint& p, const std::string& what) const {
+    box.check(p, what);
+    const auto q = box.normalised(p);
+    YarnModel m;
+    m.fiber = {p.cR, Rgb(kFamilyGatheredCTT), p.betaRDeg, p.betaTTDeg, p.gammaTTDeg};
+    m.ply = {p.fibers, p.density, p.twist};
+    try {
+        m.fiber.validate(what);
+        m.ply.validate();
+    } catch (const InputError& e) {
+        throw InputError(what + ": " + e.what());
+    }
+    m.tNet = foldConstantInputs(tNet, 3, {q[0], q[1], q[2]});
+    m.mNet = foldConstantInputs(mNet, 6, std::vector<double>(q.begin(), q.end()));
+    m.rLobe.tiltDeg = SurfaceFiberFrame::tiltDegOfTwist(p.twist);
+    if (!masking.empty()) {
+        const auto f = familyMaskingFeatures(box, p);
+        m.rLobe.masking.assign(kMaskingCoefficients, 0.0);
+        for (int k = 0; k < kMaskingCoefficients; ++k)
+            for (int l = 0; l < kFamilyMaskingFeatures; ++l)
+                m.rLobe.masking[k] += masking[k * kFamilyMaskingFeatures + l] * f[l];
+    }
+    m.sampling = sampling;
+    m.colour = colour;
+    m.fit = {{"family", {{"yarn", p.toJson()}, {"box", box.toJson()}}}};
+    m.validate();
+    return m;
+}
+
+json familyModelToJson(const FamilyModel& model) {
+    json masking = nullptr;
+    if (!model.masking.empty()) {
+        json rows = json::array();
+        for (int k = 0; k < kMaskingCoefficients; ++k)
+            rows.push_back(
+                std::vector<double>(model.masking.begin() + k * kFamilyMaskingFeatures,
+                                    model.masking.begin() + (k + 1) * kFamilyMaskingFeatures));
+        masking = {{"form", kMaskingForm}, {"features", kMaskingFeatures}, {"coefficients", rows}};
+    }
+    return {{"format", kFamilyModelFormat},
+            {"version", kFamilyModelVersion},
+            {"box", model.box.toJson()},
+            {"colour", model.colour.toJson()},
+            {"t_net", modelNetworkToJson(model.tNet)},
+            {"m_net", modelNetworkToJson(model.mNet)},
+            {"r_lobe", {{"masking", masking}}},
+            {"sampling", modelSamplingToJson(model.sampling)},
+            {"fit", model.fit}};
+}
+
+bool isFamilyModelDocument(const json& j) {
+    return j.is_object() && j.contains("format") && j["format"] == kFamilyModelFormat;
+}
+
+FamilyModel familyModelFromJson(const json& j, const std::string& source) {
+    if (!j.is_object())
+        throwJsonError(source, "",
+                       std::string("expected an object (a ") + kFamilyModelFormat + " file), got " +
+                           describeJson(j));
+    JsonObjectReader r(j, source);
+    if (!r.has("format"))
+        r.fail(std::string("missing key \"format\" (expected \"") + kFamilyModelFormat + "\")");
+    r.oneOf("format", {kFamilyModelFormat});
+    const int64_t version = r.integer("version");
+    if (version != kFamilyModelVersion)
+        r.fail("version", "unsupported version " + describeJson(r.value("version")) +
+                              " (supported: " + std::to_string(kFamilyModelVersion) + ")");
+    r.allowKeys(
+        {"format", "version", "box", "colour", "t_net", "m_net", "r_lobe", "sampling", "fit"});
+    FamilyModel model;
+    model.box = FamilyBox::fromJson(r.value("box"), source + ": box");
+    model.colour = ColourBasis::fromJson(r.value("colour"), source + ": colour");
+    model.tNet = readModelNetwork(r, "t_net", kFamilyTInputs, 1);
+    model.mNet = readModelNetwork(r, "m_net", kFamilyMInputs, 3 * model.colour.functions());
+    const JsonObjectReader rLobe = r.object("r_lobe", {"masking"});
+    if (!rLobe.isNull("masking")) {
+        const JsonObjectReader m = rLobe.object("masking", {"form", "features", "coefficients"});
+        m.oneOf("form", {kMaskingForm});
+        m.oneOf("features", {kMaskingFeatures});
+        const json& rows = m.value("coefficients");
+        const std::string path = m.pathOf("coefficients");
+        const std::string shape = "expected " + std::to_string(kMaskingCoefficients) + " rows of " +
+                                  std::to_string(kFamilyMaskingFeatures) + " numbers";
+        if (!rows.is_array() || rows.size() != kMaskingCoefficients)
+            throwJsonError(source, path, shape + ", got " + describeJson(rows));
+        for (size_t k = 0; k < rows.size(); ++k) {
+            if (!rows[k].is_array() || rows[k].size() != kFamilyMaskingFeatures)
+                throwJsonError(source, jsonIndexPath(path, k),
+                               shape + ", got " + describeJson(rows[k]));
+            for (size_t l = 0; l < rows[k].size(); ++l)
+                model.masking.push_back(
+                    readJsonNumber(rows[k][l], source, jsonIndexPath(jsonIndexPath(path, k), l)));
+        }
+    }
+    model.sampling = readModelSampling(r);
+    r.object("fit");  // an object, written back as is
+    model.fit = r.value("fit");
+    try {
+        model.validate();
+    } catch (const InputError& e) {
+        throw InputError(source + ": " + e.what());
+    }
+    return model;
+}
+
+FamilyModel loadFamilyModel(const std::string& path) {
+    return familyModelFromJson(readJsonFile(path), path);
+}
+
+void saveFamilyModel(const FamilyModel& model, const std::string& path) {
+    const json j = familyModelToJson(model);
+    familyModelFromJson(j, path);
+    writeFileAtomic(path, formatModelJson(j));
+}
+
+}  // namespace weft

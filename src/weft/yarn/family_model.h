@@ -1,0 +1,88 @@
+// weft/yarn/family_model.h — one model for every yarn of a box of yarn
+// parameters (issue 42; docs/family.md, docs/model-format.md).
+//
+// A family model is fitted (fit/family_fit.h) to a family gather
+// (gather/family.h): the walks of many yarns spread over a FamilyBox. Its
+// networks take the yarn's parameters as inputs, each mapped from its
+// range in the box to [-1, 1] (FamilyBox::normalised, q below):
+//   t_net  P(T | wi; N, rho, alpha): 6 -> 1, sigmoid. Direct transmission
+//          depends on the ply's geometry only.
+//   m_net  the colour coefficients of S_M (yarn/colour_basis.h) for
+//          (wi, wo; N, rho, alpha, beta_R, beta_TT, gamma_TT, C_R r, g, b):
+//          15 -> 3K, identity. C_TT stays free, as in a colour model.
+//   r_lobe eq. 8 follows the parameters analytically (the fiber's beta_R and
+//          C_R, the tilt atan(pi alpha), P(T) from t_net); its masking
+//          coefficients (yarn_lobes.h) are linear in (1, q_N, ..., q_gammaTT).
+// at(p) makes the ordinary colour model of the yarn p: the constant inputs
+// folded into the first layers' biases (foldConstantInputs), so that it has
+// the networks' shapes of a model fitted for p alone and renders at the same
+// cost; the renderer then builds its tables for it as for any model.
+//
+// File: {"format": "weft-family-model", "version": 1, "box", "colour",
+// "t_net", "m_net", "r_lobe": {"masking": null or {"form":
+// "symmetric-quadratic", "features": "linear", "coefficients": 4 rows of 7}},
+// "sampling", "fit"}.
+#pragma once
+
+#include <array>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "weft/core/family_box.h"
+#include "weft/yarn/colour_basis.h"
+#include "weft/yarn/network.h"
+#include "weft/yarn/yarn_lobes.h"
+#include "weft/yarn/yarn_model.h"
+
+namespace weft {
+
+inline constexpr const char* kFamilyModelFormat = "weft-family-model";
+inline constexpr int kFamilyModelVersion = 1;
+
+// The networks' inputs: the directions, then the normalised parameters.
+inline constexpr int kFamilyTInputs = 3 + 3;                       // wi; N, rho, alpha
+inline constexpr int kFamilyMInputs = 6 + FamilyBox::kDimensions;  // wi, wo; all nine
+// The masking coefficients' features: 1 and the six normalised parameters
+// other than C_R (which scales eq. 8 itself).
+inline constexpr int kFamilyMaskingFeatures = 7;
+std::array<double, kFamilyMaskingFeatures> familyMaskingFeatures(const FamilyBox& box,
+                                                                 const YarnPoint& p);
+
+struct FamilyModel {
+    FamilyBox box;
+    NetworkWeights tNet;  // kFamilyTInputs -> 1, sigmoid
+    NetworkWeights mNet;  // kFamilyMInputs -> 3K, identity
+    ColourBasis colour;
+    // masking[k * kFamilyMaskingFeatures + l]: masking coefficient k of the
+    // yarn p is sum_l masking[k, l] feature_l(p). Empty: plain eq. 8.
+    std::vector<double> masking;
+    // The fitted sampling lobe (paper eq. 9-11) of the box's centre: what
+    // the optional fitted sampler uses (the default tabulated one is built
+    // per yarn from its own model).
+    SamplingParams sampling;
+    nlohmann::json fit = nlohmann::json::object();  // errors and provenance
+
+    // InputError naming the key: the box, the networks' shapes and outputs,
+    // the masking rows, the sampling block; and that the yarn at the box's
+    // centre is a model the renderer runs.
+    void validate() const;
+    // The ordinary colour model of the yarn p (fiber C_TT 0.5 grey, the colour
+    // a scene that gives none sees): InputError naming `what`, the field,
+    // its value and the box when p is outside the box.
+    YarnModel at(const YarnPoint& p, const std::string& what) const;
+    // The box's centre (N rounded).
+    YarnPoint centre() const;
+};
+
+nlohmann::json familyModelToJson(const FamilyModel& model);
+// Strict reader: InputError naming `source` and the JSON path.
+FamilyModel familyModelFromJson(const nlohmann::json& j, const std::string& source);
+FamilyModel loadFamilyModel(const std::string& path);
+// Atomic; the document is read back first, so a non-finite weight is an
+// InputError rather than a null in the file.
+void saveFamilyModel(const FamilyModel& model, const std::string& path);
+// Whether a model document says it is a family model ("format").
+bool isFamilyModelDocument(const nlohmann::json& j);
+
+}  // namespace weft

@@ -54,6 +54,7 @@
 #include "weft/render/renderer.h"
 #include "weft/render/scene.h"
 #include "weft/render/scene_file.h"
+#include "weft/yarn/family_model.h"
 #include "weft/yarn/material_preset.h"
 #include "weft/yarn/yarn_appearance.h"
 #include "weft/yarn/yarn_bsdf.h"
@@ -1125,6 +1126,23 @@ PYBIND11_MODULE(weft, m) {
             },
             py::arg("path"), py::arg("energy_guard") = true, py::arg("sampling") = "tabulated",
             "Reads a model.json (weft fit); energy_guard=False is --no-energy-guard.")
+        .def_static(
+            "from_family",
+            [](const py::object& path, const py::dict& yarn, bool energyGuard,
+               const std::string& sampling) {
+                const std::string p = pathOf(path, "family");
+                const YarnPoint point = readUserJson("yarn", [&] {
+                    return YarnPoint::fromJson(jsonFromPy(yarn, "yarn"), "yarn", "");
+                });
+                YarnModel ym =
+                    readUserJson(p, [&] { return loadFamilyModel(p).at(point, "yarn"); });
+                return std::make_unique<PyYarnModel>(std::move(ym), p, energyGuard, sampling);
+            },
+            py::arg("family"), py::arg("yarn"), py::arg("energy_guard") = true,
+            py::arg("sampling") = "tabulated",
+            "The yarn of a family model (weft fit family; docs/family.md) at `yarn`, a dict "
+            "{fibers, density, twist, beta_r_deg, beta_tt_deg, gamma_tt_deg, c_r}: what "
+            "`weft yarn at` writes. ValueError naming the field outside the family's box.")
         .def(
             "eval",
             [](const PyYarnModel& y, const py::object& wi, const py::object& wo) {

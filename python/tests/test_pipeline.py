@@ -291,3 +291,18 @@ def test_scene_with_colours_matches_cli(cli, tmp_path, root):
         weft.scene("knit", model=model, out=tmp_path / "bad", stripe=2)
     with pytest.raises(ValueError, match="closeup, weave, knit"):
         weft.scene("twill", model=model, out=tmp_path / "bad")
+
+
+def test_family_yarn_matches_weft_yarn_at(cli, root, tmp_path, rng):
+    family = root / "models" / "family.json"
+    yarn = {"fibers": 420, "density": 0.27, "twist": 0.1, "beta_r_deg": 5, "beta_tt_deg": 20,
+            "gamma_tt_deg": 30, "c_r": [0.3, 0.6, 0.9]}
+    cli("yarn", "at", "--family", family, "--yarn", json.dumps(yarn), "--out", tmp_path / "y.json")
+    wi = np.array([[0.3, 0.2, np.sqrt(1 - 0.13)]] * 64)
+    wo = rng.normal(size=(64, 3))
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    ours = weft.YarnModel.from_family(family, yarn).eval(wi, wo)
+    assert np.array_equal(ours, weft.YarnModel.load(tmp_path / "y.json").eval(wi, wo))
+    assert np.all(ours >= 0) and np.any(ours > 0)
+    with pytest.raises(ValueError, match=r"twist = 0\.5.*\[0, 0\.3\]"):
+        weft.YarnModel.from_family(family, dict(yarn, twist=0.5))

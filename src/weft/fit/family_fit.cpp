@@ -12,6 +12,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/math.h"
 #include "weft/core/progress.h"
 #include "weft/fit/colour_basis.h"
 #include "weft/fit/masking_fit.h"
@@ -45,8 +46,39 @@ struct LoadedYarn {
     std::vector<int64_t> count;
 };
 
+// The mean of a yarn's M targets over the training's cells
+// (FamilyTrainingPoint::meanM) at kFamilyMeanNodes colours of `range`: with
+// cells drawn with probability solidAngle(o) / (4 pi nIn), each M path adds
+// W0 C^k / count(i) / (4 pi nIn).
+std::array<std::vector<float>, 3> meanMTable(const std::vector<ColourPath>& paths,
+                                             const std::vector<int64_t>& count,
+                                             const ColourRange& range) {
+    // h_c[k]: the paths' weights by their number of TT events.
+    std::array<std::vector<double>, 3> h;
+    const double norm = 1.0 / (4 * kPi * static_cast<double>(count.size()));
+    for (const ColourPath& p : paths) {
+        if (p.kind != ColourPath::M) continue;
+        for (int c = 0; c < 3; ++c) {
+            if (h[c].size() <= static_cast<size_t>(p.ttEvents)) h[c].resize(p.ttEvents + 1, 0.0);
+            h[c][p.ttEvents] += p.weight[c] * norm / static_cast<double>(count[p.incidentBin]);
+        }
+    }
+    std::array<std::vector<float>, 3> table;
+    for (int c = 0; c < 3; ++c) {
+        table[c].resize(kFamilyMeanNodes);
+        for (int g = 0; g < kFamilyMeanNodes; ++g) {
+            const double colour =
+                range.lo + (range.hi - range.lo) * g / static_cast<double>(kFamilyMeanNodes - 1);
+            double sum = 0, power = 1;
+            for (double hk : h[c]) sum += hk * power, power *= colour;
+            table[c][g] = static_cast<float>(sum);
+        }
+    }
+    return table;
+}
+
 LoadedYarn loadYarn(const FamilyGather& gather, int k, bool keepR, bool keepPaths,
-                    FamilyTrainingPoint& point) {
+                    const ColourRange& range, FamilyTrainingPoint& point) {
     const GatherFolder folder = readGatherFolder(gather.pointDir(k), GatherFolderKind::Gather);
     const RdmBins& bins = gather.options.bins;  // loadFamilyGather checked each yarn's
     const GatherCounts counts = readGatherCounts(folder);
@@ -67,6 +99,7 @@ LoadedYarn loadYarn(const FamilyGather& gather, int k, bool keepR, bool keepPath
     for (int d = 0; d < FamilyBox::kDimensions; ++d) point.inputs[d] = static_cast<float>(q[d]);
     yarn.m = std::make_unique<ColourTargets>(paths, bins, counts.count, ColourPath::M,
                                              ColourTargets::CellIndex::Sparse);
+    point.meanM = meanMTable(paths, counts.count, range);
     point.m = yarn.m.get();
     if (keepR)
         yarn.r = std::make_unique<ColourTargets>(paths, bins, counts.count, ColourPath::R,
@@ -97,19 +130,27 @@ std::vector<double> fitFamilyMasking(const FamilyModel& family, const FamilyGath
         const std::vector<double> pe = poolRdm(eq8, fine, coarse),
                                   pr = poolRdm(loaded[k].r->map(Rgb(0.5)), fine, coarse);
         const auto features = familyMaskingFeatures(family.box, p);
-        Eigen::VectorXd v(n);
+        // The rows of this yarn are basis (x) features times eq. 8: their
+        // normal equations are the yarn's 4 x 4 ones (x) f f^T.
+        Eigen::Matrix4d yarnA = Eigen::Matrix4d::Zero();
+        Eigen::Vector4d yarnB = Eigen::Vector4d::Zero();
         forEachMaskingRow(pe, pr, coarse, [&](double w, const auto& basis, double e, double r) {
-            for (int j = 0; j < kMaskingCoefficients; ++j)
-                for (int l = 0; l < kFamilyMaskingFeatures; ++l)
-                    v[j * kFamilyMaskingFeatures + l] = basis[j] * features[l] * e;
-            a.selfadjointView<Eigen::Lower>().rankUpdate(v, w);
-            b += w * r * v;
+            const Eigen::Vector4d v(basis[0] * e, basis[1] * e, basis[2] * e, basis[3] * e);
+            yarnA += w * v * v.transpose();
+            yarnB += w * r * v;
             targetSquares += w * r * r;
         });
+        const Eigen::Map<const Eigen::Matrix<double, kFamilyMaskingFeatures, 1>> f(features.data());
+        const Eigen::MatrixXd ff = f * f.transpose();
+        for (int i = 0; i < kMaskingCoefficients; ++i) {
+            b.segment<kFamilyMaskingFeatures>(i * kFamilyMaskingFeatures) += yarnB[i] * f;
+            for (int j = 0; j < kMaskingCoefficients; ++j)
+                a.block<kFamilyMaskingFeatures, kFamilyMaskingFeatures>(
+                    i * kFamilyMaskingFeatures, j * kFamilyMaskingFeatures) += yarnA(i, j) * ff;
+        }
     }
-    const Eigen::MatrixXd full = a.selfadjointView<Eigen::Lower>();
-    const Eigen::VectorXd x = full.ldlt().solve(b);
-    const double squares = x.dot(full * x) - 2 * x.dot(b) + targetSquares;
+    const Eigen::VectorXd x = a.ldlt().solve(b);
+    const double squares = x.dot(a * x) - 2 * x.dot(b) + targetSquares;
     *residual = targetSquares > 0 ? std::sqrt(std::max(squares, 0.0) / targetSquares) : 0.0;
     return std::vector<double>(x.data(), x.data() + n);
 }
@@ -119,7 +160,7 @@ std::vector<double> fitFamilyMasking(const FamilyModel& family, const FamilyGath
 FitConfig FamilyFitOptions::defaultConfig() {
     FitConfig config;
     config.t.hidden = {16, 16};
-    config.m.steps = 300000;
+    config.m.steps = 600000;
     config.calibrationDegree = -1;
     return config;
 }
@@ -164,7 +205,8 @@ FamilyFitResult fitFamilyModel(const FamilyGather& gather, const FamilyFitOption
                 std::find(maskingYarns.begin(), maskingYarns.end(), k) != maskingYarns.end();
             const bool keepPaths =
                 std::find(basisYarns.begin(), basisYarns.end(), k) != basisYarns.end();
-            loaded[k] = loadYarn(gather, static_cast<int>(k), keepR, keepPaths, points[k]);
+            loaded[k] =
+                loadYarn(gather, static_cast<int>(k), keepR, keepPaths, options.range, points[k]);
             progress.add(1);
         }
         progress.finish();

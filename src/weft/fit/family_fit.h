@@ -30,7 +30,7 @@ namespace weft {
 
 // Yarns that the colour functions and the masking fit read.
 inline constexpr int kFamilyBasisYarns = 32;
-inline constexpr int kFamilyMaskingYarns = 128;
+inline constexpr int kFamilyMaskingYarns = 512;
 
 struct FamilyFitOptions {
     FitConfig config = defaultConfig();
@@ -40,7 +40,7 @@ struct FamilyFitOptions {
     bool quiet = false;
 
     // A family's defaults: a wider T network (its inputs include the ply's
-    // geometry) and twice the M steps of a one-yarn fit.
+    // geometry), four times the M steps of a one-yarn fit, no energy calibration.
     static FitConfig defaultConfig();
 };
 

@@ -160,9 +160,11 @@ MSample drawMSample(Rng& rng, const RdmBins& bins, const std::vector<double>& ro
 // The loss of a colour-conditioned M network on M_c = exp(sum_j a_jc
 // phi_j(C_TT,c)) (yarn/colour_basis.h), the sample's C_TT in rows
 // colourRow.. of x; its gradient into `gradient`.
+// With weightRow >= 0, rows weightRow.. hold a weight per channel that
+// multiplies the sample's squared residual.
 float conditionedLossAndGradient(MlpBatch& passes, const BatchRows& x, const BatchRows& target,
                                  int colourRow, const ColourBasis& basis, Loss loss,
-                                 std::vector<float>& gradient) {
+                                 std::vector<float>& gradient, int weightRow = -1) {
     const int batch = x.capacity(), functions = basis.functions();
     passes.forward(x, batch);
     double total = 0;
@@ -174,8 +176,9 @@ float conditionedLossAndGradient(MlpBatch& passes, const BatchRows& x, const Bat
             for (int j = 0; j < functions; ++j) z += passes.output(3 * j + c)[k] * phi[j];
             const float y = static_cast<float>(std::exp(std::min(z, 80.0)));
             const auto [diff, dDiff] = lossResidual(loss, y, target(c, k));
-            total += static_cast<double>(diff) * diff;
-            const double dz = 2.0 * diff * dDiff * y / static_cast<double>(batch);
+            const double weight = weightRow >= 0 ? x(weightRow + c, k) : 1.0;
+            total += weight * diff * diff;
+            const double dz = 2.0 * weight * diff * dDiff * y / static_cast<double>(batch);
             for (int j = 0; j < functions; ++j)
                 passes.outputGradient(3 * j + c)[k] = static_cast<float>(dz * phi[j]);
         }
@@ -360,7 +363,8 @@ NetworkWeights fitFamilyMNetwork(const std::vector<FamilyTrainingPoint>& points,
     Mlp<float> net(widthsOf(kInputs, config.m.hidden, 3 * basis.functions()),
                    OutputFunction::Identity, seed);
     Progress progress("fit M (family)", static_cast<uint64_t>(config.m.steps), quiet);
-    // Inputs: (wi, wo) and the yarn's parameters; extra rows: C_TT per channel.
+    // Inputs: (wi, wo) and the yarn's parameters; extra rows: C_TT per
+    // channel, then the weight per channel (1 / the yarn's mean M squared).
     const auto fill = [&](Rng& rng, BatchRows& x, BatchRows& target) {
         for (int k = 0; k < x.capacity(); ++k) {
             const FamilyTrainingPoint& p = points[drawPoint(rng, points.size())];
@@ -368,8 +372,16 @@ NetworkWeights fitFamilyMNetwork(const std::vector<FamilyTrainingPoint>& points,
             setInputColumn(x, k, m.wi, m.wo);
             for (int d = 0; d < FamilyBox::kDimensions; ++d) x(6 + d, k) = p.inputs[d];
             Rgb colour;
-            for (int c = 0; c < 3; ++c)
-                colour[c] = range.lo + (range.hi - range.lo) * rng.uniform();
+            for (int c = 0; c < 3; ++c) {
+                const double u = rng.uniform();
+                colour[c] = range.lo + (range.hi - range.lo) * u;
+                // The mean at u, linear between the nodes.
+                const double node = u * (kFamilyMeanNodes - 1);
+                const int g = std::min(static_cast<int>(node), kFamilyMeanNodes - 2);
+                const double f = node - g;
+                const double mean = (1 - f) * p.meanM[c][g] + f * p.meanM[c][g + 1];
+                x(kInputs + 3 + c, k) = static_cast<float>(1.0 / std::max(mean * mean, 1e-12));
+            }
             const Rgb t = p.m->value(m.i, m.o, colour);
             for (int c = 0; c < 3; ++c) {
                 x(kInputs + c, k) = static_cast<float>(colour[c]);
@@ -380,9 +392,9 @@ NetworkWeights fitFamilyMNetwork(const std::vector<FamilyTrainingPoint>& points,
     const auto lossAndGradient = [&](MlpBatch& passes, const BatchRows& x, const BatchRows& target,
                                      std::vector<float>& gradient) {
         return conditionedLossAndGradient(passes, x, target, kInputs, basis, config.m.loss,
-                                          gradient);
+                                          gradient, kInputs + 3);
     };
-    *curve = train(net, config.m, seed, 5, &arena, progress, false, {kInputs, 3, 3}, fill,
+    *curve = train(net, config.m, seed, 5, &arena, progress, false, {kInputs, 3, 6}, fill,
                    lossAndGradient);
     progress.finish();
     return net.weights();

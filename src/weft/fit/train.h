@@ -47,7 +47,13 @@ struct FamilyTrainingPoint {
     std::vector<double> incidentCdf;   // cumulative path counts over incident bins
     std::vector<double> pT;            // P(T | incident bin)
     const ColourTargets* m = nullptr;  // its M records
+    // The mean of its M targets over the training's cells (incident bins
+    // uniform, outgoing in proportion to solid angle) per channel, at
+    // kFamilyMeanNodes colours uniform over the fit's colour range: the
+    // scale that the M loss divides each sample's residual by.
+    std::array<std::vector<float>, 3> meanM;
 };
+inline constexpr int kFamilyMeanNodes = 64;
 
 // The family's T network (kFamilyTInputs -> 1, sigmoid): as T above, with
 // the yarn drawn uniformly for every sample and its N, rho, alpha as inputs
@@ -59,7 +65,11 @@ NetworkWeights fitFamilyTransmissionNetwork(const std::vector<FamilyTrainingPoin
                                             LossCurve* curve, double* error);
 // The family's M network (kFamilyMInputs -> 3K): as the colour-conditioned M
 // network, with the yarn drawn uniformly for every sample and its nine
-// parameters as inputs after (wi, wo).
+// parameters as inputs after (wi, wo), and each sample's squared residual in
+// channel c divided by the square of its yarn's mean M in c at its colour
+// (FamilyTrainingPoint::meanM): the loss is relative per yarn and channel, as
+// the error metric is, so that dark channels and dim yarns, whose noisy
+// targets would otherwise weigh nothing against bright ones, are fitted too.
 NetworkWeights fitFamilyMNetwork(const std::vector<FamilyTrainingPoint>& points,
                                  const ColourBasis& basis, const FitConfig& config, uint64_t seed,
                                  tbb::task_arena& arena, bool quiet, LossCurve* curve);

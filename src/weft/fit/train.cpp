@@ -187,8 +187,39 @@ float conditionedLossAndGradient(MlpBatch& passes, const BatchRows& x, const Bat
 }
 
 // The 3-7-7-1 network is small for the sharp grazing-angle edge of P(T | wi)
-// and its result depends on the initialisation: train `restarts` networks
-// from different seeds (in parallel, each on one thread) and keep the best.
+// and its result depends on the initialisation: train `restarts` T networks
+// of `inputs` inputs from different seeds (in parallel, each on one thread)
+// with fill (trainPlain) and keep the one of least error(weights); its loss
+// curve into *curve, its error into *bestError.
+template <typename Fill, typename Error>
+NetworkWeights bestTransmissionNetwork(int inputs, const FitConfig& config, uint64_t seed,
+                                       uint64_t netId, tbb::task_arena& arena, const char* label,
+                                       bool quiet, const Fill& fill, const Error& error,
+                                       LossCurve* curve, double* bestError) {
+    const int restarts = config.t.restarts;
+    std::vector<Mlp<float>> nets(restarts);
+    std::vector<LossCurve> curves(restarts);
+    std::vector<double> errors(restarts);
+    Progress progress(label, static_cast<uint64_t>(config.t.steps) * restarts, quiet);
+    arena.execute([&] {
+        tbb::parallel_for(0, restarts, [&](int r) {
+            const uint64_t netSeed = mixBits(seed + 0x9e3779b97f4a7c15ULL * static_cast<uint64_t>(r));
+            nets[r] =
+                Mlp<float>(widthsOf(inputs, config.t.hidden, 1), OutputFunction::Sigmoid, netSeed);
+            curves[r] = trainPlain(nets[r], config.t, netSeed, netId, nullptr, progress,
+                                   restarts > 1, fill);
+            errors[r] = error(nets[r].weights());
+        });
+    });
+    const int best =
+        static_cast<int>(std::min_element(errors.begin(), errors.end()) - errors.begin());
+    progress.setStatus("best rmse " + std::to_string(errors[best]));
+    progress.finish();
+    *curve = curves[best];
+    if (bestError) *bestError = errors[best];
+    return nets[best].weights();
+}
+
 }  // namespace
 
 NetworkWeights fitTransmissionNetwork(const RdmData& rdm, const FitConfig& config, uint64_t seed,
@@ -198,35 +229,20 @@ NetworkWeights fitTransmissionNetwork(const RdmData& rdm, const FitConfig& confi
     double sum = 0;
     for (size_t i = 0; i < cdf.size(); ++i) cdf[i] = sum += static_cast<double>(rdm.count[i]);
     if (sum <= 0) throw InputError(rdm.dir + ": the gather has no paths (count.npy is all zero)");
-    const int restarts = config.t.restarts;
-    std::vector<Mlp<float>> nets(restarts);
-    std::vector<LossCurve> curves(restarts);
-    std::vector<double> rmse(restarts);
-    Progress progress("fit T", static_cast<uint64_t>(config.t.steps) * restarts, quiet);
-    arena.execute([&] {
-        tbb::parallel_for(0, restarts, [&](int r) {
-            const uint64_t netSeed = mixBits(seed + 0x9e3779b97f4a7c15ULL * static_cast<uint64_t>(r));
-            nets[r] = Mlp<float>(widthsOf(3, config.t.hidden, 1), OutputFunction::Sigmoid, netSeed);
-            curves[r] = trainPlain(nets[r], config.t, netSeed, 1, nullptr, progress, restarts > 1,
-                                   [&](Rng& rng, BatchRows& x, BatchRows& target) {
-                                       for (int k = 0; k < x.capacity(); ++k) {
-                                           const size_t i = drawFromCdf(cdf, rng.uniform());
-                                           const double u1 = rng.uniform(), u2 = rng.uniform();
-                                           setInputColumn(x, k,
-                                                          config.jitter
-                                                              ? bins.incidentDirectionIn(i, u1, u2)
-                                                              : bins.incidentCentre(i));
-                                           target(0, k) = static_cast<float>(rdm.pT[i]);
-                                       }
-                                   });
-            rmse[r] = transmissionError(transmissionMap(nets[r].weights(), bins), rdm).weighted;
-        });
-    });
-    const int best = static_cast<int>(std::min_element(rmse.begin(), rmse.end()) - rmse.begin());
-    progress.setStatus("best rmse " + std::to_string(rmse[best]));
-    progress.finish();
-    *curve = curves[best];
-    return nets[best].weights();
+    const auto fill = [&](Rng& rng, BatchRows& x, BatchRows& target) {
+        for (int k = 0; k < x.capacity(); ++k) {
+            const size_t i = drawFromCdf(cdf, rng.uniform());
+            const double u1 = rng.uniform(), u2 = rng.uniform();
+            setInputColumn(
+                x, k, config.jitter ? bins.incidentDirectionIn(i, u1, u2) : bins.incidentCentre(i));
+            target(0, k) = static_cast<float>(rdm.pT[i]);
+        }
+    };
+    const auto error = [&](const NetworkWeights& net) {
+        return transmissionError(transmissionMap(net, bins), rdm).weighted;
+    };
+    return bestTransmissionNetwork(3, config, seed, 1, arena, "fit T", quiet, fill, error, curve,
+                                   nullptr);
 }
 
 NetworkWeights fitMultipleScatteringNetwork(const RdmData& rdm, const FitConfig& config,
@@ -315,41 +331,24 @@ size_t drawPoint(Rng& rng, size_t count) {
 NetworkWeights fitFamilyTransmissionNetwork(const std::vector<FamilyTrainingPoint>& points,
                                             const RdmBins& bins, const FitConfig& config,
                                             uint64_t seed, tbb::task_arena& arena, bool quiet,
-                                            LossCurve* curve, double* error) {
+                                            LossCurve* curve, double* rmse) {
     if (points.empty()) throw InputError("a family fit needs at least one yarn");
-    const int restarts = config.t.restarts;
-    std::vector<Mlp<float>> nets(restarts);
-    std::vector<LossCurve> curves(restarts);
-    std::vector<double> rmse(restarts);
-    Progress progress("fit T (family)", static_cast<uint64_t>(config.t.steps) * restarts, quiet);
-    arena.execute([&] {
-        tbb::parallel_for(0, restarts, [&](int r) {
-            const uint64_t netSeed =
-                mixBits(seed + 0x9e3779b97f4a7c15ULL * static_cast<uint64_t>(r));
-            nets[r] = Mlp<float>(widthsOf(6, config.t.hidden, 1), OutputFunction::Sigmoid, netSeed);
-            curves[r] = trainPlain(
-                nets[r], config.t, netSeed, 4, nullptr, progress, restarts > 1,
-                [&](Rng& rng, BatchRows& x, BatchRows& target) {
-                    for (int k = 0; k < x.capacity(); ++k) {
-                        const FamilyTrainingPoint& p = points[drawPoint(rng, points.size())];
-                        const size_t i = drawFromCdf(p.incidentCdf, rng.uniform());
-                        const double u1 = rng.uniform(), u2 = rng.uniform();
-                        setInputColumn(x, k,
-                                       config.jitter ? bins.incidentDirectionIn(i, u1, u2)
-                                                     : bins.incidentCentre(i));
-                        for (int d = 0; d < 3; ++d) x(3 + d, k) = p.inputs[d];
-                        target(0, k) = static_cast<float>(p.pT[i]);
-                    }
-                });
-            rmse[r] = familyTransmissionError(nets[r].weights(), points, bins);
-        });
-    });
-    const int best = static_cast<int>(std::min_element(rmse.begin(), rmse.end()) - rmse.begin());
-    progress.setStatus("best rmse " + std::to_string(rmse[best]));
-    progress.finish();
-    *curve = curves[best];
-    *error = rmse[best];
-    return nets[best].weights();
+    const auto fill = [&](Rng& rng, BatchRows& x, BatchRows& target) {
+        for (int k = 0; k < x.capacity(); ++k) {
+            const FamilyTrainingPoint& p = points[drawPoint(rng, points.size())];
+            const size_t i = drawFromCdf(p.incidentCdf, rng.uniform());
+            const double u1 = rng.uniform(), u2 = rng.uniform();
+            setInputColumn(
+                x, k, config.jitter ? bins.incidentDirectionIn(i, u1, u2) : bins.incidentCentre(i));
+            for (int d = 0; d < 3; ++d) x(3 + d, k) = p.inputs[d];
+            target(0, k) = static_cast<float>(p.pT[i]);
+        }
+    };
+    const auto error = [&](const NetworkWeights& net) {
+        return familyTransmissionError(net, points, bins);
+    };
+    return bestTransmissionNetwork(6, config, seed, 4, arena, "fit T (family)", quiet, fill, error,
+                                   curve, rmse);
 }
 
 NetworkWeights fitFamilyMNetwork(const std::vector<FamilyTrainingPoint>& points,

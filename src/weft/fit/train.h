@@ -57,12 +57,12 @@ inline constexpr int kFamilyMeanNodes = 64;
 
 // The family's T network (kFamilyTInputs -> 1, sigmoid): as T above, with
 // the yarn drawn uniformly for every sample and its N, rho, alpha as inputs
-// after wi. `error` receives the kept restart's path-count-weighted RMS error
+// after wi. `rmse` receives the kept restart's path-count-weighted RMS error
 // over all yarns' incident bins.
 NetworkWeights fitFamilyTransmissionNetwork(const std::vector<FamilyTrainingPoint>& points,
                                             const RdmBins& bins, const FitConfig& config,
                                             uint64_t seed, tbb::task_arena& arena, bool quiet,
-                                            LossCurve* curve, double* error);
+                                            LossCurve* curve, double* rmse);
 // The family's M network (kFamilyMInputs -> 3K): as the colour-conditioned M
 // network, with the yarn drawn uniformly for every sample and its nine
 // parameters as inputs after (wi, wo), and each sample's squared residual in

@@ -183,6 +183,33 @@ TEST_F(SceneCliTest, AppearanceColoursTheYarnsByHowTheyLook) {
                     {"--appearance", "#rrggbb"});
 }
 
+// A family model's yarn (docs/family.md): the scene's entries carry it in
+// "yarn" and render; a family without --yarn, --yarn with a model of one
+// yarn and a yarn outside the box are refused.
+TEST_F(SceneCliTest, FamilyYarnScenes) {
+    const std::string family = std::string(WEFT_SOURCE_DIR) + "/models/family.json";
+    const std::string yarn = R"('{"fibers": 250, "density": 0.38, "twist": 0.28, "beta_r_deg": 2,
+        "beta_tt_deg": 12, "gamma_tt_deg": 21, "c_r": [0.2, 0.3, 0.4]}')";
+    RunResult r = run("scene closeup --model " + family + " --yarn " + yarn +
+                      " --colours 0.8,0.5,0.35 --width 16 --height 16 --spp 1 --out c");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json scene = nlohmann::json::parse(readFile(path("c/scene.json")));
+    const nlohmann::json& entry = scene.at("yarns").at(0);
+    EXPECT_EQ(entry.at("yarn").at("fibers"), 250);
+    EXPECT_EQ(entry.at("yarn").at("c_r"), nlohmann::json({0.2, 0.3, 0.4}));
+    r = run("render c/scene.json --spp 1 --threads 2 --quiet --out c.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    expectUserError(run("scene closeup --model " + family + " --out d"),
+                    {"--model", "family model", "--yarn"});
+    expectUserError(run("scene closeup --model " + kFleece + " --yarn " + yarn + " --out d"),
+                    {"--yarn", "model of one yarn"});
+    expectUserError(run("scene closeup --model " + family + R"( --yarn '{"fibers": 100,
+        "density": 0.3, "twist": 0.1, "beta_r_deg": 2, "beta_tt_deg": 12, "gamma_tt_deg": 21,
+        "c_r": [0.2, 0.3, 0.4]}' --out d)"),
+                    {"--yarn", "fibers", "100", "[200, 600]"});
+    EXPECT_FALSE(std::filesystem::exists(path("d")));
+}
+
 TEST_F(SceneCliTest, BadInputIsNamed) {
     const std::string m = " --model " + kFleece;
     expectUserError(run("scene twill" + m + " --out o"), {"twill", "closeup, weave, knit"});

@@ -21,6 +21,7 @@ struct SceneCmdOptions {
     eval::SceneOptions scene;
     std::vector<std::string> colours;      // --colours: "R,G,B" each
     std::vector<std::string> appearances;  // --appearance: "#rrggbb" or "R,G,B" each
+    std::string yarn;                      // --yarn: JSON text or file
     CLI::Option* sizeOpt = nullptr;
     CLI::Option* stripeOpt = nullptr;
     int stripe = eval::kDefaultStripe;
@@ -39,6 +40,7 @@ void runScene(SceneCmdOptions o) {
     for (const std::string& c : o.colours) o.scene.colours.push_back(parseColour(c, "--colours"));
     for (const std::string& c : o.appearances)
         o.scene.appearances.push_back(parseSrgbColour(c, "--appearance"));
+    if (!o.yarn.empty()) o.scene.yarn = readYarnPointArgument(o.yarn, "--yarn");
     checkOutputsSpareInputs({{"--model", o.scene.model}, {"--envmap", o.scene.envmap}}, {}, {},
                             {{"--out", o.out}});
     const eval::GeneratedScene generated = eval::generateScene(kind, o.scene);
@@ -93,6 +95,10 @@ void addSceneCommand(CLI::App& app) {
                     "Instead of --colours: one or two colours the yarns should look, sRGB, "
                     "#rrggbb or R,G,B in [0, 1] (docs/colour.md, \"Colour by appearance\"); "
                     "needs a colour model, and each colour within the material's reach");
+    cmd->add_option("--yarn", o->yarn,
+                    "With a family model (weft fit family): the yarn, YARN.json or inline "
+                    "{\"fibers\", \"density\", \"twist\", \"beta_r_deg\", \"beta_tt_deg\", "
+                    "\"gamma_tt_deg\", \"c_r\"}, inside the family's box (docs/family.md)");
     o->stripeOpt = cmd->add_option("--stripe", o->stripe,
                                    "With two colours: knit courses or weave yarns per stripe, "
                                    "[1, 100]")

@@ -16,12 +16,14 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/image.h"
+#include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/math.h"
 #include "weft/render/camera.h"
 #include "weft/render/environment_light.h"
 #include "weft/render/scene.h"
 #include "weft/render/sphere_light.h"
+#include "weft/yarn/family_model.h"
 #include "weft/yarn/yarn_appearance.h"
 #include "weft/yarn/yarn_model.h"
 
@@ -154,6 +156,7 @@ GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera
     yarn.plies = o.plies;
     yarn.plyTwist = o.plyTwist;
     yarn.model = absolutePath(o.model);
+    yarn.yarn = o.yarn;
     if (o.dyeLength) {
         // Space-dyed: one entry, a colour per curve point.
         spaceDye(curves.set, curves.anchor, o, colours.fiber);
@@ -325,11 +328,37 @@ SceneColours SceneOptions::validate() const {
             throw InputError(std::string("--envmap: ") + e.what());
         }
     }
-    YarnModel loaded;
+    // A family model's yarn (docs/family.md) is the model of the scene's yarns.
+    nlohmann::json document;
     try {
-        loaded = loadYarnModel(model);
+        document = readJsonFile(model);
     } catch (const InputError& e) {
         throw InputError(std::string("--model: ") + e.what());
+    }
+    const bool family = isFamilyModelDocument(document);
+    if (family && !yarn)
+        throw InputError("--model: " + model +
+                         " is a family model (weft fit family): give the yarn's parameters with "
+                         "--yarn (docs/family.md)");
+    if (!family && yarn)
+        throw InputError("--yarn: " + model +
+                         " is a model of one yarn; only a family model (weft fit family) takes "
+                         "yarn parameters");
+    YarnModel loaded;
+    if (family) {
+        FamilyModel familyModel;
+        try {
+            familyModel = familyModelFromJson(document, model);
+        } catch (const InputError& e) {
+            throw InputError(std::string("--model: ") + e.what());
+        }
+        loaded = familyModel.at(*yarn, "--yarn");
+    } else {
+        try {
+            loaded = yarnModelFromJson(document, model);
+        } catch (const InputError& e) {
+            throw InputError(std::string("--model: ") + e.what());
+        }
     }
     if (!appearances.empty() && !loaded.colour)
         throw InputError("--appearance: " + model +

@@ -45,6 +45,7 @@
 #include <vector>
 
 #include "weft/core/curves.h"
+#include "weft/core/family_box.h"
 #include "weft/core/rgb.h"
 #include "weft/core/vec.h"
 #include "weft/render/scene_file.h"
@@ -93,6 +94,9 @@ struct SceneColours {
 
 struct SceneOptions {
     std::string model;         // --model: MODEL.json from `weft fit`; must exist and load
+    // --yarn: with a family model (weft fit family), the yarn every entry
+    // draws (its parameters in the scene's "yarn"); refused with any other.
+    std::optional<YarnPoint> yarn;
     int size = 6;              // --size N: weave N x N yarns, knit N courses x N loops; [1, 100]
     double radius = 0.01;      // --radius: yarn radius R in scene units; [1e-6, 1e3]
     int plies = 3;             // --plies: plies per yarn; [1, 16]

@@ -956,9 +956,13 @@ py::object pyScene(const std::string& kindName, const py::object& model, const p
                    const py::object& width, const py::object& height, const py::object& spp,
                    const py::object& envmap, const py::object& colours,
                    const py::object& appearances, const py::object& stripe,
-                   const py::object& dyeLength) {
+                   const py::object& dyeLength, const py::object& yarn) {
     const eval::SceneKind kind = eval::parseSceneKind(kindName);
     eval::SceneOptions o;
+    // A family model's yarn (docs/family.md): a dict as weft yarn at takes.
+    if (!yarn.is_none())
+        o.yarn = readUserJson(
+            "yarn", [&] { return YarnPoint::fromJson(jsonFromPy(yarn, "yarn"), "yarn", ""); });
     // The integer arguments first (eval/scene_gen.h gives their ranges).
     o.size = intArg(size, "size", 1, eval::kMaxPatchSize);
     o.plies = intArg(plies, "plies", 1, 16);
@@ -1271,15 +1275,17 @@ PYBIND11_MODULE(weft, m) {
           py::arg("ply_twist") = 0.3, py::arg("width") = 512, py::arg("height") = 512,
           py::arg("spp") = 64, py::arg("envmap") = py::none(), py::arg("colours") = py::none(),
           py::arg("appearances") = py::none(), py::arg("stripe") = py::none(),
-          py::arg("dye_length") = py::none(),
+          py::arg("dye_length") = py::none(), py::arg("yarn") = py::none(),
           "`weft scene`: writes the generated scene folder `out` (\"closeup\", \"weave\" or "
           "\"knit\") and returns its summary dict; colours=[(r, g, b)] colours every yarn, two "
           "colours make a striped knit or a check weave (stripe yarns per stripe, default 2), or "
           "with "
           "dye_length=L space-dyed yarns (the colour alternating every L yarn radii); "
           "appearances=[\"#rrggbb\" or (r, g, b)] instead gives the sRGB colours the yarns should "
-          "look (docs/colour.md, \"Colour by appearance\"). Warnings (overlapping yarns, colours a "
-          "neural render would refuse) are UserWarnings.");
+          "look (docs/colour.md, \"Colour by appearance\"); with a family model, yarn={fibers, "
+          "density, twist, beta_r_deg, beta_tt_deg, gamma_tt_deg, c_r} is the yarn every entry "
+          "draws (docs/family.md). Warnings (overlapping yarns, colours a neural render would "
+          "refuse) are UserWarnings.");
 
     m.def("yarn_appearance", &pyYarnAppearance, py::arg("model"), py::kw_only(),
           py::arg("appearance") = py::none(), py::arg("c_tt") = py::none(),

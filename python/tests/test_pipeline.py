@@ -306,3 +306,15 @@ def test_family_yarn_matches_weft_yarn_at(cli, root, tmp_path, rng):
     assert np.all(ours >= 0) and np.any(ours > 0)
     with pytest.raises(ValueError, match=r"twist = 0\.5.*\[0, 0\.3\]"):
         weft.YarnModel.from_family(family, dict(yarn, twist=0.5))
+
+
+def test_scene_with_a_family_yarn(root, tmp_path):
+    family = root / "models" / "family.json"
+    yarn = {"fibers": 420, "density": 0.27, "twist": 0.1, "beta_r_deg": 5, "beta_tt_deg": 20,
+            "gamma_tt_deg": 30, "c_r": [0.3, 0.6, 0.9]}
+    weft.scene("closeup", model=family, out=tmp_path / "s", yarn=yarn, width=16, height=16, spp=1,
+               colours=[(0.8, 0.5, 0.35)])
+    scene = json.loads((tmp_path / "s" / "scene.json").read_text())
+    assert scene["yarns"][0]["yarn"]["fibers"] == 420
+    with pytest.raises(ValueError, match="--yarn"):
+        weft.scene("closeup", model=family, out=tmp_path / "t")

@@ -16,7 +16,6 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/image.h"
-#include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/math.h"
 #include "weft/render/camera.h"
@@ -329,37 +328,13 @@ SceneColours SceneOptions::validate() const {
         }
     }
     // A family model's yarn (docs/family.md) is the model of the scene's yarns.
-    nlohmann::json document;
+    ModelFile file;
     try {
-        document = readJsonFile(model);
+        file = ModelFile::load(model);
     } catch (const InputError& e) {
         throw InputError(std::string("--model: ") + e.what());
     }
-    const bool family = isFamilyModelDocument(document);
-    if (family && !yarn)
-        throw InputError("--model: " + model +
-                         " is a family model (weft fit family): give the yarn's parameters with "
-                         "--yarn (docs/family.md)");
-    if (!family && yarn)
-        throw InputError("--yarn: " + model +
-                         " is a model of one yarn; only a family model (weft fit family) takes "
-                         "yarn parameters");
-    YarnModel loaded;
-    if (family) {
-        FamilyModel familyModel;
-        try {
-            familyModel = familyModelFromJson(document, model);
-        } catch (const InputError& e) {
-            throw InputError(std::string("--model: ") + e.what());
-        }
-        loaded = familyModel.at(*yarn, "--yarn");
-    } else {
-        try {
-            loaded = yarnModelFromJson(document, model);
-        } catch (const InputError& e) {
-            throw InputError(std::string("--model: ") + e.what());
-        }
-    }
+    const YarnModel loaded = file.forYarn(yarn, "--model", "--yarn", "with --yarn");
     if (!appearances.empty() && !loaded.colour)
         throw InputError("--appearance: " + model +
                          " is fitted for one colour; colour by appearance needs a colour model "

@@ -11,7 +11,6 @@
 
 #include "weft/core/error.h"
 #include "weft/core/image.h"
-#include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/limits.h"
 #include "weft/core/math.h"
@@ -134,26 +133,15 @@ class SceneMaterials {
         const std::string key = modelKey(y);
         auto it = models_.find(key);
         if (it != models_.end()) return it->second;
-        auto family = families_.find(yarn.model);
-        if (family == families_.end()) {
-            const nlohmann::json document = readJsonFile(yarn.model);
-            if (isFamilyModelDocument(document)) {
-                family =
-                    families_.emplace(yarn.model, familyModelFromJson(document, yarn.model)).first;
-            } else {
-                if (yarn.yarn)
-                    throw InputError(entryName(y) + ".yarn: " + yarn.model +
-                                     " is a model of one yarn; only a family model (weft fit "
-                                     "family) takes yarn parameters");
-                return models_.emplace(key, yarnModelFromJson(document, yarn.model)).first->second;
-            }
-        }
-        if (!yarn.yarn)
-            throw InputError(entryName(y) + ": " + yarn.model +
-                             " is a family model: give the yarn's parameters in \"yarn\" "
-                             "({\"fibers\", \"density\", \"twist\", \"beta_r_deg\", "
-                             "\"beta_tt_deg\", \"gamma_tt_deg\", \"c_r\"}; docs/family.md)");
-        return models_.emplace(key, family->second.at(*yarn.yarn, entryName(y) + ".yarn"))
+        auto file = files_.find(yarn.model);
+        if (file == files_.end())
+            file = files_.emplace(yarn.model, ModelFile::load(yarn.model)).first;
+        const std::string yarnHint =
+            "in \"yarn\" ({\"fibers\", \"density\", \"twist\", \"beta_r_deg\", "
+            "\"beta_tt_deg\", \"gamma_tt_deg\", \"c_r\"})";
+        return models_
+            .emplace(key, file->second.forYarn(yarn.yarn, entryName(y), entryName(y) + ".yarn",
+                                               yarnHint))
             .first->second;
     }
 
@@ -219,7 +207,7 @@ class SceneMaterials {
     std::vector<std::unique_ptr<Bsdf>>* bsdfs_;
     std::vector<uint8_t>* plyFrame_;
     std::map<std::string, YarnModel> models_;
-    std::map<std::string, FamilyModel> families_;
+    std::map<std::string, ModelFile> files_;  // by path
     std::map<std::string, AppearanceTable> tables_;
     std::map<std::tuple<std::string, std::vector<double>, std::string>, int> index_;
     // The last coloured lookup: neighbouring segments mostly share a colour.

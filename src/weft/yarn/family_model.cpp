@@ -167,4 +167,31 @@ void saveFamilyModel(const FamilyModel& model, const std::string& path) {
     writeFileAtomic(path, formatModelJson(j));
 }
 
+ModelFile ModelFile::load(const std::string& path) {
+    const json document = readJsonFile(path);
+    ModelFile file;
+    file.path = path;
+    if (isFamilyModelDocument(document))
+        file.family = familyModelFromJson(document, path);
+    else
+        file.single = yarnModelFromJson(document, path);
+    return file;
+}
+
+YarnModel ModelFile::forYarn(const std::optional<YarnPoint>& yarn, const std::string& owner,
+                             const std::string& yarnWhat, const std::string& yarnHint) const {
+    if (single) {
+        if (yarn)
+            throw InputError(yarnWhat + ": " + path +
+                             " is a model of one yarn; only a family model (weft fit family) "
+                             "takes yarn parameters");
+        return *single;
+    }
+    if (!yarn)
+        throw InputError(owner + ": " + path +
+                         " is a family model (weft fit family): give the yarn's parameters " +
+                         yarnHint + " (docs/family.md)");
+    return family->at(*yarn, yarnWhat);
+}
+
 }  // namespace weft

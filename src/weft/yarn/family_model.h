@@ -26,6 +26,7 @@
 
 #include <array>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -84,5 +85,22 @@ FamilyModel loadFamilyModel(const std::string& path);
 void saveFamilyModel(const FamilyModel& model, const std::string& path);
 // Whether a model document says it is a family model ("format").
 bool isFamilyModelDocument(const nlohmann::json& j);
+
+// A model file as scenes read it (`weft render`, `weft scene`): a model of
+// one yarn, or a family model whose yarns at() makes; its "format" decides.
+struct ModelFile {
+    std::string path;
+    std::optional<YarnModel> single;
+    std::optional<FamilyModel> family;
+
+    // InputError naming the path (and the JSON path) for a bad file.
+    static ModelFile load(const std::string& path);
+    // The model of a yarn that gives `yarn` (or none): the model of one yarn
+    // as it is, refusing a yarn; the family's yarn at `yarn`, requiring one.
+    // Messages name `owner` (the yarn's entry, or --model) or `yarnWhat` (where
+    // the yarn is given), and `yarnHint` says how to give one.
+    YarnModel forYarn(const std::optional<YarnPoint>& yarn, const std::string& owner,
+                      const std::string& yarnWhat, const std::string& yarnHint) const;
+};
 
 }  // namespace weft

@@ -535,8 +535,10 @@ void walkArgs(Options& o, const py::object& bins, const py::object& maxDepth,
 py::object pyGatherFamily(const py::object& points, const py::object& paths, const py::object& out,
                           const py::object& box, const py::object& seed, const py::object& bins,
                           const py::object& maxDepth, const py::object& threads,
-                          const py::object& segmentsPerTwist, const py::object& shard, bool quiet) {
+                          const py::object& segmentsPerTwist, const py::object& shard,
+                          const std::string& design, bool quiet) {
     FamilyGatherOptions o;
+    o.design = parseFamilyDesign(design, "design");
     o.points = intArg(points, "points", 1, kMaxFamilyPoints);
     o.pathsPerPoint = integerArg<int64_t>(paths, "paths", 1, kMaxPaths);
     o.seed = seedArg(seed, "seed");
@@ -1242,11 +1244,12 @@ PYBIND11_MODULE(weft, m) {
           py::arg("out"), py::arg("box") = py::none(), py::arg("seed") = 0,
           py::arg("bins") = std::vector<int>{11, 45, 15, 30}, py::arg("max_depth") = 1000,
           py::arg("threads") = 0, py::arg("segments_per_twist") = 128,
-          py::arg("shard") = py::none(), py::arg("quiet") = true,
+          py::arg("shard") = py::none(), py::arg("design") = "halton", py::arg("quiet") = true,
           "`weft gather family` (docs/family.md): the yarns of a family, points spread over a "
           "box of yarn parameters (box: a dict in BOX.json's layout or its path; None: the "
           "default box), each an any-colour gather of `paths` walks in out/points/NNNNN, and "
-          "out/family.json; shard=(k, n) gathers shard k of n of the points into the same out. "
+          "out/family.json; shard=(k, n) gathers shard k of n of the points into the same out; "
+          "design: 'halton' (uniform) or 'edges' (denser towards the box's faces). "
           "Returns the summary dict.");
 
     m.def("gather_merge", &gatherMerge, py::arg("parts"), py::kw_only(),

@@ -214,6 +214,11 @@ def test_gather_family_matches_cli(cli, tmp_path):
                            box=dict(box, density=[0.5, 0.4]))
     with pytest.raises(ValueError, match="another family"):
         weft.gather_family(out=tmp_path / "py", points=3, paths=300, seed=5, bins=(3, 8, 6, 12))
+    edges = weft.gather_family(out=tmp_path / "edges", design="edges", **args)
+    assert edges["points_gathered"] == 3
+    assert json.loads((tmp_path / "edges" / "family.json").read_text())["design"] == "edges"
+    with pytest.raises(ValueError, match="halton, edges"):
+        weft.gather_family(out=tmp_path / "bad", design="grid", **args)
 
 
 def test_yarn_appearance_matches_cli_and_inverts(cli, root):

@@ -354,5 +354,57 @@ TEST_F(FitCliTest, AblationsFitAndRender) {
     }
 }
 
+// weft fit family (docs/family.md): a family model with its energy
+// calibration; --recalibrate refits only the calibration (here at another
+// degree), keeping the networks; bad options are refused.
+TEST_F(FitCliTest, FamilyFitsAndRecalibrates) {
+    ASSERT_EQ(run("gather family --points 3 --paths 3000 --bins 3,8,6,12 --seed 2 --quiet "
+                  "--out fam")
+                  .status,
+              0);
+    writeFileAtomic(path("family.json"),
+                    R"({"t_net": {"steps": 200, "restarts": 1, "batch": 64},
+                        "m_net": {"hidden": [8, 8], "steps": 200, "batch": 64},
+                        "energy_calibration_degree": 2})");
+    const RunResult r =
+        run("fit family --gather fam --out f.json --config family.json "
+            "--colour-functions 3 --quiet");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json summary = nlohmann::json::parse(r.out);
+    EXPECT_EQ(summary.at("calibration").at("degree"), 2);
+    const nlohmann::json fitted = nlohmann::json::parse(readFile(path("f.json")));
+    EXPECT_EQ(fitted.at("version"), 2);
+    EXPECT_EQ(fitted.at("energy_calibration").at("degree"), 2);
+    EXPECT_EQ(fitted.at("energy_calibration").at("r").size(), 9u);  // (2 + 1)^2 rows
+
+    writeFileAtomic(path("degree1.json"), R"({"energy_calibration_degree": 1})");
+    const RunResult re =
+        run("fit family --gather fam --recalibrate f.json --config degree1.json "
+            "--out g.json --quiet");
+    ASSERT_EQ(re.status, 0) << re.err;
+    const nlohmann::json again = nlohmann::json::parse(readFile(path("g.json")));
+    EXPECT_EQ(again.at("energy_calibration").at("degree"), 1);
+    EXPECT_EQ(again.at("fit").at("recalibrated"), true);
+    EXPECT_EQ(again.at("m_net"), fitted.at("m_net"));
+    EXPECT_EQ(again.at("t_net"), fitted.at("t_net"));
+
+    // Another box's gather; a missing model; a degree out of range.
+    writeFileAtomic(path("box.json"),
+                    R"({"fibers": [300, 400], "density": [0.2, 0.4], "twist": [0, 0.3],
+                        "beta_r_deg": [1, 8], "beta_tt_deg": [10, 28], "gamma_tt_deg": [19, 39],
+                        "c_r": [0, 1]})");
+    ASSERT_EQ(run("gather family --points 2 --paths 1000 --bins 3,8,6,12 --seed 2 --quiet "
+                  "--box box.json --out other")
+                  .status,
+              0);
+    expectUserError(run("fit family --gather other --recalibrate f.json --out h.json --quiet"),
+                    {"--recalibrate", "box"});
+    expectUserError(run("fit family --gather fam --recalibrate missing.json --out h.json"),
+                    {"missing.json"});
+    writeFileAtomic(path("degree13.json"), R"({"energy_calibration_degree": 13})");
+    expectUserError(run("fit family --gather fam --config degree13.json --out h.json"),
+                    {"energy_calibration_degree", "13"});
+}
+
 }  // namespace
 }  // namespace weft

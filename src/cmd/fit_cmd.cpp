@@ -132,7 +132,7 @@ void runFit(const FitCliOptions& c) {
 }
 
 struct FamilyFitCliOptions {
-    std::string gather, out, config, colourRange = "0.3,0.999";
+    std::string gather, out, config, recalibrate, colourRange = "0.3,0.999";
     uint64_t seed = 0;
     int threads = -1, colourFunctions = 6;
     bool quiet = false, printConfig = false;
@@ -159,9 +159,14 @@ void runFitFamily(const FamilyFitCliOptions& c) {
     options.functions = c.colourFunctions;
     options.seed = c.seed;
     options.quiet = c.quiet;
-    checkOutputsSpareInputs({{"--config", c.config}}, {{"--out", c.out}}, {{"--gather", c.gather}},
-                            {});
+    checkOutputsSpareInputs({{"--config", c.config}, {"--recalibrate", c.recalibrate}},
+                            {{"--out", c.out}}, {{"--gather", c.gather}}, {});
     requireParentDirectory(c.out, "--out");
+    if (!c.recalibrate.empty()) {
+        options.recalibrate = loadFamilyModel(c.recalibrate);
+        // The model's own colour range, not the option's default.
+        options.range = options.recalibrate->colour.range();
+    }
     const FamilyGather gather = loadFamilyGather(c.gather);
     const FamilyFitResult fit = fitFamilyModel(gather, options);
     saveFamilyModel(fit.model, c.out);
@@ -170,6 +175,7 @@ void runFitFamily(const FamilyFitCliOptions& c) {
                                       {"yarns", gather.points.size()},
                                       {"t_rmse", r.at("t_rmse")},
                                       {"masking", r.value("masking", nlohmann::json())},
+                                      {"calibration", r.value("calibration", nlohmann::json())},
                                       {"seconds", r.at("seconds")},
                                       {"m_samples_per_second", r.at("m_samples_per_second")}};
     std::printf("%s\n", summary.dump().c_str());
@@ -225,6 +231,9 @@ void addFitCommand(CLI::App& app) {
                        "shows them; energy_calibration_degree must stay -1)");
     addSeedOption(*family, fo->seed, "random seed of network initialisation and training samples");
     family->add_option("--threads", fo->threads, "worker threads (0: all cores)");
+    family->add_option("--recalibrate", fo->recalibrate,
+                       "refit the energy calibration of this family model (FAMILY.json) only, "
+                       "at the configuration's energy_calibration_degree, and write it to --out");
     family->add_option("--colour-range", fo->colourRange,
                        "LO,HI: the fiber colours C_TT the model covers, per channel "
                        "(0 < LO < HI <= 1; default 0.3,0.999)");

@@ -388,6 +388,19 @@ TEST_F(GatherCliTest, FamilyShardsGatherTheYarnsOfTheBox) {
                     {"fam/family.json", "another family"});
     expectUserError(gather("family --points 3 --paths 400 --box missing.json --out bad"),
                     {"missing.json"});
+    // The edges design: recorded in family.json, read back, and not another seed's family.
+    ASSERT_EQ(gather("family --points 2 --paths 400 --bins 3,8,6,12 --seed 2 --design edges "
+                     "--quiet --out edges")
+                  .status,
+              0);
+    const nlohmann::json edges = nlohmann::json::parse(readFile(path("edges/family.json")));
+    EXPECT_EQ(edges.at("design"), "edges");
+    EXPECT_FALSE(family.contains("design"));  // halton files stay as they were
+    EXPECT_NE(edges.at("yarns")[0].at("density"), family.at("yarns")[0].at("density"));
+    expectUserError(gather("family --points 2 --paths 400 --bins 3,8,6,12 --seed 2 --out edges"),
+                    {"edges/family.json", "another family"});
+    expectUserError(gather("family --points 2 --paths 400 --design grid --out bad"),
+                    {"--design", "grid", "halton, edges"});
 }
 
 // ---------------------------------------------------------------------------

@@ -164,7 +164,7 @@ void runGatherRecolour(const RecolourCliOptions& c) {
 
 struct FamilyCliOptions {
     WalkCliOptions walks;
-    std::string box, out;
+    std::string box, out, design = "halton";
     int points = 0;
     int64_t paths = 0;
     uint64_t seed = 0;
@@ -176,6 +176,7 @@ void runGatherFamily(const FamilyCliOptions& c) {
     o.points = c.points;
     o.pathsPerPoint = c.paths;
     o.seed = c.seed;
+    o.design = parseFamilyDesign(c.design, "--design");
     c.walks.applyTo(o);
     o.validate();
     checkOutputsSpareInputs({{"--box", c.box}}, {}, {}, {});
@@ -244,6 +245,11 @@ void addGatherCommand(CLI::App& app) {
     family->add_option("--points", fo->points, "yarns of the box, in [1, 65536]")->required();
     family->add_option("--paths", fo->paths, "random walks per yarn, in [1, 2^31]")->required();
     addSeedOption(*family, fo->seed, "random seed of the points and of every yarn's walks");
+    family
+        ->add_option("--design", fo->design,
+                     "how the yarns spread over the box: halton (uniform) or edges (denser "
+                     "towards the box's faces, where the five presets sit; docs/family.md)")
+        ->default_val("halton");
     fo->walks.add(*family, "11,45,15,30", "each yarn's RDM resolution TI,PI,TO,PO",
                   "K/N: gather only shard K (0..N-1) of N of the points, into the same --out as "
                   "the other shards (docs/cluster.md)");

@@ -7,6 +7,7 @@
 #include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/json_reader.h"
+#include "weft/core/math.h"
 #include "weft/core/rng.h"
 
 namespace weft {
@@ -149,7 +150,18 @@ void FamilyBox::check(const YarnPoint& p, const std::string& source) const {
     for (int c = 0; c < 3; ++c) inside(("c_r[" + std::to_string(c) + "]").c_str(), p.cR[c], cR);
 }
 
-std::vector<YarnPoint> familyPoints(const FamilyBox& box, int count, uint64_t seed) {
+const char* familyDesignName(FamilyDesign design) {
+    return design == FamilyDesign::Edges ? "edges" : "halton";
+}
+
+FamilyDesign parseFamilyDesign(const std::string& name, const std::string& what) {
+    if (name == "halton") return FamilyDesign::Halton;
+    if (name == "edges") return FamilyDesign::Edges;
+    throw InputError(what + ": \"" + name + "\" is not a design (allowed: halton, edges)");
+}
+
+std::vector<YarnPoint> familyPoints(const FamilyBox& box, int count, uint64_t seed,
+                                    FamilyDesign design) {
     Rng rng(0x46616d696c79ULL, seed);  // the rotation's own stream ("Family")
     std::array<double, FamilyBox::kDimensions> offset;
     for (double& o : offset) o = rng.uniform();
@@ -161,6 +173,7 @@ std::vector<YarnPoint> familyPoints(const FamilyBox& box, int count, uint64_t se
             const double v =
                 radicalInverse(static_cast<uint64_t>(k) + 1, kHaltonBases[d]) + offset[d];
             u[d] = v >= 1 ? v - 1 : v;
+            if (design == FamilyDesign::Edges) u[d] = 0.5 * (1 - std::cos(kPi * u[d]));
         }
         points.push_back(box.at(u));
     }

@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
+#include "weft/core/math.h"
 #include "weft/core/test_util.h"
 
 namespace weft {
@@ -95,6 +97,37 @@ TEST(FamilyPoints, SpreadOverTheBoxAndDependOnTheSeed) {
     EXPECT_NE(familyPoints(box, 81, 8), points);
     // The C_R channels are separate dimensions.
     EXPECT_NE(points[3].cR.r, points[3].cR.g);
+}
+
+// The edges design follows the arcsine law in every dimension: u = (1 -
+// cos(pi v)) / 2 of the uniform v, so P(u < x) = (2 / pi) asin(sqrt(x)).
+// With 81 points, a stratum of v (1/81 each, one point per stratum in the
+// base-3 dimension) maps to [F^-1(k/81), F^-1((k+1)/81)) of u: each holds
+// about one point, and the 5% next to each face about 14% of them (uniform: 5%).
+TEST(FamilyPoints, EdgesDesignCrowdsTheFaces) {
+    const FamilyBox box;
+    const std::vector<YarnPoint> points = familyPoints(box, 81, 7, FamilyDesign::Edges);
+    std::vector<int> perStratum(81, 0);
+    int nearFaces = 0;
+    for (const YarnPoint& p : points) {
+        EXPECT_NO_THROW(box.check(p, "point"));
+        const double u = (p.density - box.density.lo) / (box.density.hi - box.density.lo);
+        const double v = 2 / kPi * std::asin(std::sqrt(std::clamp(u, 0.0, 1.0)));  // F(u)
+        ++perStratum[std::min(80, static_cast<int>(v * 81))];
+        nearFaces += u < 0.05 || u > 0.95;
+    }
+    int empty = 0;
+    for (int n : perStratum) {
+        EXPECT_LE(n, 2);
+        empty += n == 0;
+    }
+    EXPECT_LE(empty, 1);
+    // 2 F(0.05) = 0.287 of 81 points: 23.
+    EXPECT_NEAR(nearFaces, 23, 2);
+    EXPECT_EQ(parseFamilyDesign("edges", "--design"), FamilyDesign::Edges);
+    EXPECT_STREQ(familyDesignName(FamilyDesign::Halton), "halton");
+    testing::expectInputError([] { parseFamilyDesign("grid", "--design"); },
+                              {"--design", "grid", "halton, edges"});
 }
 
 }  // namespace

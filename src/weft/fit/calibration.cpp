@@ -177,6 +177,20 @@ EnergyCalibration fitEnergyCalibration(const YarnModel& model, const RdmData& rd
     return cal;
 }
 
+std::vector<double> colourCalibrationNodes(const ColourRange& range) {
+    // From the dark end (u large) to the light one, so that C_TT increases.
+    const double uDark = ColourCalibration::variableOf(range.lo);
+    const double uLight = ColourCalibration::variableOf(range.hi);
+    std::vector<double> nodes;
+    for (int g = 0; g < kColourCalibrationNodes; ++g) {
+        const double u = uDark + (uLight - uDark) * g / (kColourCalibrationNodes - 1);
+        nodes.push_back(g == 0                             ? range.lo
+                        : g + 1 == kColourCalibrationNodes ? range.hi
+                                                           : std::exp(-u * u));
+    }
+    return nodes;
+}
+
 ColourCalibration fitColourCalibration(const YarnModel& model, const RdmData& rdm,
                                        const std::vector<ColourPath>& paths, int degree,
                                        int threads, nlohmann::json* summary) {
@@ -188,14 +202,7 @@ ColourCalibration fitColourCalibration(const YarnModel& model, const RdmData& rd
     conditioned.colourCalibration = {};
     ColourCalibration result;
     if (summary) *summary = nlohmann::json::array();
-    // Nodes from the dark end (u large) to the light one, so that C_TT increases.
-    const double uDark = ColourCalibration::variableOf(range.lo);
-    const double uLight = ColourCalibration::variableOf(range.hi);
-    for (int g = 0; g < kColourCalibrationNodes; ++g) {
-        const double u = uDark + (uLight - uDark) * g / (kColourCalibrationNodes - 1);
-        const double grey = g == 0 ? range.lo
-                           : g + 1 == kColourCalibrationNodes ? range.hi
-                                                              : std::exp(-u * u);
+    for (const double grey : colourCalibrationNodes(range)) {
         RdmData recoloured;
         recoloured.dir = rdm.dir + " recoloured to C_TT " + formatNumber(grey);
         recoloured.bins = rdm.bins;

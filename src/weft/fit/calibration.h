@@ -36,6 +36,8 @@ EnergyCalibration fitEnergyCalibration(const YarnModel& model, const RdmData& rd
 // `rdm`'s, which do not depend on the colour). `summary` (optional) gets each
 // node's colour and albedo errors before and after.
 inline constexpr int kColourCalibrationNodes = 7;
+// The node colours: greys uniform in u = sqrt(-ln C_TT) from range.lo to range.hi.
+std::vector<double> colourCalibrationNodes(const ColourRange& range);
 ColourCalibration fitColourCalibration(const YarnModel& model, const RdmData& rdm,
                                        const std::vector<ColourPath>& paths, int degree,
                                        int threads, nlohmann::json* summary = nullptr);

@@ -15,6 +15,7 @@
 #include "weft/core/math.h"
 #include "weft/core/progress.h"
 #include "weft/fit/colour_basis.h"
+#include "weft/fit/family_calibration.h"
 #include "weft/fit/masking_fit.h"
 #include "weft/fit/metrics.h"
 #include "weft/fit/model_maps.h"
@@ -161,7 +162,7 @@ FitConfig FamilyFitOptions::defaultConfig() {
     FitConfig config;
     config.t.hidden = {16, 16};
     config.m.steps = 600000;
-    config.calibrationDegree = -1;
+    config.calibrationDegree = kFamilyCalibrationDegree;
     return config;
 }
 
@@ -173,10 +174,6 @@ FamilyFitResult fitFamilyModel(const FamilyGather& gather, const FamilyFitOption
         throw InputError("--colour-functions " + std::to_string(options.functions) +
                          " is out of range: allowed [2, " +
                          std::to_string(ColourBasis::kMaxFunctions) + "]");
-    if (config.calibrationDegree >= 0)
-        throw InputError(
-            "fit configuration: energy_calibration_degree must be -1 for a family fit (a family "
-            "model has no energy calibration; docs/family.md)");
     const auto t0 = Clock::now();
     const bool quiet = options.quiet;
     const int threads =
@@ -193,20 +190,29 @@ FamilyFitResult fitFamilyModel(const FamilyGather& gather, const FamilyFitOption
     };
 
     // The yarns' data.
-    const std::vector<size_t> basisYarns = spreadIndices(yarns, kFamilyBasisYarns);
-    const std::vector<size_t> maskingYarns =
-        config.masking ? spreadIndices(yarns, kFamilyMaskingYarns) : std::vector<size_t>{};
+    const bool recalibrate = options.recalibrate.has_value();
+    auto contains = [](const std::vector<size_t>& set, size_t k) {
+        return std::find(set.begin(), set.end(), k) != set.end();
+    };
+    const std::vector<size_t> basisYarns =
+        recalibrate ? std::vector<size_t>{} : spreadIndices(yarns, kFamilyBasisYarns);
+    const std::vector<size_t> maskingYarns = config.masking && !recalibrate
+                                                 ? spreadIndices(yarns, kFamilyMaskingYarns)
+                                                 : std::vector<size_t>{};
+    const std::vector<size_t> calibrationYarns = config.calibrationDegree >= 0
+                                                     ? spreadIndices(yarns, kFamilyCalibrationYarns)
+                                                     : std::vector<size_t>{};
     std::vector<FamilyTrainingPoint> points(yarns);
     std::vector<LoadedYarn> loaded(yarns);
     {
-        Progress progress("read yarns", yarns, quiet);
-        for (size_t k = 0; k < yarns; ++k) {
-            const bool keepR =
-                std::find(maskingYarns.begin(), maskingYarns.end(), k) != maskingYarns.end();
-            const bool keepPaths =
-                std::find(basisYarns.begin(), basisYarns.end(), k) != basisYarns.end();
-            loaded[k] =
-                loadYarn(gather, static_cast<int>(k), keepR, keepPaths, options.range, points[k]);
+        // A recalibration reads the calibration's yarns only.
+        const std::vector<size_t> read =
+            recalibrate ? calibrationYarns : spreadIndices(yarns, yarns);
+        Progress progress("read yarns", read.size(), quiet);
+        for (size_t k : read) {
+            const bool keepR = contains(maskingYarns, k) || contains(calibrationYarns, k);
+            loaded[k] = loadYarn(gather, static_cast<int>(k), keepR, contains(basisYarns, k),
+                                 options.range, points[k]);
             progress.add(1);
         }
         progress.finish();
@@ -216,54 +222,83 @@ FamilyFitResult fitFamilyModel(const FamilyGather& gather, const FamilyFitOption
 
     FamilyFitResult result;
     FamilyModel& model = result.model;
-    model.box = gather.options.box;
-    // 1. T.
-    double tRmse = 0;
-    model.tNet = fitFamilyTransmissionNetwork(points, bins, config, options.seed, arena, quiet,
-                                              &result.tLoss, &tRmse);
-    record["t_rmse"] = tRmse;
-    record["t_seconds"] = phaseDone("T network");
+    if (recalibrate) {
+        model = *options.recalibrate;
+        if (model.box.toJson() != gather.options.box.toJson())
+            throw InputError("--recalibrate: the model's box is not the family gather's (" +
+                             gather.dir +
+                             "/family.json): recalibrate a model with the gather it "
+                             "was fitted to");
+        record = model.fit;
+        record["recalibrated"] = true;
+    } else {
+        model.box = gather.options.box;
+        // 1. T.
+        double tRmse = 0;
+        model.tNet = fitFamilyTransmissionNetwork(points, bins, config, options.seed, arena, quiet,
+                                                  &result.tLoss, &tRmse);
+        record["t_rmse"] = tRmse;
+        record["t_seconds"] = phaseDone("T network");
 
-    // 2. The colour functions from the pooled records of the basis yarns.
-    {
-        std::vector<ColourPath> pooled;
-        std::vector<int64_t> count(bins.incidentCount(), 0);
-        for (size_t k : basisYarns) {
-            pooled.insert(pooled.end(), loaded[k].basisPaths.begin(), loaded[k].basisPaths.end());
-            for (size_t i = 0; i < count.size(); ++i) count[i] += loaded[k].count[i];
-            loaded[k].basisPaths = {};
+        // 2. The colour functions from the pooled records of the basis yarns.
+        {
+            std::vector<ColourPath> pooled;
+            std::vector<int64_t> count(bins.incidentCount(), 0);
+            for (size_t k : basisYarns) {
+                pooled.insert(pooled.end(), loaded[k].basisPaths.begin(),
+                              loaded[k].basisPaths.end());
+                for (size_t i = 0; i < count.size(); ++i) count[i] += loaded[k].count[i];
+                loaded[k].basisPaths = {};
+            }
+            ColourBasisFit basis;
+            arena.execute([&] {
+                basis = fitColourBasis(pooled, bins, count, options.range, options.functions);
+            });
+            model.colour = basis.basis;
+            record["colour"] = {{"functions", options.functions},
+                                {"c_tt_range", {options.range.lo, options.range.hi}},
+                                {"basis_yarns", basisYarns.size()},
+                                {"basis_error_mean", basis.meanError},
+                                {"basis_error_worst", basis.worstError}};
+            phaseDone("colour functions");
         }
-        ColourBasisFit basis;
-        arena.execute(
-            [&] { basis = fitColourBasis(pooled, bins, count, options.range, options.functions); });
-        model.colour = basis.basis;
-        record["colour"] = {{"functions", options.functions},
-                            {"c_tt_range", {options.range.lo, options.range.hi}},
-                            {"basis_yarns", basisYarns.size()},
-                            {"basis_error_mean", basis.meanError},
-                            {"basis_error_worst", basis.worstError}};
-        phaseDone("colour functions");
+
+        // 3. M.
+        phase = Clock::now();
+        model.mNet = fitFamilyMNetwork(points, model.colour, config, options.seed, arena, quiet,
+                                       &result.mLoss);
+        const double mSeconds = phaseDone("M network");
+        record["m_seconds"] = mSeconds;
+        record["m_samples_per_second"] =
+            static_cast<double>(config.m.steps) * config.m.batch / std::max(mSeconds, 1e-9);
+
+        // 4. Masking.
+        if (config.masking) {
+            double residual = 0;
+            model.masking = fitFamilyMasking(model, gather, maskingYarns, loaded, arena, &residual);
+            record["masking"] = {{"yarns", maskingYarns.size()}, {"r_rel_l2", residual}};
+            phaseDone("R masking term");
+        }
     }
 
-    // 3. M.
-    phase = Clock::now();
-    model.mNet =
-        fitFamilyMNetwork(points, model.colour, config, options.seed, arena, quiet, &result.mLoss);
-    const double mSeconds = phaseDone("M network");
-    record["m_seconds"] = mSeconds;
-    record["m_samples_per_second"] =
-        static_cast<double>(config.m.steps) * config.m.batch / std::max(mSeconds, 1e-9);
-
-    // 4. Masking.
-    if (config.masking) {
-        double residual = 0;
-        model.masking = fitFamilyMasking(model, gather, maskingYarns, loaded, arena, &residual);
-        record["masking"] = {{"yarns", maskingYarns.size()}, {"r_rel_l2", residual}};
-        phaseDone("R masking term");
+    // 5. The energy calibration.
+    model.calibration = {};
+    if (!calibrationYarns.empty()) {
+        std::vector<FamilyCalibrationYarn> data;
+        for (size_t k : calibrationYarns)
+            data.push_back(
+                {gather.points[k], loaded[k].r.get(), loaded[k].m.get(), &loaded[k].count});
+        nlohmann::json summary;
+        model.calibration = fitFamilyCalibration(model, data, bins, config.calibrationDegree,
+                                                 threads, quiet, &summary);
+        summary["seconds"] = phaseDone("energy calibration");
+        record["calibration"] = summary;
+    } else {
+        record["calibration"] = nullptr;
     }
 
-    // 5. The sampling lobe at the box's centre.
-    {
+    // 6. The sampling lobe at the box's centre.
+    if (!recalibrate) {
         const YarnModel centre =
             model.at(model.centre(), "family fit").forColour(Rgb(0.5), "family fit");
         std::vector<float> rMap, mMap;
@@ -279,6 +314,13 @@ FamilyFitResult fitFamilyModel(const FamilyGather& gather, const FamilyFitOption
         phaseDone("sampling lobe");
     }
 
+    if (recalibrate) {
+        record["recalibration_seconds"] = secondsSince(t0);
+        record["config"]["energy_calibration_degree"] = config.calibrationDegree;
+        model.fit = record;
+        model.validate();
+        return result;
+    }
     record["seconds"] = secondsSince(t0);
     record["seed"] = options.seed;
     record["config"] = config.toJson();

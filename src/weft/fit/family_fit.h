@@ -14,14 +14,19 @@
 //   4. The masking term: one linear least-squares fit over the yarns (up to
 //      kFamilyMaskingYarns, spread) of coefficients linear in the
 //      parameters (family_model.h), against each yarn's RDM_R.
-//   5. The sampling lobe (fit.h step 5) of the yarn at the box's centre.
-// No energy calibration: it is fitted per gather and would need a model of
-// its own across the box (docs/family.md says what that costs in accuracy).
+//   5. The energy calibration (family_calibration.h): one fit over up to
+//      kFamilyCalibrationYarns yarns, its coefficients linear in the yarn's
+//      parameters, so that it follows them as the networks do.
+//   6. The sampling lobe (fit.h step 5) of the yarn at the box's centre.
+// With `recalibrate` set, the fit keeps that model and redoes step 5 only
+// (for a model fitted before the calibration existed, or at another degree).
 #pragma once
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 
+#include "weft/fit/family_calibration.h"
 #include "weft/fit/fit.h"
 #include "weft/gather/family.h"
 #include "weft/yarn/family_model.h"
@@ -31,6 +36,7 @@ namespace weft {
 // Yarns that the colour functions and the masking fit read.
 inline constexpr int kFamilyBasisYarns = 32;
 inline constexpr int kFamilyMaskingYarns = 512;
+inline constexpr int kFamilyCalibrationDegree = 6;
 
 struct FamilyFitOptions {
     FitConfig config = defaultConfig();
@@ -38,9 +44,11 @@ struct FamilyFitOptions {
     int functions = 6;
     uint64_t seed = 0;
     bool quiet = false;
+    std::optional<FamilyModel> recalibrate;  // refit this model's calibration only
 
     // A family's defaults: a wider T network (its inputs include the ply's
-    // geometry), four times the M steps of a one-yarn fit, no energy calibration.
+    // geometry), four times the M steps of a one-yarn fit, an energy
+    // calibration of degree kFamilyCalibrationDegree.
     static FitConfig defaultConfig();
 };
 

@@ -55,6 +55,7 @@ TEST_F(FamilyFitTest, TransmissionFollowsEachYarnsGeometry) {
     o.config.t.restarts = 2;
     o.config.m.steps = 300;
     o.config.threads = 2;
+    o.config.calibrationDegree = -1;  // family_calibration_test checks it
     o.quiet = true;
     const FamilyFitResult fit = fitFamilyModel(gather, o);
     EXPECT_EQ(fit.model.masking.size(),
@@ -90,7 +91,7 @@ TEST_F(FamilyFitTest, TransmissionFollowsEachYarnsGeometry) {
               familyModelToJson(fit.model));
 }
 
-TEST_F(FamilyFitTest, RefusesAnEnergyCalibrationAndABadColourRange) {
+TEST_F(FamilyFitTest, RefusesBadColourFunctions) {
     FamilyGatherOptions g;
     g.points = 1;
     g.pathsPerPoint = 200;
@@ -99,9 +100,6 @@ TEST_F(FamilyFitTest, RefusesAnEnergyCalibrationAndABadColourRange) {
     gatherFamily(g, path("family"));
     const FamilyGather gather = loadFamilyGather(path("family"));
     FamilyFitOptions o;
-    o.config.calibrationDegree = 4;
-    testing::expectInputError([&] { fitFamilyModel(gather, o); }, {"energy_calibration_degree"});
-    o = {};
     o.functions = 13;
     testing::expectInputError([&] { fitFamilyModel(gather, o); }, {"--colour-functions", "13"});
 }

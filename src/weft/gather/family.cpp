@@ -118,21 +118,24 @@ nlohmann::json familyMetadata(const FamilyGatherOptions& o, const std::vector<Ya
         y["seed"] = o.pointOptions(k, points[k]).seed;
         yarns.push_back(std::move(y));
     }
-    return {{"format", kFamilyFormat},
-            {"version", kFamilyVersion},
-            {"box", o.box.toJson()},
-            {"points", o.points},
-            {"paths_per_point", o.pathsPerPoint},
-            {"seed", o.seed},
-            {"bins", {o.bins.thetaI, o.bins.phiI, o.bins.thetaO, o.bins.phiO}},
-            {"max_depth", o.maxDepth},
-            {"segments_per_twist", o.segmentsPerTwist},
-            {"yarns", std::move(yarns)}};
+    nlohmann::json meta = {{"format", kFamilyFormat},
+                           {"version", kFamilyVersion},
+                           {"box", o.box.toJson()},
+                           {"points", o.points},
+                           {"paths_per_point", o.pathsPerPoint},
+                           {"seed", o.seed},
+                           {"bins", {o.bins.thetaI, o.bins.phiI, o.bins.thetaO, o.bins.phiO}},
+                           {"max_depth", o.maxDepth},
+                           {"segments_per_twist", o.segmentsPerTwist},
+                           {"yarns", std::move(yarns)}};
+    if (o.design != FamilyDesign::Halton) meta["design"] = familyDesignName(o.design);
+    return meta;
 }
 
 FamilyGatherSummary gatherFamily(const FamilyGatherOptions& options, const std::string& dir) {
     options.validate();
-    const std::vector<YarnPoint> points = familyPoints(options.box, options.points, options.seed);
+    const std::vector<YarnPoint> points =
+        familyPoints(options.box, options.points, options.seed, options.design);
     const std::string metaPath = dir + "/family.json";
     const std::string meta = familyMetadata(options, points).dump(1) + "\n";
     std::error_code ec;
@@ -195,7 +198,7 @@ FamilyGather loadFamilyGather(const std::string& dir) {
     const std::string metaPath = dir + "/family.json";
     const nlohmann::json meta = readJsonFile(metaPath);
     JsonObjectReader r(meta, metaPath);
-    r.allowKeys({"format", "version", "box", "points", "paths_per_point", "seed", "bins",
+    r.allowKeys({"format", "version", "box", "points", "paths_per_point", "seed", "design", "bins",
                  "max_depth", "segments_per_twist", "yarns"});
     if (r.string("format") != kFamilyFormat)
         throw InputError(metaPath + ": format is not \"" + std::string(kFamilyFormat) + "\"");
@@ -207,6 +210,7 @@ FamilyGather loadFamilyGather(const std::string& dir) {
     o.points = static_cast<int>(r.integer("points", {1, kMaxFamilyPoints}));
     o.pathsPerPoint = r.integer("paths_per_point", {1, kMaxPaths});
     o.seed = r.unsignedInteger("seed");
+    if (r.has("design")) o.design = parseFamilyDesign(r.string("design"), metaPath + ": design");
     const std::vector<int64_t> bins = r.integers("bins", 4, 4, {1, 4096}, "(TI, PI, TO, PO)");
     o.bins = {static_cast<int>(bins[0]), static_cast<int>(bins[1]), static_cast<int>(bins[2]),
               static_cast<int>(bins[3])};
@@ -219,7 +223,7 @@ FamilyGather loadFamilyGather(const std::string& dir) {
         throw InputError(metaPath + ": " + e.what());
     }
     // The yarns follow from the box and the seed: a file whose list was edited is refused.
-    family.points = familyPoints(o.box, o.points, o.seed);
+    family.points = familyPoints(o.box, o.points, o.seed, o.design);
     const nlohmann::json& yarns = r.value("yarns");
     if (!yarns.is_array() || yarns.size() != static_cast<size_t>(o.points))
         throw InputError(metaPath + ": yarns: expected " + std::to_string(o.points) + " entries");

@@ -56,6 +56,7 @@ struct FamilyGatherOptions {
     int points = 0;                // [1, kMaxFamilyPoints]
     int64_t pathsPerPoint = 0;     // [1, kMaxPaths]
     uint64_t seed = 0;             // the points and every point's walks
+    FamilyDesign design = FamilyDesign::Halton;  // how the points spread (core/family_box.h)
     RdmBins bins{11, 45, 15, 30};  // the fit's error grid (fit/metrics.h, kCoarseErrorBins)
     int maxDepth = 1000, threads = 0, segmentsPerTwist = 128;
     bool quiet = false;
@@ -86,7 +87,8 @@ nlohmann::json familyGatherSummaryJson(const FamilyGatherOptions& options,
 // inputs and refuses (InputError naming it) one with other inputs.
 FamilyGatherSummary gatherFamily(const FamilyGatherOptions& options, const std::string& dir);
 
-// DIR/family.json: the box, the options and every point.
+// DIR/family.json: the box, the options and every point ("design" only when
+// it is not halton, so that the files of earlier families stay as they were).
 nlohmann::json familyMetadata(const FamilyGatherOptions& options,
                               const std::vector<YarnPoint>& points);
 

@@ -60,10 +60,8 @@ void ColourCalibration::validate(const std::string& what) const {
                          std::to_string(kMaxNodes) + " of them, got " +
                          std::to_string(nodes.size()) + " for " + std::to_string(cTT.size()) +
                          " colours");
+    validateNodeColours(cTT, what);
     for (size_t g = 0; g < cTT.size(); ++g) {
-        if (!(cTT[g] > 0 && cTT[g] <= 1) || (g > 0 && !(cTT[g] > cTT[g - 1])))
-            throw InputError(what + ".c_tt[" + std::to_string(g) +
-                             "]: node colours must increase strictly within (0, 1]");
         const EnergyCalibration& n = nodes[g];
         const size_t terms = static_cast<size_t>(EnergyCalibration::termCount(n.degree));
         if (n.degree != nodes[0].degree || n.degree < 0 || n.degree > EnergyCalibration::kMaxDegree)
@@ -76,6 +74,14 @@ void ColourCalibration::validate(const std::string& what) const {
                 throw InputError(what + ": node " + std::to_string(g) + " needs " +
                                  std::to_string(terms) + " coefficients per channel for R and M");
     }
+}
+
+void ColourCalibration::validateNodeColours(const std::vector<double>& cTT,
+                                            const std::string& what) {
+    for (size_t g = 0; g < cTT.size(); ++g)
+        if (!(cTT[g] > 0 && cTT[g] <= 1) || (g > 0 && !(cTT[g] > cTT[g - 1])))
+            throw InputError(what + ".c_tt[" + std::to_string(g) +
+                             "]: node colours must increase strictly within (0, 1]");
 }
 
 EnergyCalibration ColourCalibration::at(const Rgb& colour) const {

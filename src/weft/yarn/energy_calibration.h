@@ -68,6 +68,8 @@ struct ColourCalibration {
     // colours are strictly increasing in (0, 1], and every node has the same
     // degree and 3 rows of (degree + 1)^2 coefficients for R and M.
     void validate(const std::string& what) const;
+    // InputError naming `what`.c_tt[g] unless the node colours increase strictly within (0, 1].
+    static void validateNodeColours(const std::vector<double>& cTT, const std::string& what);
     // The calibration of the model of colour cTT (each channel in [0, 1]).
     EnergyCalibration at(const Rgb& cTT) const;
 };

@@ -18,6 +18,8 @@ using nlohmann::json;
 
 constexpr const char* kMaskingForm = "symmetric-quadratic";
 constexpr const char* kMaskingFeatures = "linear";
+constexpr const char* kCalibrationForm = "log-polynomial-by-colour";
+constexpr const char* kCalibrationFeatures = "linear-by-channel";
 // The fiber colour of a yarn made by at(): the family gather's own (gather/family.h).
 constexpr double kFamilyGatheredCTT = 0.5;
 
@@ -27,6 +29,62 @@ std::array<double, kFamilyMaskingFeatures> familyMaskingFeatures(const FamilyBox
                                                                  const YarnPoint& p) {
     const auto q = box.normalised(p);
     return {1.0, q[0], q[1], q[2], q[3], q[4], q[5]};
+}
+
+std::array<double, kFamilyCalibrationFeatures> familyCalibrationFeatures(const FamilyBox& box,
+                                                                         const YarnPoint& p,
+                                                                         int channel) {
+    const auto q = box.normalised(p);
+    return {1.0, q[0], q[1], q[2], q[3], q[4], q[5], q[6 + channel]};
+}
+
+void FamilyCalibration::validate(const std::string& what) const {
+    if (empty()) return;
+    if (degree > EnergyCalibration::kMaxDegree)
+        throw InputError(what + ".degree: " + std::to_string(degree) + " is out of range [0, " +
+                         std::to_string(EnergyCalibration::kMaxDegree) + "]");
+    const size_t size =
+        static_cast<size_t>(EnergyCalibration::termCount(degree)) * kFamilyCalibrationFeatures;
+    auto checkBlock = [&](const std::vector<double>& block, const std::string& where) {
+        if (block.size() != size)
+            throw InputError(where + ": expected " +
+                             std::to_string(EnergyCalibration::termCount(degree)) + " rows of " +
+                             std::to_string(kFamilyCalibrationFeatures) + " coefficients");
+        for (double v : block)
+            if (!std::isfinite(v)) throw InputError(where + ": a coefficient is not finite");
+    };
+    checkBlock(r, what + ".r");
+    if (m.size() != cTT.size() || cTT.empty() ||
+        cTT.size() > static_cast<size_t>(ColourCalibration::kMaxNodes))
+        throw InputError(what + ": expected one block of m rows per node colour, 1 to " +
+                         std::to_string(ColourCalibration::kMaxNodes) + " of them, got " +
+                         std::to_string(m.size()) + " for " + std::to_string(cTT.size()) +
+                         " colours");
+    for (size_t g = 0; g < m.size(); ++g) checkBlock(m[g], what + ".m[" + std::to_string(g) + "]");
+    ColourCalibration::validateNodeColours(cTT, what);
+}
+
+ColourCalibration FamilyCalibration::at(const FamilyBox& box, const YarnPoint& p) const {
+    ColourCalibration out;
+    if (empty()) return out;
+    const int terms = EnergyCalibration::termCount(degree);
+    std::array<std::array<double, kFamilyCalibrationFeatures>, 3> f;
+    for (int c = 0; c < 3; ++c) f[c] = familyCalibrationFeatures(box, p, c);
+    auto rows = [&](const std::vector<double>& block, int c) {
+        std::vector<double> coefficients(static_cast<size_t>(terms), 0.0);
+        for (int k = 0; k < terms; ++k)
+            for (int l = 0; l < kFamilyCalibrationFeatures; ++l)
+                coefficients[k] += block[k * kFamilyCalibrationFeatures + l] * f[c][l];
+        return coefficients;
+    };
+    out.cTT = cTT;
+    for (const std::vector<double>& block : m) {
+        EnergyCalibration node;
+        node.degree = degree;
+        for (int c = 0; c < 3; ++c) node.r[c] = rows(r, c), node.m[c] = rows(block, c);
+        out.nodes.push_back(std::move(node));
+    }
+    return out;
 }
 
 YarnPoint FamilyModel::centre() const {
@@ -47,6 +105,7 @@ void FamilyModel::validate() const {
     for (double c : masking)
         if (!std::isfinite(c)) throw InputError("r_lobe.masking: a coefficient is not finite");
     sampling.validate();
+    calibration.validate("energy_calibration");
     // What the renderer needs of every yarn (shapes within its networks'
     // capacity) holds for all when it holds for one: at() changes biases only.
     at(centre(), "box centre");
@@ -76,6 +135,7 @@ YarnModel FamilyModel::at(const YarnPoint& p, const std::string& what) const {
     }
     m.sampling = sampling;
     m.colour = colour;
+    m.colourCalibration = calibration.at(box, p);
     m.fit = {{"family", {{"yarn", p.toJson()}, {"box", box.toJson()}}}};
     m.validate();
     return m;
@@ -91,16 +151,83 @@ json familyModelToJson(const FamilyModel& model) {
                                     model.masking.begin() + (k + 1) * kFamilyMaskingFeatures));
         masking = {{"form", kMaskingForm}, {"features", kMaskingFeatures}, {"coefficients", rows}};
     }
-    return {{"format", kFamilyModelFormat},
-            {"version", kFamilyModelVersion},
-            {"box", model.box.toJson()},
-            {"colour", model.colour.toJson()},
-            {"t_net", modelNetworkToJson(model.tNet)},
-            {"m_net", modelNetworkToJson(model.mNet)},
-            {"r_lobe", {{"masking", masking}}},
-            {"sampling", modelSamplingToJson(model.sampling)},
-            {"fit", model.fit}};
+    json document = {{"format", kFamilyModelFormat},
+                     {"version", 1},
+                     {"box", model.box.toJson()},
+                     {"colour", model.colour.toJson()},
+                     {"t_net", modelNetworkToJson(model.tNet)},
+                     {"m_net", modelNetworkToJson(model.mNet)},
+                     {"r_lobe", {{"masking", masking}}},
+                     {"sampling", modelSamplingToJson(model.sampling)},
+                     {"fit", model.fit}};
+    // Version 2 only with a calibration: a file without one stays readable
+    // by version 1 readers.
+    const FamilyCalibration& cal = model.calibration;
+    if (!cal.empty()) {
+        auto rows = [](const std::vector<double>& block) {
+            json out = json::array();
+            for (size_t k = 0; k < block.size(); k += kFamilyCalibrationFeatures)
+                out.push_back(std::vector<double>(
+                    block.begin() + static_cast<std::ptrdiff_t>(k),
+                    block.begin() + static_cast<std::ptrdiff_t>(k + kFamilyCalibrationFeatures)));
+            return out;
+        };
+        json m = json::array();
+        for (const std::vector<double>& block : cal.m) m.push_back(rows(block));
+        document["version"] = kFamilyModelVersion;
+        document["energy_calibration"] = {
+            {"form", kCalibrationForm}, {"features", kCalibrationFeatures},
+            {"degree", cal.degree},     {"c_tt", cal.cTT},
+            {"r", rows(cal.r)},         {"m", m}};
+    }
+    return document;
 }
+
+namespace {
+
+// `rows` rows of kFamilyCalibrationFeatures numbers, appended to *out.
+void readFeatureRows(const json& rows, const std::string& source, const std::string& path,
+                     size_t count, std::vector<double>* out) {
+    const std::string shape = "expected " + std::to_string(count) + " rows of " +
+                              std::to_string(kFamilyCalibrationFeatures) + " numbers";
+    if (!rows.is_array() || rows.size() != count)
+        throwJsonError(source, path, shape + ", got " + describeJson(rows));
+    for (size_t k = 0; k < count; ++k) {
+        if (!rows[k].is_array() || rows[k].size() != kFamilyCalibrationFeatures)
+            throwJsonError(source, jsonIndexPath(path, k),
+                           shape + ", got " + describeJson(rows[k]));
+        for (size_t l = 0; l < kFamilyCalibrationFeatures; ++l)
+            out->push_back(
+                readJsonNumber(rows[k][l], source, jsonIndexPath(jsonIndexPath(path, k), l)));
+    }
+}
+
+FamilyCalibration readFamilyCalibration(const JsonObjectReader& r) {
+    r.oneOf("form", {kCalibrationForm});
+    r.oneOf("features", {kCalibrationFeatures});
+    FamilyCalibration cal;
+    cal.degree = static_cast<int>(r.integer("degree", {0, EnergyCalibration::kMaxDegree}));
+    const size_t terms = static_cast<size_t>(EnergyCalibration::termCount(cal.degree));
+    const json& colours = r.value("c_tt");
+    if (!colours.is_array() || colours.empty() ||
+        colours.size() > static_cast<size_t>(ColourCalibration::kMaxNodes))
+        r.fail("c_tt", "expected an array of 1 to " + std::to_string(ColourCalibration::kMaxNodes) +
+                           " node colours, got " + describeJson(colours));
+    for (size_t g = 0; g < colours.size(); ++g)
+        cal.cTT.push_back(
+            readJsonNumber(colours[g], r.source(), jsonIndexPath(r.pathOf("c_tt"), g)));
+    readFeatureRows(r.value("r"), r.source(), r.pathOf("r"), terms, &cal.r);
+    const json& perNode = r.value("m");
+    if (!perNode.is_array() || perNode.size() != colours.size())
+        r.fail("m", "expected one block of rows per node colour (" +
+                        std::to_string(colours.size()) + "), got " + describeJson(perNode));
+    cal.m.resize(colours.size());
+    for (size_t g = 0; g < colours.size(); ++g)
+        readFeatureRows(perNode[g], r.source(), jsonIndexPath(r.pathOf("m"), g), terms, &cal.m[g]);
+    return cal;
+}
+
+}  // namespace
 
 bool isFamilyModelDocument(const json& j) {
     return j.is_object() && j.contains("format") && j["format"] == kFamilyModelFormat;
@@ -116,11 +243,15 @@ FamilyModel familyModelFromJson(const json& j, const std::string& source) {
         r.fail(std::string("missing key \"format\" (expected \"") + kFamilyModelFormat + "\")");
     r.oneOf("format", {kFamilyModelFormat});
     const int64_t version = r.integer("version");
-    if (version != kFamilyModelVersion)
+    if (version < 1 || version > kFamilyModelVersion)
         r.fail("version", "unsupported version " + describeJson(r.value("version")) +
-                              " (supported: " + std::to_string(kFamilyModelVersion) + ")");
-    r.allowKeys(
-        {"format", "version", "box", "colour", "t_net", "m_net", "r_lobe", "sampling", "fit"});
+                              " (supported: 1 to " + std::to_string(kFamilyModelVersion) + ")");
+    if (version == 1)
+        r.allowKeys(
+            {"format", "version", "box", "colour", "t_net", "m_net", "r_lobe", "sampling", "fit"});
+    else
+        r.allowKeys({"format", "version", "box", "colour", "t_net", "m_net", "r_lobe", "sampling",
+                     "energy_calibration", "fit"});
     FamilyModel model;
     model.box = FamilyBox::fromJson(r.value("box"), source + ": box");
     model.colour = ColourBasis::fromJson(r.value("colour"), source + ": colour");
@@ -147,6 +278,9 @@ FamilyModel familyModelFromJson(const json& j, const std::string& source) {
         }
     }
     model.sampling = readModelSampling(r);
+    if (version >= 2 && !r.isNull("energy_calibration"))
+        model.calibration = readFamilyCalibration(
+            r.object("energy_calibration", {"form", "features", "degree", "c_tt", "r", "m"}));
     r.object("fit");  // an object, written back as is
     model.fit = r.value("fit");
     try {

@@ -13,15 +13,22 @@
 //   r_lobe eq. 8 follows the parameters analytically (the fiber's beta_R and
 //          C_R, the tilt atan(pi alpha), P(T) from t_net); its masking
 //          coefficients (yarn_lobes.h) are linear in (1, q_N, ..., q_gammaTT).
+//   energy_calibration  (version 2; fit/family_calibration.h) the energy
+//          calibration by colour (yarn/energy_calibration.h) of every yarn:
+//          its coefficients linear in features of the yarn and the channel.
 // at(p) makes the ordinary colour model of the yarn p: the constant inputs
 // folded into the first layers' biases (foldConstantInputs), so that it has
 // the networks' shapes of a model fitted for p alone and renders at the same
 // cost; the renderer then builds its tables for it as for any model.
 //
-// File: {"format": "weft-family-model", "version": 1, "box", "colour",
+// File: {"format": "weft-family-model", "version": 1 or 2, "box", "colour",
 // "t_net", "m_net", "r_lobe": {"masking": null or {"form":
 // "symmetric-quadratic", "features": "linear", "coefficients": 4 rows of 7}},
-// "sampling", "fit"}.
+// "energy_calibration" (version 2 only): null or {"form":
+// "log-polynomial-by-colour", "features": "linear-by-channel", "degree": d,
+// "c_tt": node colours, "r": (d + 1)^2 rows of 8, "m": per node (d + 1)^2
+// rows of 8}, "sampling", "fit"}. Version 1 is written when there is no
+// calibration, so that older readers read such files.
 #pragma once
 
 #include <array>
@@ -39,7 +46,7 @@
 namespace weft {
 
 inline constexpr const char* kFamilyModelFormat = "weft-family-model";
-inline constexpr int kFamilyModelVersion = 1;
+inline constexpr int kFamilyModelVersion = 2;
 
 // The networks' inputs: the directions, then the normalised parameters.
 inline constexpr int kFamilyTInputs = 3 + 3;                       // wi; N, rho, alpha
@@ -49,6 +56,35 @@ inline constexpr int kFamilyMInputs = 6 + FamilyBox::kDimensions;  // wi, wo; al
 inline constexpr int kFamilyMaskingFeatures = 7;
 std::array<double, kFamilyMaskingFeatures> familyMaskingFeatures(const FamilyBox& box,
                                                                  const YarnPoint& p);
+
+// The energy calibration's features of the yarn p for channel c: 1, the six
+// normalised non-colour parameters and the channel's normalised C_R (a
+// channel's energies depend on its own C_R and C_TT only: the walks'
+// weights are products of per-channel factors, gather/colour_paths.h).
+inline constexpr int kFamilyCalibrationFeatures = 8;
+std::array<double, kFamilyCalibrationFeatures> familyCalibrationFeatures(const FamilyBox& box,
+                                                                         const YarnPoint& p,
+                                                                         int channel);
+
+// The energy calibration of every yarn of the box: the yarn p's calibration
+// by colour (ColourCalibration, one EnergyCalibration per node colour) has,
+// for channel c, the coefficients
+//   r_c[k] = sum_l r[k, l] f_l(p, c),   m_c[k] at node g = sum_l m[g][k, l] f_l(p, c)
+// with f = familyCalibrationFeatures: log s is linear in the features, so
+// the calibration follows the parameters and costs nothing to build.
+struct FamilyCalibration {
+    int degree = -1;                     // -1: none
+    std::vector<double> cTT;             // M's node colours, strictly increasing in (0, 1]
+    std::vector<double> r;               // r[k * kFamilyCalibrationFeatures + l]
+    std::vector<std::vector<double>> m;  // per node, as r
+
+    bool empty() const { return degree < 0; }
+    // InputError starting with `what` unless the shapes agree and every
+    // coefficient is finite.
+    void validate(const std::string& what) const;
+    // The calibration by colour of the yarn p (empty when this is).
+    ColourCalibration at(const FamilyBox& box, const YarnPoint& p) const;
+};
 
 struct FamilyModel {
     FamilyBox box;
@@ -62,6 +98,7 @@ struct FamilyModel {
     // the optional fitted sampler uses (the default tabulated one is built
     // per yarn from its own model).
     SamplingParams sampling;
+    FamilyCalibration calibration;
     nlohmann::json fit = nlohmann::json::object();  // errors and provenance
 
     // InputError naming the key: the box, the networks' shapes and outputs,
@@ -69,8 +106,8 @@ struct FamilyModel {
     // centre is a model the renderer runs.
     void validate() const;
     // The ordinary colour model of the yarn p (fiber C_TT 0.5 grey, the colour
-    // a scene that gives none sees): InputError naming `what`, the field,
-    // its value and the box when p is outside the box.
+    // a scene that gives none sees), with its calibration by colour: InputError naming `what`, the
+    // field, its value and the box when p is outside the box.
     YarnModel at(const YarnPoint& p, const std::string& what) const;
     // The box's centre (N rounded).
     YarnPoint centre() const;

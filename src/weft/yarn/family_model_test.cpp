@@ -30,6 +30,16 @@ FamilyModel syntheticFamily() {
     for (int k = 0; k < kMaskingCoefficients * kFamilyMaskingFeatures; ++k)
         f.masking.push_back(0.01 * (k + 1) * (k % 2 ? -1 : 1));
     f.masking[0] = 0.6;  // the constant term of c0
+    // A calibration of degree 1 with every coefficient set, small.
+    FamilyCalibration& cal = f.calibration;
+    cal.degree = 1;
+    cal.cTT = {0.3, 0.6, 0.999};
+    const int size = EnergyCalibration::termCount(1) * kFamilyCalibrationFeatures;
+    for (int k = 0; k < size; ++k) cal.r.push_back(0.003 * (k % 5) - 0.005);
+    for (size_t g = 0; g < cal.cTT.size(); ++g) {
+        cal.m.emplace_back();
+        for (int k = 0; k < size; ++k) cal.m.back().push_back(0.002 * ((k + g) % 7) - 0.006);
+    }
     f.fit = {{"note", "synthetic"}};
     f.validate();
     return f;
@@ -67,10 +77,48 @@ TEST_F(FamilyModelFile, RoundTripIsExact) {
     EXPECT_EQ(g.tNet, f.tNet);
     EXPECT_EQ(g.mNet, f.mNet);
     EXPECT_EQ(g.masking, f.masking);
+    EXPECT_EQ(g.calibration.degree, f.calibration.degree);
+    EXPECT_EQ(g.calibration.cTT, f.calibration.cTT);
+    EXPECT_EQ(g.calibration.r, f.calibration.r);
+    EXPECT_EQ(g.calibration.m, f.calibration.m);
     EXPECT_EQ(g.box.toJson(), f.box.toJson());
     EXPECT_EQ(g.colour.toJson(), f.colour.toJson());
     EXPECT_EQ(g.fit, f.fit);
     EXPECT_EQ(familyModelToJson(g), familyModelToJson(f));
+    // Version 2 holds the calibration; without one the file stays version 1.
+    EXPECT_EQ(familyModelToJson(f).at("version"), 2);
+    FamilyModel none = f;
+    none.calibration = {};
+    EXPECT_EQ(familyModelToJson(none).at("version"), 1);
+    EXPECT_FALSE(familyModelToJson(none).contains("energy_calibration"));
+}
+
+// The yarn's calibration by colour is linear in its features: with hand-set
+// coefficients, log s_R = 0.5 q_N - 0.3 q_CR,c and, at the node colour 0.6,
+// log s_M = 0.2 + 0.2 z q_alpha, where fleece (N 300, alpha 0.24, C_R 0.04,
+// 0.087, 0.087) in the box N [200, 600], alpha [0, 0.3], C_R [0, 1] has
+// q_N = -0.5, q_alpha = 0.6, q_CR = 2 C_R - 1.
+TEST(FamilyModel, CalibrationIsLinearInTheYarnsFeatures) {
+    FamilyModel f = syntheticFamily();
+    FamilyCalibration& cal = f.calibration;
+    const int z = EnergyCalibration::termIndex(0, 0, 1, 1);
+    for (double& v : cal.r) v = 0;
+    for (auto& block : cal.m)
+        for (double& v : block) v = 0;
+    cal.r[0 * kFamilyCalibrationFeatures + 1] = 0.5;
+    cal.r[0 * kFamilyCalibrationFeatures + 7] = -0.3;
+    cal.m[1][0 * kFamilyCalibrationFeatures + 0] = 0.2;
+    cal.m[1][z * kFamilyCalibrationFeatures + 3] = 0.2;
+    cal.m[0][0] = 1.0;  // other nodes: not used at C_TT 0.6
+    cal.m[2][0] = -1.0;
+    const YarnModel yarn = f.at(fleece(), "yarn").forColour(Rgb(0.6), "yarn");
+    const Vec3 wi = normalize(Vec3(0.3, -0.2, 0.8));
+    const EnergyCalibration::Scales s = yarn.calibration.scales(wi);
+    const Rgb qCR(2 * 0.04 - 1, 2 * 0.087 - 1, 2 * 0.087 - 1);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(s.r[c], std::exp(0.5 * -0.5 - 0.3 * qCR[c]), 1e-12);
+        EXPECT_NEAR(s.m[c], std::exp(0.2 + 0.2 * wi.z * 0.6), 1e-12);
+    }
 }
 
 TEST(FamilyModel, AYarnIsTheFamilyWithItsParametersAsConstantInputs) {
@@ -119,8 +167,23 @@ TEST(FamilyModel, RefusesAYarnOutsideItsBoxAndDamagedFiles) {
 
     const nlohmann::json good = familyModelToJson(f);
     nlohmann::json j = good;
-    j["version"] = 2;
-    expectInputError([&] { familyModelFromJson(j, "f.json"); }, {"f.json", "version", "2"});
+    j["version"] = 3;
+    expectInputError([&] { familyModelFromJson(j, "f.json"); }, {"f.json", "version", "3"});
+    j = good;
+    j["version"] = 1;  // version 1 has no calibration
+    expectInputError([&] { familyModelFromJson(j, "f.json"); }, {"f.json", "energy_calibration"});
+    j = good;
+    j["energy_calibration"]["m"][1].erase(0);
+    expectInputError([&] { familyModelFromJson(j, "f.json"); },
+                     {"f.json", "energy_calibration.m[1]", "4 rows of 8"});
+    j = good;
+    j["energy_calibration"]["c_tt"] = {0.3, 0.2, 0.999};
+    expectInputError([&] { familyModelFromJson(j, "f.json"); },
+                     {"f.json", "energy_calibration.c_tt[1]", "increase"});
+    j = good;
+    j["energy_calibration"]["r"][0][7] = "x";
+    expectInputError([&] { familyModelFromJson(j, "f.json"); },
+                     {"f.json", "energy_calibration.r[0][7]"});
     j = good;
     j["t_net"]["layers"][0]["weight"][0].erase(0);  // 5 inputs
     expectInputError([&] { familyModelFromJson(j, "f.json"); }, {"f.json", "t_net", "6 numbers"});

@@ -208,21 +208,14 @@ FamilyCalibration readFamilyCalibration(const JsonObjectReader& r) {
     FamilyCalibration cal;
     cal.degree = static_cast<int>(r.integer("degree", {0, EnergyCalibration::kMaxDegree}));
     const size_t terms = static_cast<size_t>(EnergyCalibration::termCount(cal.degree));
-    const json& colours = r.value("c_tt");
-    if (!colours.is_array() || colours.empty() ||
-        colours.size() > static_cast<size_t>(ColourCalibration::kMaxNodes))
-        r.fail("c_tt", "expected an array of 1 to " + std::to_string(ColourCalibration::kMaxNodes) +
-                           " node colours, got " + describeJson(colours));
-    for (size_t g = 0; g < colours.size(); ++g)
-        cal.cTT.push_back(
-            readJsonNumber(colours[g], r.source(), jsonIndexPath(r.pathOf("c_tt"), g)));
+    cal.cTT = readCalibrationNodeColours(r);
     readFeatureRows(r.value("r"), r.source(), r.pathOf("r"), terms, &cal.r);
     const json& perNode = r.value("m");
-    if (!perNode.is_array() || perNode.size() != colours.size())
+    if (!perNode.is_array() || perNode.size() != cal.cTT.size())
         r.fail("m", "expected one block of rows per node colour (" +
-                        std::to_string(colours.size()) + "), got " + describeJson(perNode));
-    cal.m.resize(colours.size());
-    for (size_t g = 0; g < colours.size(); ++g)
+                        std::to_string(cal.cTT.size()) + "), got " + describeJson(perNode));
+    cal.m.resize(cal.cTT.size());
+    for (size_t g = 0; g < cal.cTT.size(); ++g)
         readFeatureRows(perNode[g], r.source(), jsonIndexPath(r.pathOf("m"), g), terms, &cal.m[g]);
     return cal;
 }

@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "weft/core/json_reader.h"
 #include "weft/yarn/network.h"
@@ -21,6 +22,9 @@ nlohmann::json modelNetworkToJson(const NetworkWeights& net);
 // The "sampling" block of `model`, each parameter in its range.
 SamplingParams readModelSampling(const JsonObjectReader& model);
 nlohmann::json modelSamplingToJson(const SamplingParams& sampling);
+// The "c_tt" node colours of an energy calibration by colour `calibration`
+// (1 to ColourCalibration::kMaxNodes numbers; their order is the caller's check).
+std::vector<double> readCalibrationNodeColours(const JsonObjectReader& calibration);
 // The file's text: keys in the layout order of docs/model-format.md, weight
 // rows on one line, numbers in their shortest round-trip form.
 std::string formatModelJson(const nlohmann::json& document);

@@ -179,6 +179,18 @@ RLobeParams readRLobe(const JsonObjectReader& model) {
 
 }  // namespace
 
+std::vector<double> readCalibrationNodeColours(const JsonObjectReader& r) {
+    const json& colours = r.value("c_tt");
+    if (!colours.is_array() || colours.empty() ||
+        colours.size() > static_cast<size_t>(ColourCalibration::kMaxNodes))
+        r.fail("c_tt", "expected an array of 1 to " + std::to_string(ColourCalibration::kMaxNodes) +
+                           " node colours, got " + describeJson(colours));
+    std::vector<double> cTT;
+    for (size_t g = 0; g < colours.size(); ++g)
+        cTT.push_back(readJsonNumber(colours[g], r.source(), jsonIndexPath(r.pathOf("c_tt"), g)));
+    return cTT;
+}
+
 SamplingParams readModelSampling(const JsonObjectReader& model) {
     const JsonObjectReader r =
         model.object("sampling", {"kappa_r", "beta_m_deg", "gamma_m_deg", "kappa_m"});
@@ -237,21 +249,15 @@ EnergyCalibration readCalibration(const JsonObjectReader& model, bool conditione
         readCalibrationRows(r.value("m"), r.source(), r.pathOf("m"), degree, &cal.m);
         return cal;
     }
-    const json& colours = r.value("c_tt");
-    if (!colours.is_array() || colours.empty() ||
-        colours.size() > static_cast<size_t>(ColourCalibration::kMaxNodes))
-        r.fail("c_tt", "expected an array of 1 to " + std::to_string(ColourCalibration::kMaxNodes) +
-                           " node colours, got " + describeJson(colours));
-    for (size_t g = 0; g < colours.size(); ++g)
-        byColour->cTT.push_back(
-            readJsonNumber(colours[g], r.source(), jsonIndexPath(r.pathOf("c_tt"), g)));
-    byColour->nodes.resize(colours.size());
+    byColour->cTT = readCalibrationNodeColours(r);
+    const size_t colours = byColour->cTT.size();
+    byColour->nodes.resize(colours);
     for (const char* key : {"r", "m"}) {
         const json& perNode = r.value(key);
-        if (!perNode.is_array() || perNode.size() != colours.size())
-            r.fail(key, "expected one block of rows per node colour (" +
-                            std::to_string(colours.size()) + "), got " + describeJson(perNode));
-        for (size_t g = 0; g < colours.size(); ++g) {
+        if (!perNode.is_array() || perNode.size() != colours)
+            r.fail(key, "expected one block of rows per node colour (" + std::to_string(colours) +
+                            "), got " + describeJson(perNode));
+        for (size_t g = 0; g < colours; ++g) {
             EnergyCalibration& node = byColour->nodes[g];
             node.degree = degree;
             readCalibrationRows(perNode[g], r.source(), jsonIndexPath(r.pathOf(key), g), degree,

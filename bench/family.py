@@ -70,6 +70,18 @@ def csv(values):
     return ",".join(format(v, ".6g") for v in values)
 
 
+def calibration_text(fit):
+    """The family's energy calibration, as its fit record gives it."""
+    cal = fit.get("calibration")
+    if not cal:
+        return "no energy calibration"
+    m = "R and M" if cal.get("m") else "R only"
+    text = f"energy calibration of degree {cal['degree']} ({m}, {cal['yarns']} yarns"
+    if fit.get("recalibrated"):
+        text += f"; refitted by --recalibrate in {fit['recalibration_seconds']:.0f} s"
+    return text + ")"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--family", required=True)
@@ -168,7 +180,8 @@ def main():
         f"{fit['gather']['paths_per_yarn']} paths (`weft gather family`), fitted in "
         f"{fit['seconds']:.0f} s (`weft fit family`, M network "
         f"{'-'.join(str(len(l['bias'])) for l in family['m_net']['layers'])}, "
-        f"{fit['m_samples_per_second'] / 1e6:.2f} M samples/s), colour range [{lo}, {hi}]. "
+        f"{fit['m_samples_per_second'] / 1e6:.2f} M samples/s), colour range [{lo}, {hi}], "
+        f"{calibration_text(fit)}. "
         "Both models of a row are checked by `weft yarn check` against the same gather: at the "
         "presets an independent 16M-path gather of the preset; at held-out yarns (a family "
         f"gather with seed {HELD_SEED}: none is a training yarn) the {a.held_paths}-path gather "

@@ -376,14 +376,19 @@ TEST_F(FitCliTest, FamilyFitsAndRecalibrates) {
     EXPECT_EQ(fitted.at("version"), 2);
     EXPECT_EQ(fitted.at("energy_calibration").at("degree"), 2);
     EXPECT_EQ(fitted.at("energy_calibration").at("r").size(), 9u);  // (2 + 1)^2 rows
+    // R's calibration only by default: M's one node holds zeros.
+    ASSERT_EQ(fitted.at("energy_calibration").at("c_tt").size(), 1u);
+    for (const nlohmann::json& row : fitted.at("energy_calibration").at("m")[0])
+        for (const nlohmann::json& v : row) EXPECT_EQ(v, 0.0);
 
     writeFileAtomic(path("degree1.json"), R"({"energy_calibration_degree": 1})");
     const RunResult re =
         run("fit family --gather fam --recalibrate f.json --config degree1.json "
-            "--out g.json --quiet");
+            "--calibrate-m --out g.json --quiet");
     ASSERT_EQ(re.status, 0) << re.err;
     const nlohmann::json again = nlohmann::json::parse(readFile(path("g.json")));
     EXPECT_EQ(again.at("energy_calibration").at("degree"), 1);
+    EXPECT_EQ(again.at("energy_calibration").at("c_tt").size(), 7u);  // M's nodes
     EXPECT_EQ(again.at("fit").at("recalibrated"), true);
     EXPECT_EQ(again.at("m_net"), fitted.at("m_net"));
     EXPECT_EQ(again.at("t_net"), fitted.at("t_net"));

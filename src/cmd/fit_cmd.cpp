@@ -135,7 +135,7 @@ struct FamilyFitCliOptions {
     std::string gather, out, config, recalibrate, colourRange = "0.3,0.999";
     uint64_t seed = 0;
     int threads = -1, colourFunctions = 6;
-    bool quiet = false, printConfig = false;
+    bool quiet = false, printConfig = false, calibrateM = false;
 };
 
 void runFitFamily(const FamilyFitCliOptions& c) {
@@ -159,6 +159,7 @@ void runFitFamily(const FamilyFitCliOptions& c) {
     options.functions = c.colourFunctions;
     options.seed = c.seed;
     options.quiet = c.quiet;
+    options.calibrateM = c.calibrateM;
     checkOutputsSpareInputs({{"--config", c.config}, {"--recalibrate", c.recalibrate}},
                             {{"--out", c.out}}, {{"--gather", c.gather}}, {});
     requireParentDirectory(c.out, "--out");
@@ -234,6 +235,9 @@ void addFitCommand(CLI::App& app) {
     family->add_option("--recalibrate", fo->recalibrate,
                        "refit the energy calibration of this family model (FAMILY.json) only, "
                        "at the configuration's energy_calibration_degree, and write it to --out");
+    family->add_flag("--calibrate-m", fo->calibrateM,
+                     "calibrate the M lobe's energy too (by default only R's: measured, M's made "
+                     "the albedo worse; docs/family.md)");
     family->add_option("--colour-range", fo->colourRange,
                        "LO,HI: the fiber colours C_TT the model covers, per channel "
                        "(0 < LO < HI <= 1; default 0.3,0.999)");

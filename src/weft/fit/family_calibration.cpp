@@ -74,7 +74,8 @@ YarnEnergies yarnEnergies(const FamilyModel& family, const FamilyCalibrationYarn
                      rule.weights[static_cast<size_t>(k)];
             setInputColumn(x, k, wi, wo);
         }
-        const Eigen::MatrixXf a = coefficients.forward(x);  // 3K x count, a_jc at row 3 j + c
+        // 3K x count, a_jc at row 3 j + c (not needed without M nodes)
+        const Eigen::MatrixXf a = nodes.empty() ? Eigen::MatrixXf() : coefficients.forward(x);
         e.bin.push_back(static_cast<int32_t>(i));
         e.paths.push_back(static_cast<double>(n));
         e.modelR.push_back(r);
@@ -99,9 +100,13 @@ YarnEnergies yarnEnergies(const FamilyModel& family, const FamilyCalibrationYarn
 
 PoissonFit fitPoissonLogLinear(const std::vector<FamilyCalibrationPoint>& points,
                                const Eigen::MatrixXd& basis,
-                               const std::vector<CalibrationFeatures>& features) {
+                               const std::vector<CalibrationFeatures>& features,
+                               const std::vector<bool>& active) {
     const int terms = static_cast<int>(basis.cols());
     const int unknowns = terms * kFeatures;
+    std::vector<int> free;  // the coefficients fitted; the others stay 0
+    for (int u = 0; u < unknowns; ++u)
+        if (active.empty() || active[static_cast<size_t>(u)]) free.push_back(u);
     Eigen::VectorXd beta = Eigen::VectorXd::Zero(unknowns);
     // log s of a point for the coefficients b.
     auto logScale = [&](const Eigen::VectorXd& b, const FamilyCalibrationPoint& p) {
@@ -157,7 +162,11 @@ PoissonFit fitPoissonLogLinear(const std::vector<FamilyCalibrationPoint>& points
         const double ridge = 1e-9 * std::max(h.diagonal().mean(), 1e-300);
         h.diagonal().array() += ridge;
         g += ridge * beta;
-        const Eigen::VectorXd step = h.ldlt().solve(g);
+        Eigen::VectorXd step = Eigen::VectorXd::Zero(unknowns);
+        const Eigen::MatrixXd hFree = h(free, free);
+        const Eigen::VectorXd gFree = g(free);
+        const Eigen::VectorXd stepFree = hFree.ldlt().solve(gFree);
+        step(free) = stepFree;
         double t = 1;
         bool improved = false;
         for (int halving = 0; halving < 30; ++halving, t *= 0.5) {
@@ -189,13 +198,16 @@ PoissonFit fitPoissonLogLinear(const std::vector<FamilyCalibrationPoint>& points
 
 FamilyCalibration fitFamilyCalibration(const FamilyModel& model,
                                        const std::vector<FamilyCalibrationYarn>& yarns,
-                                       const RdmBins& bins, int degree, int threads, bool quiet,
-                                       nlohmann::json* summary) {
+                                       const RdmBins& bins, int degree, bool multipleScattering,
+                                       int threads, bool quiet, nlohmann::json* summary) {
     FamilyCalibration cal;
     if (degree < 0 || yarns.empty()) return cal;
     FamilyModel plain = model;
     plain.calibration = {};
-    const std::vector<double> nodes = colourCalibrationNodes(plain.colour.range());
+    // Without M's calibration there is no M system; its one node (any
+    // colour) holds zeros, a scale of 1.
+    const std::vector<double> nodes =
+        multipleScattering ? colourCalibrationNodes(plain.colour.range()) : std::vector<double>{};
     tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
 
     // The energies, yarn by yarn.
@@ -238,10 +250,26 @@ FamilyCalibration fitFamilyCalibration(const FamilyModel& model,
                         {e.bin[k], static_cast<int32_t>(3 * y + c), e.paths[k], modelE, rdmE});
                 }
     }
+    // Every basis term has a coefficient shared by all yarns (feature 1);
+    // only the terms up to a feature degree follow the other features.
+    auto activeUpTo = [&](int featureDegree) {
+        std::vector<bool> active(static_cast<size_t>(terms * kFeatures), false);
+        for (int a = 0; a <= std::min(1, degree); ++a)
+            for (int b = 0; b <= degree - a; ++b)
+                for (int c = 0; c <= degree - a - b; ++c) {
+                    const int k = EnergyCalibration::termIndex(a, b, c, degree);
+                    for (int l = 0; l < kFeatures; ++l)
+                        active[static_cast<size_t>(k * kFeatures + l)] =
+                            l == 0 || a + b + c <= featureDegree;
+                }
+        return active;
+    };
+    const std::vector<bool> activeR = activeUpTo(kFamilyCalibrationFeatureDegreeR);
+    const std::vector<bool> activeM = activeUpTo(kFamilyCalibrationFeatureDegreeM);
     std::vector<PoissonFit> fits(systems);
     arena.execute([&] {
         tbb::parallel_for(size_t(0), systems, [&](size_t s) {
-            fits[s] = fitPoissonLogLinear(points[s], basis, features);
+            fits[s] = fitPoissonLogLinear(points[s], basis, features, s == 0 ? activeR : activeM);
         });
     });
 
@@ -249,6 +277,10 @@ FamilyCalibration fitFamilyCalibration(const FamilyModel& model,
     cal.cTT = nodes;
     cal.r = fits[0].beta;
     for (size_t g = 0; g < nodes.size(); ++g) cal.m.push_back(fits[1 + g].beta);
+    if (!multipleScattering) {
+        cal.cTT = {plain.colour.range().hi};
+        cal.m = {std::vector<double>(cal.r.size(), 0.0)};
+    }
     if (summary) {
         nlohmann::json perNode = nlohmann::json::array();
         for (size_t g = 0; g < nodes.size(); ++g)
@@ -257,6 +289,9 @@ FamilyCalibration fitFamilyCalibration(const FamilyModel& model,
                                {"energy_rel_error_before", fits[1 + g].errorBefore},
                                {"energy_rel_error_after", fits[1 + g].errorAfter}});
         *summary = {{"degree", degree},
+                    {"feature_degree",
+                     {{"r", std::min(degree, kFamilyCalibrationFeatureDegreeR)},
+                      {"m", std::min(degree, kFamilyCalibrationFeatureDegreeM)}}},
                     {"yarns", yarns.size()},
                     {"min_paths", kFamilyCalibrationMinPaths},
                     {"r",
@@ -264,7 +299,7 @@ FamilyCalibration fitFamilyCalibration(const FamilyModel& model,
                       {"iterations", fits[0].iterations},
                       {"energy_rel_error_before", fits[0].errorBefore},
                       {"energy_rel_error_after", fits[0].errorAfter}}},
-                    {"m", perNode}};
+                    {"m", multipleScattering ? perNode : nlohmann::json()}};
     }
     return cal;
 }

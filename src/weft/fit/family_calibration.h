@@ -39,6 +39,14 @@ namespace weft {
 // an incident bin needs to count.
 inline constexpr int kFamilyCalibrationYarns = 96;
 inline constexpr int64_t kFamilyCalibrationMinPaths = 20;
+// The basis terms up to these degrees follow the yarn's features (R, M); the
+// higher ones (the shape in wi) are one set of coefficients for every yarn.
+// Every term times every feature extrapolates wildly at the box's faces
+// (measured on cotton, at N 600 and beta_R 1: M energy off by up to 80 % at
+// degree 6 with every term following the features, 50 % up to degree 2,
+// against 10 % uncalibrated).
+inline constexpr int kFamilyCalibrationFeatureDegreeR = 2;
+inline constexpr int kFamilyCalibrationFeatureDegreeM = 0;
 
 // One yarn's data: its parameters, its recorded R and M paths (any colour)
 // and its paths per incident bin.
@@ -68,19 +76,24 @@ struct PoissonFit {
 
 // The Poisson regression above for points that come group by group (all
 // points of a group consecutive): log s of a point is
-// sum_k sum_l beta[k, l] basis(bin, k) features[group][l].
+// sum_k sum_l beta[k, l] basis(bin, k) features[group][l]; only the
+// coefficients k * kFamilyCalibrationFeatures + l flagged in `active` are
+// fitted (empty: all), the others stay 0.
 PoissonFit fitPoissonLogLinear(const std::vector<FamilyCalibrationPoint>& points,
                                const Eigen::MatrixXd& basis,
-                               const std::vector<CalibrationFeatures>& features);
+                               const std::vector<CalibrationFeatures>& features,
+                               const std::vector<bool>& active = {});
 
 // The calibration of `model` (its own calibration is ignored) at `degree`
-// (EnergyCalibration's polynomial degree) with node colours
-// colourCalibrationNodes(model.colour.range()). `summary` (optional) gets
+// (EnergyCalibration's polynomial degree): R's, and with
+// `multipleScattering` M's at the node colours
+// colourCalibrationNodes(model.colour.range()); without, M's scale is 1 (one
+// node of zeros). `summary` (optional) gets
 // the yarns, points, Newton iterations, and the energies' error against the
 // yarns' RDMs before and after (PoissonFit).
 FamilyCalibration fitFamilyCalibration(const FamilyModel& model,
                                        const std::vector<FamilyCalibrationYarn>& yarns,
-                                       const RdmBins& bins, int degree, int threads, bool quiet,
-                                       nlohmann::json* summary = nullptr);
+                                       const RdmBins& bins, int degree, bool multipleScattering,
+                                       int threads, bool quiet, nlohmann::json* summary = nullptr);
 
 }  // namespace weft

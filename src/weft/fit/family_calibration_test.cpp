@@ -132,6 +132,7 @@ TEST_F(FamilyCalibrationFit, CalibratedYarnsHoldTheirRdmsEnergy) {
     o.config.threads = 2;
     o.config.calibrationDegree = 1;
     o.functions = 3;
+    o.calibrateM = true;
     o.quiet = true;
     const FamilyModel model = fitFamilyModel(gather, o).model;
     ASSERT_EQ(model.calibration.degree, 1);

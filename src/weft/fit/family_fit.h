@@ -16,7 +16,8 @@
 //      parameters (family_model.h), against each yarn's RDM_R.
 //   5. The energy calibration (family_calibration.h): one fit over up to
 //      kFamilyCalibrationYarns yarns, its coefficients linear in the yarn's
-//      parameters, so that it follows them as the networks do.
+//      parameters, so that it follows them as the networks do; R's only
+//      unless calibrateM.
 //   6. The sampling lobe (fit.h step 5) of the yarn at the box's centre.
 // With `recalibrate` set, the fit keeps that model and redoes step 5 only
 // (for a model fitted before the calibration existed, or at another degree).
@@ -45,6 +46,9 @@ struct FamilyFitOptions {
     uint64_t seed = 0;
     bool quiet = false;
     std::optional<FamilyModel> recalibrate;  // refit this model's calibration only
+    // Calibrate M too (family_calibration.h); off by default: measured, it
+    // made the albedo worse at held-out yarns and at cotton (docs/family.md).
+    bool calibrateM = false;
 
     // A family's defaults: a wider T network (its inputs include the ply's
     // geometry), four times the M steps of a one-yarn fit, an energy

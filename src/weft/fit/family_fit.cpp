@@ -289,7 +289,8 @@ FamilyFitResult fitFamilyModel(const FamilyGather& gather, const FamilyFitOption
             data.push_back(
                 {gather.points[k], loaded[k].r.get(), loaded[k].m.get(), &loaded[k].count});
         nlohmann::json summary;
-        model.calibration = fitFamilyCalibration(model, data, bins, config.calibrationDegree, options.calibrateM, threads, quiet, &summary);
+        model.calibration = fitFamilyCalibration(model, data, bins, config.calibrationDegree,
+                                                 options.calibrateM, threads, quiet, &summary);
         summary["seconds"] = phaseDone("energy calibration");
         record["calibration"] = summary;
     } else {

@@ -358,6 +358,12 @@ TEST_F(FitCliTest, AblationsFitAndRender) {
 // calibration; --recalibrate refits only the calibration (here at another
 // degree), keeping the networks; bad options are refused.
 TEST_F(FitCliTest, FamilyFitsAndRecalibrates) {
+    const RunResult defaults = run("fit family --print-config");
+    ASSERT_EQ(defaults.status, 0) << defaults.err;
+    const nlohmann::json config = nlohmann::json::parse(defaults.out);
+    EXPECT_EQ(config.at("t_net").at("hidden"), nlohmann::json({16, 16}));
+    EXPECT_EQ(config.at("m_net").at("hidden"), nlohmann::json({32, 32, 32}));
+    EXPECT_EQ(config.at("energy_calibration_degree"), 6);
     ASSERT_EQ(run("gather family --points 3 --paths 3000 --bins 3,8,6,12 --seed 2 --quiet "
                   "--out fam")
                   .status,

@@ -161,6 +161,7 @@ std::vector<double> fitFamilyMasking(const FamilyModel& family, const FamilyGath
 FitConfig FamilyFitOptions::defaultConfig() {
     FitConfig config;
     config.t.hidden = {16, 16};
+    config.m.hidden = {32, 32, 32};
     config.m.steps = 600000;
     config.calibrationDegree = kFamilyCalibrationDegree;
     return config;

@@ -50,9 +50,10 @@ struct FamilyFitOptions {
     // made the albedo worse at held-out yarns and at cotton (docs/family.md).
     bool calibrateM = false;
 
-    // A family's defaults: a wider T network (its inputs include the ply's
-    // geometry), four times the M steps of a one-yarn fit, an energy
-    // calibration of degree kFamilyCalibrationDegree.
+    // A family's defaults: wider networks (T 16-16: its inputs include the
+    // ply's geometry; M 32-32-32: one network for every yarn, measured
+    // against 21-21-21 in docs/family.md), four times the M steps of a
+    // one-yarn fit, an energy calibration of degree kFamilyCalibrationDegree.
     static FitConfig defaultConfig();
 };
 

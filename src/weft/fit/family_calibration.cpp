@@ -104,9 +104,9 @@ PoissonFit fitPoissonLogLinear(const std::vector<FamilyCalibrationPoint>& points
                                const std::vector<bool>& active) {
     const int terms = static_cast<int>(basis.cols());
     const int unknowns = terms * kFeatures;
-    std::vector<int> free;  // the coefficients fitted; the others stay 0
+    std::vector<int> fitted;  // the coefficients fitted; the others stay 0
     for (int u = 0; u < unknowns; ++u)
-        if (active.empty() || active[static_cast<size_t>(u)]) free.push_back(u);
+        if (active.empty() || active[static_cast<size_t>(u)]) fitted.push_back(u);
     Eigen::VectorXd beta = Eigen::VectorXd::Zero(unknowns);
     // log s of a point for the coefficients b.
     auto logScale = [&](const Eigen::VectorXd& b, const FamilyCalibrationPoint& p) {
@@ -163,10 +163,10 @@ PoissonFit fitPoissonLogLinear(const std::vector<FamilyCalibrationPoint>& points
         h.diagonal().array() += ridge;
         g += ridge * beta;
         Eigen::VectorXd step = Eigen::VectorXd::Zero(unknowns);
-        const Eigen::MatrixXd hFree = h(free, free);
-        const Eigen::VectorXd gFree = g(free);
+        const Eigen::MatrixXd hFree = h(fitted, fitted);
+        const Eigen::VectorXd gFree = g(fitted);
         const Eigen::VectorXd stepFree = hFree.ldlt().solve(gFree);
-        step(free) = stepFree;
+        step(fitted) = stepFree;
         double t = 1;
         bool improved = false;
         for (int halving = 0; halving < 30; ++halving, t *= 0.5) {

@@ -23,6 +23,34 @@ constexpr const char* kCalibrationFeatures = "linear-by-channel";
 // The fiber colour of a yarn made by at(): the family gather's own (gather/family.h).
 constexpr double kFamilyGatheredCTT = 0.5;
 
+// A block of coefficients, row k = block[k * width, (k + 1) * width), as
+// JSON rows (the masking's and the calibration's layout).
+json coefficientRows(const std::vector<double>& block, size_t width) {
+    json rows = json::array();
+    for (size_t k = 0; k + width <= block.size(); k += width)
+        rows.push_back(std::vector<double>(block.begin() + static_cast<std::ptrdiff_t>(k),
+                                           block.begin() + static_cast<std::ptrdiff_t>(k + width)));
+    return rows;
+}
+
+// `count` rows of `width` numbers at `path`, appended to *out; InputError
+// naming the row or number otherwise.
+void readCoefficientRows(const json& rows, const std::string& source, const std::string& path,
+                         size_t count, size_t width, std::vector<double>* out) {
+    const std::string shape =
+        "expected " + std::to_string(count) + " rows of " + std::to_string(width) + " numbers";
+    if (!rows.is_array() || rows.size() != count)
+        throwJsonError(source, path, shape + ", got " + describeJson(rows));
+    for (size_t k = 0; k < count; ++k) {
+        if (!rows[k].is_array() || rows[k].size() != width)
+            throwJsonError(source, jsonIndexPath(path, k),
+                           shape + ", got " + describeJson(rows[k]));
+        for (size_t l = 0; l < width; ++l)
+            out->push_back(
+                readJsonNumber(rows[k][l], source, jsonIndexPath(jsonIndexPath(path, k), l)));
+    }
+}
+
 }  // namespace
 
 std::array<double, kFamilyMaskingFeatures> familyMaskingFeatures(const FamilyBox& box,
@@ -143,14 +171,10 @@ YarnModel FamilyModel::at(const YarnPoint& p, const std::string& what) const {
 
 json familyModelToJson(const FamilyModel& model) {
     json masking = nullptr;
-    if (!model.masking.empty()) {
-        json rows = json::array();
-        for (int k = 0; k < kMaskingCoefficients; ++k)
-            rows.push_back(
-                std::vector<double>(model.masking.begin() + k * kFamilyMaskingFeatures,
-                                    model.masking.begin() + (k + 1) * kFamilyMaskingFeatures));
-        masking = {{"form", kMaskingForm}, {"features", kMaskingFeatures}, {"coefficients", rows}};
-    }
+    if (!model.masking.empty())
+        masking = {{"form", kMaskingForm},
+                   {"features", kMaskingFeatures},
+                   {"coefficients", coefficientRows(model.masking, kFamilyMaskingFeatures)}};
     json document = {{"format", kFamilyModelFormat},
                      {"version", 1},
                      {"box", model.box.toJson()},
@@ -164,43 +188,21 @@ json familyModelToJson(const FamilyModel& model) {
     // by version 1 readers.
     const FamilyCalibration& cal = model.calibration;
     if (!cal.empty()) {
-        auto rows = [](const std::vector<double>& block) {
-            json out = json::array();
-            for (size_t k = 0; k < block.size(); k += kFamilyCalibrationFeatures)
-                out.push_back(std::vector<double>(
-                    block.begin() + static_cast<std::ptrdiff_t>(k),
-                    block.begin() + static_cast<std::ptrdiff_t>(k + kFamilyCalibrationFeatures)));
-            return out;
-        };
         json m = json::array();
-        for (const std::vector<double>& block : cal.m) m.push_back(rows(block));
+        for (const std::vector<double>& block : cal.m)
+            m.push_back(coefficientRows(block, kFamilyCalibrationFeatures));
         document["version"] = kFamilyModelVersion;
-        document["energy_calibration"] = {
-            {"form", kCalibrationForm}, {"features", kCalibrationFeatures},
-            {"degree", cal.degree},     {"c_tt", cal.cTT},
-            {"r", rows(cal.r)},         {"m", m}};
+        document["energy_calibration"] = {{"form", kCalibrationForm},
+                                          {"features", kCalibrationFeatures},
+                                          {"degree", cal.degree},
+                                          {"c_tt", cal.cTT},
+                                          {"r", coefficientRows(cal.r, kFamilyCalibrationFeatures)},
+                                          {"m", m}};
     }
     return document;
 }
 
 namespace {
-
-// `rows` rows of kFamilyCalibrationFeatures numbers, appended to *out.
-void readFeatureRows(const json& rows, const std::string& source, const std::string& path,
-                     size_t count, std::vector<double>* out) {
-    const std::string shape = "expected " + std::to_string(count) + " rows of " +
-                              std::to_string(kFamilyCalibrationFeatures) + " numbers";
-    if (!rows.is_array() || rows.size() != count)
-        throwJsonError(source, path, shape + ", got " + describeJson(rows));
-    for (size_t k = 0; k < count; ++k) {
-        if (!rows[k].is_array() || rows[k].size() != kFamilyCalibrationFeatures)
-            throwJsonError(source, jsonIndexPath(path, k),
-                           shape + ", got " + describeJson(rows[k]));
-        for (size_t l = 0; l < kFamilyCalibrationFeatures; ++l)
-            out->push_back(
-                readJsonNumber(rows[k][l], source, jsonIndexPath(jsonIndexPath(path, k), l)));
-    }
-}
 
 FamilyCalibration readFamilyCalibration(const JsonObjectReader& r) {
     r.oneOf("form", {kCalibrationForm});
@@ -209,14 +211,16 @@ FamilyCalibration readFamilyCalibration(const JsonObjectReader& r) {
     cal.degree = static_cast<int>(r.integer("degree", {0, EnergyCalibration::kMaxDegree}));
     const size_t terms = static_cast<size_t>(EnergyCalibration::termCount(cal.degree));
     cal.cTT = readCalibrationNodeColours(r);
-    readFeatureRows(r.value("r"), r.source(), r.pathOf("r"), terms, &cal.r);
+    readCoefficientRows(r.value("r"), r.source(), r.pathOf("r"), terms, kFamilyCalibrationFeatures,
+                        &cal.r);
     const json& perNode = r.value("m");
     if (!perNode.is_array() || perNode.size() != cal.cTT.size())
         r.fail("m", "expected one block of rows per node colour (" +
                         std::to_string(cal.cTT.size()) + "), got " + describeJson(perNode));
     cal.m.resize(cal.cTT.size());
     for (size_t g = 0; g < cal.cTT.size(); ++g)
-        readFeatureRows(perNode[g], r.source(), jsonIndexPath(r.pathOf("m"), g), terms, &cal.m[g]);
+        readCoefficientRows(perNode[g], r.source(), jsonIndexPath(r.pathOf("m"), g), terms,
+                            kFamilyCalibrationFeatures, &cal.m[g]);
     return cal;
 }
 
@@ -255,20 +259,8 @@ FamilyModel familyModelFromJson(const json& j, const std::string& source) {
         const JsonObjectReader m = rLobe.object("masking", {"form", "features", "coefficients"});
         m.oneOf("form", {kMaskingForm});
         m.oneOf("features", {kMaskingFeatures});
-        const json& rows = m.value("coefficients");
-        const std::string path = m.pathOf("coefficients");
-        const std::string shape = "expected " + std::to_string(kMaskingCoefficients) + " rows of " +
-                                  std::to_string(kFamilyMaskingFeatures) + " numbers";
-        if (!rows.is_array() || rows.size() != kMaskingCoefficients)
-            throwJsonError(source, path, shape + ", got " + describeJson(rows));
-        for (size_t k = 0; k < rows.size(); ++k) {
-            if (!rows[k].is_array() || rows[k].size() != kFamilyMaskingFeatures)
-                throwJsonError(source, jsonIndexPath(path, k),
-                               shape + ", got " + describeJson(rows[k]));
-            for (size_t l = 0; l < rows[k].size(); ++l)
-                model.masking.push_back(
-                    readJsonNumber(rows[k][l], source, jsonIndexPath(jsonIndexPath(path, k), l)));
-        }
+        readCoefficientRows(m.value("coefficients"), source, m.pathOf("coefficients"),
+                            kMaskingCoefficients, kFamilyMaskingFeatures, &model.masking);
     }
     model.sampling = readModelSampling(r);
     if (version >= 2 && !r.isNull("energy_calibration"))

@@ -21,7 +21,7 @@
 //   Incident nodes: kIncidentTheta x kIncidentPhi, equal steps of the surface
 //     fiber angles theta_i in [-pi/2, pi/2] and phi_i in [-pi/2, pi/2] (the
 //     upper hemisphere). A node stores the probability of every cell of its
-//     own row layout, computed by a 2 x 2 midpoint rule per cell, with a
+//     own row layout, computed by the midpoint rule per cell, with a
 //     floor of kFloor times the uniform density (so the density is positive
 //     wherever f is), each cell's mass as an 8-bit code of its log2 relative
 //     to the node's largest cell (kCodeStep codes per factor 2; the decoded

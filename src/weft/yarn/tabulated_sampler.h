@@ -38,7 +38,7 @@ namespace weft {
 class TabulatedYarnSampler final : public YarnSampler {
   public:
     // Builds the table from the model as `evaluator` gives it (guard
-    // included), in parallel: about 0.25 s for a shipped model on 2 cores.
+    // included), in parallel: about 0.08 s for a shipped model on 2 cores.
     // Keeps the evaluator: q_R is its fiber's R lobe.
     explicit TabulatedYarnSampler(std::shared_ptr<const YarnEvaluator> evaluator);
 

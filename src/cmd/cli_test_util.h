@@ -4,12 +4,16 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <initializer_list>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -41,6 +45,47 @@ inline void expectUserError(const RunResult& r, std::initializer_list<std::strin
     EXPECT_TRUE(contains(r.err, "weft: error: ")) << "stderr: " << r.err;
     for (const std::string& p : parts)
         EXPECT_TRUE(contains(r.err, p)) << "stderr '" << r.err << "' lacks '" << p << "'";
+}
+
+// Starts `weft ARGS` (ARGS split at spaces) in `dir` with its soft file-size
+// limit at `fileSizeLimit` (0: unchanged) and SIGXFSZ, SIGINT, SIGTERM and
+// SIGHUP at their default actions,
+// whatever this process inherited: what the binary does on its own is tested.
+// stdout and stderr go to the given descriptors. Only async-signal-safe calls
+// between fork and exec.
+inline pid_t spawnWeft(const std::filesystem::path& dir, const std::string& args,
+                       rlim_t fileSizeLimit, int outFd, int errFd) {
+    std::vector<std::string> words{WEFT_BIN};
+    std::istringstream split(args);
+    for (std::string w; split >> w;) words.push_back(w);
+    std::vector<char*> argv;
+    for (std::string& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    const std::string where = dir.string();
+    rlimit limit{};
+    ::getrlimit(RLIMIT_FSIZE, &limit);
+    if (fileSizeLimit > 0) limit.rlim_cur = fileSizeLimit;
+    const pid_t child = ::fork();
+    if (child == 0) {
+        struct sigaction dfl {};
+        dfl.sa_handler = SIG_DFL;
+        // And the signals the tests send at their default actions, even
+        // where this process was started with them ignored (a background job).
+        for (int s : {SIGXFSZ, SIGINT, SIGTERM, SIGHUP}) ::sigaction(s, &dfl, nullptr);
+        if (::chdir(where.c_str()) != 0 || ::setrlimit(RLIMIT_FSIZE, &limit) != 0 ||
+            ::dup2(outFd, 1) < 0 || ::dup2(errFd, 2) < 0)
+            ::_exit(127);
+        ::execv(argv[0], argv.data());
+        ::_exit(127);
+    }
+    return child;
+}
+
+// The exit status as RunResult keeps it: -signal when killed by one.
+inline int statusOf(int wstatus) {
+    if (WIFEXITED(wstatus)) return WEXITSTATUS(wstatus);
+    if (WIFSIGNALED(wstatus)) return -WTERMSIG(wstatus);
+    return -1000;
 }
 
 class CliTestBase : public TempDirTest {

@@ -19,6 +19,13 @@
 
 namespace weft::cmd {
 
+// Thrown by a command that wrote its outputs and must still end with a status
+// other than 0 (weft render stopped by a signal: 128 + the signal); main()
+// returns `status` after flushing the summary line.
+struct ExitStatus {
+    int status;
+};
+
 // --preset NAME | --params FILE, shared by every command that needs fiber parameters.
 struct MaterialOptions {
     std::string preset;

@@ -34,46 +34,10 @@ namespace {
 namespace fs = std::filesystem;
 using testing::contains;
 using testing::RunResult;
+using testing::spawnWeft;
+using testing::statusOf;
 
 const std::string kFleece = std::string(WEFT_SOURCE_DIR) + "/tests/data/fleece-small.json";
-
-// Starts `weft ARGS` (ARGS split at spaces) in `dir` with its soft file-size
-// limit at `fileSizeLimit` (0: unchanged) and SIGXFSZ at its default action,
-// whatever this process inherited: what the binary does on its own is tested.
-// stdout and stderr go to the given descriptors. Only async-signal-safe calls
-// between fork and exec.
-pid_t spawnWeft(const fs::path& dir, const std::string& args, rlim_t fileSizeLimit, int outFd,
-                int errFd) {
-    std::vector<std::string> words{WEFT_BIN};
-    std::istringstream split(args);
-    for (std::string w; split >> w;) words.push_back(w);
-    std::vector<char*> argv;
-    for (std::string& w : words) argv.push_back(w.data());
-    argv.push_back(nullptr);
-    const std::string where = dir.string();
-    rlimit limit{};
-    ::getrlimit(RLIMIT_FSIZE, &limit);
-    if (fileSizeLimit > 0) limit.rlim_cur = fileSizeLimit;
-    const pid_t child = ::fork();
-    if (child == 0) {
-        struct sigaction dfl {};
-        dfl.sa_handler = SIG_DFL;
-        ::sigaction(SIGXFSZ, &dfl, nullptr);
-        if (::chdir(where.c_str()) != 0 || ::setrlimit(RLIMIT_FSIZE, &limit) != 0 ||
-            ::dup2(outFd, 1) < 0 || ::dup2(errFd, 2) < 0)
-            ::_exit(127);
-        ::execv(argv[0], argv.data());
-        ::_exit(127);
-    }
-    return child;
-}
-
-// The exit status as RunResult keeps it: -signal when killed by one.
-int statusOf(int wstatus) {
-    if (WIFEXITED(wstatus)) return WEXITSTATUS(wstatus);
-    if (WIFSIGNALED(wstatus)) return -WTERMSIG(wstatus);
-    return -1000;
-}
 
 // Every path below `dir`, relative, with the size of each file ("/" after a directory).
 std::map<std::string, uintmax_t> tree(const fs::path& dir) {

@@ -54,7 +54,12 @@ int main(int argc, char** argv) {
     weft::cmd::addMontageCommand(app);
     weft::cmd::addCurvesCommands(app);
     try {
-        app.parse(argc, argv);
+        try {
+            app.parse(argc, argv);
+        } catch (const weft::cmd::ExitStatus& e) {
+            flushStandardOutput();
+            return e.status;
+        }
         flushStandardOutput();
     } catch (const CLI::CallForHelp& e) {
         if (weft::cmd::reportUnknownCommand(app)) return 2;  // `weft view --help`

@@ -1,5 +1,9 @@
 // End-to-end tests of `weft render`: outputs, statistics, budgets and input errors.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdint>
@@ -8,6 +12,8 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
+#include <utility>
 
 #include "cli_test_util.h"
 #include "weft/core/file.h"
@@ -17,6 +23,7 @@
 namespace weft {
 namespace {
 
+using testing::contains;
 using testing::expectUserError;
 using testing::RunResult;
 
@@ -522,9 +529,79 @@ TEST_F(RenderCliTest, BadInputIsNamed) {
     expectUserError(run("render scene.json --spp 1 --threads -2 --out a.exr"), {"--threads"});
     writeScene("bad.json", R"(, "plys": 3)");
     expectUserError(run("render bad.json --spp 1 --out a.exr"), {"bad.json", "plys"});
+    expectUserError(run("render scene.json --spp 1 --checkpoint 0.5 --out a.exr"),
+                    {"--checkpoint", "[1, 1e6]"});
     writeFileAtomic(path("yarn.txt"), "0 0 0\n1 nan 0\n");
     expectUserError(run("render scene.json --spp 1 --out a.exr"), {"yarn.txt", "2"});
     EXPECT_FALSE(std::filesystem::exists(path("a.exr")));
+}
+
+// Issue 43, item 3: outputs that cannot be written fail before the render
+// (a million spp would not finish within the test's time), naming the flag.
+TEST_F(RenderCliTest, OutputsAreCheckedBeforeTheRender) {
+    RunResult r = run("render scene.json --spp 1000000 --out missing/a.exr");
+    expectUserError(r, {"--out", "missing/a.exr"});
+    std::filesystem::create_directory(path("a.png"));
+    r = run("render scene.json --spp 1000000 --out a.exr");
+    expectUserError(r, {"--out's PNG", "a.png", "directory"});
+    EXPECT_FALSE(std::filesystem::exists(path("a.exr")));
+}
+
+// `weft render knit.json --out knit.exr`: the statistics go to knit.render.json,
+// never over the scene, and `weft render merge` finds them there.
+TEST_F(RenderCliTest, StatisticsNeverReplaceTheScene) {
+    const std::string scene = readFile(path("scene.json"));
+    RunResult r = run("render scene.json --spp 2 --quiet --out scene.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(readFile(path("scene.json")), scene);
+    EXPECT_EQ(nlohmann::json::parse(r.out).at("json"), "scene.render.json");
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("scene.render.json"))).at("spp"), 2);
+    ASSERT_EQ(run("render scene.json --spp 2 --shard 0/2 --quiet --out scene.exr").status, 0);
+    ASSERT_EQ(run("render scene.json --spp 2 --shard 1/2 --quiet --out part1.exr").status, 0);
+    r = run("render merge scene.exr part1.exr --out merged.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("merged.json"))).at("spp"), 2);
+    EXPECT_EQ(readFile(path("scene.json")), scene);
+}
+
+// Issue 43, item 3: --checkpoint writes the image while rendering; the first
+// SIGINT or SIGTERM finishes the tiles in flight, writes the image so far
+// ("partial": true) and exits 130 or 143; `weft compare` reads that image.
+TEST_F(RenderCliTest, SignalsAndCheckpointsKeepTheWork) {
+    ASSERT_EQ(run("render scene.json --spp 4 --quiet --out ref.exr").status, 0);
+    for (const auto& [signal, status] : {std::pair{SIGINT, 130}, std::pair{SIGTERM, 143}}) {
+        std::filesystem::remove(path("long.json"));
+        const int out = ::open(path("long.out").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        const int err = ::open(path("long.err").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        ASSERT_GE(out, 0);
+        ASSERT_GE(err, 0);
+        const pid_t child = testing::spawnWeft(
+            dir_, "render scene.json --time 100000 --checkpoint 1 --threads 2 --out long.exr", 0,
+            out, err);
+        ::close(out);
+        ::close(err);
+        // The first checkpoint: the render is under way (and the image so far on disk).
+        bool written = false;
+        for (int k = 0; k < 6000 && !written; ++k) {
+            written = std::filesystem::exists(path("long.json"));
+            if (!written) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        }
+        if (!written) ::kill(child, SIGKILL);
+        int wstatus = 0;
+        if (written) ::kill(child, signal);
+        ::waitpid(child, &wstatus, 0);
+        ASSERT_TRUE(written) << readFile(path("long.err"));
+        EXPECT_EQ(testing::statusOf(wstatus), status) << readFile(path("long.err"));
+        const nlohmann::json stats = nlohmann::json::parse(readFile(path("long.json")));
+        EXPECT_TRUE(stats.at("partial").get<bool>());
+        EXPECT_GE(stats.at("spp").get<int>(), 1);
+        EXPECT_GE(stats.at("spp_max").get<int>(), stats.at("spp").get<int>());
+        EXPECT_TRUE(contains(readFile(path("long.err")), "stopped by"))
+            << readFile(path("long.err"));
+        EXPECT_TRUE(nlohmann::json::parse(readFile(path("long.out"))).at("partial").get<bool>());
+        const RunResult compared = run("compare long.exr ref.exr");
+        EXPECT_EQ(compared.status, 0) << compared.err;
+    }
 }
 
 // A family model (docs/family.md): each yarn gives its own parameters and

@@ -1,5 +1,6 @@
 // weft render: a cloth scene to an image, its yarns in neural, fiber or dual mode (docs/render.md).
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -22,7 +23,7 @@ namespace {
 struct RenderCmdOptions {
     std::string scene, mode, out, yarnSampling = "tabulated", shard, sampler;
     int spp = 0, threads = 0;
-    double seconds = 0, exposure = 0;
+    double seconds = 0, exposure = 0, checkpoint = 0;
     uint64_t seed = 0;
     CLI::Option *sppOpt = nullptr, *timeOpt = nullptr, *seedOpt = nullptr, *shardOpt = nullptr,
                 *samplerOpt = nullptr;
@@ -35,23 +36,40 @@ std::string outputStem(const std::string& out) {
     return json.substr(0, json.size() - 5);
 }
 
-// IMAGE.exr, IMAGE.png and IMAGE.json, all three or none; then the one-line summary.
-void writeRenderOutputs(const std::string& out, const Image& image, nlohmann::json stats,
-                        double exposure) {
-    const std::string stem = outputStem(out);
+// A render's three outputs: IMAGE.exr, IMAGE.png and the statistics,
+// IMAGE.json, or IMAGE.render.json where IMAGE.json is the scene file
+// (`weft render knit.json --out knit.exr`; docs/render.md).
+struct RenderOutputs {
+    std::string exr, png, json;
+
+    RenderOutputs(const std::string& out, const std::string& sceneFile)
+        : exr(out), png(outputStem(out) + ".png"), json(outputStem(out) + ".json") {
+        if (sameFilePath(json, sceneFile)) json = outputStem(out) + render::kRenderStatsSuffix;
+    }
+    std::vector<CommandPath> paths() const {
+        return {{"--out", exr}, {"--out's PNG", png}, {"--out's statistics", json}};
+    }
+};
+
+// The three outputs, all or none (each through a temporary file renamed into place).
+void writeRenderFiles(const RenderOutputs& out, const Image& image, nlohmann::json& stats,
+                      double exposure) {
     stats["exposure"] = exposure;
-    stats["outputs"] = {{"exr", out}, {"png", stem + ".png"}, {"json", stem + ".json"}};
-    writeFilesAtomic({{out, encodeExr(image, out)},
-                      {stem + ".png", encodePng(image, exposure)},
-                      {stem + ".json", stats.dump(2) + "\n"}});
-    std::printf("%s\n", nlohmann::json({{"exr", out},
-                                        {"png", stem + ".png"},
-                                        {"json", stem + ".json"},
-                                        {"mode", stats.at("mode")},
-                                        {"spp", stats.at("spp")},
-                                        {"seconds", stats.at("seconds")}})
-                            .dump()
-                            .c_str());
+    stats["outputs"] = {{"exr", out.exr}, {"png", out.png}, {"json", out.json}};
+    writeFilesAtomic({{out.exr, encodeExr(image, out.exr)},
+                      {out.png, encodePng(image, exposure)},
+                      {out.json, stats.dump(2) + "\n"}});
+}
+
+// writeRenderFiles, then the one-line summary.
+void writeRenderOutputs(const RenderOutputs& out, const Image& image, nlohmann::json stats,
+                        double exposure) {
+    writeRenderFiles(out, image, stats, exposure);
+    nlohmann::json line = {{"exr", out.exr},         {"png", out.png},
+                           {"json", out.json},       {"mode", stats.at("mode")},
+                           {"spp", stats.at("spp")}, {"seconds", stats.at("seconds")}};
+    if (stats.value("partial", false)) line["partial"] = true;
+    std::printf("%s\n", line.dump().c_str());
 }
 
 void checkExposure(double exposure) {
@@ -65,17 +83,16 @@ void runRender(const RenderCmdOptions& o) {
     if (o.scene.empty() || o.out.empty())
         throw InputError("weft render needs SCENE and --out IMAGE.exr (or: weft render merge "
                          "PART.exr... --out IMAGE.exr)");
-    const std::string stem = outputStem(o.out);
+    const RenderOutputs outputs(o.out, o.scene);
     checkExposure(o.exposure);
     render::SceneOptions sceneOptions;
     if (!o.mode.empty()) sceneOptions.mode = render::yarnModeNamed(o.mode).name();
     sceneOptions.quiet = o.quiet;
     sceneOptions.yarn.sampling = parseYarnSampling(o.yarnSampling, "--yarn-sampling");
     const render::SceneDesc desc = render::loadScene(o.scene);
-    checkOutputsSpareInputs(render::sceneInputs(desc, o.scene),
-                            {{"--out", o.out},
-                             {"--out's PNG", stem + ".png"},
-                             {"--out's statistics", stem + ".json"}});
+    checkOutputsSpareInputs(render::sceneInputs(desc, o.scene), outputs.paths());
+    // Before the scene is built and rendered: a bad destination fails now.
+    checkOutputsWritable(outputs.paths());
 
     render::RenderOptions options;
     // Flags override the scene's spp; RenderOptions::validate checks that
@@ -90,6 +107,7 @@ void runRender(const RenderCmdOptions& o) {
     options.nextEventEstimation = !o.noNee;
     options.quiet = o.quiet;
     if (o.shardOpt->count()) options.shard = Shard::parse(o.shard, "--shard");
+    options.checkpointSeconds = o.checkpoint;
     options.validate();
 
     const std::string hash = render::sceneHash(desc);
@@ -101,21 +119,45 @@ void runRender(const RenderCmdOptions& o) {
     if (!o.quiet)
         for (const std::string& n : render::appearanceNotes(desc.path, scene.stats()))
             std::fprintf(stderr, "weft: %s\n", n.c_str());
+    auto statsOf = [&](const render::RenderStats& st) {
+        nlohmann::json stats = render::toJson(st);
+        stats["scene_file"] = o.scene;
+        stats["scene_hash"] = hash;
+        stats["next_event_estimation"] = !o.noNee;
+        stats["yarn_sampling"] = yarnSamplingName(sceneOptions.yarn.sampling);
+        stats["max_depth"] = options.maxDepth;
+        stats["version"] = WEFT_VERSION;
+        return stats;
+    };
+    // The image so far, every --checkpoint seconds (partial: true in its statistics).
+    options.checkpoint = [&](const render::RenderResult& partial) {
+        nlohmann::json stats = statsOf(partial.stats);
+        writeRenderFiles(outputs, partial.image, stats, o.exposure);
+    };
+    // The first SIGINT or SIGTERM: the tiles in flight finish, the image so far is written.
+    const StopOnSignal stop("the image of the samples traced so far");
+    options.stopRequested = [] { return StopOnSignal::signal() != 0; };
     const render::RenderResult result = render::render(scene, options);
 
-    nlohmann::json stats = render::toJson(result.stats);
-    stats["scene_file"] = o.scene;
-    stats["scene_hash"] = hash;
-    stats["next_event_estimation"] = !o.noNee;
-    stats["yarn_sampling"] = yarnSamplingName(sceneOptions.yarn.sampling);
-    stats["max_depth"] = options.maxDepth;
-    stats["version"] = WEFT_VERSION;
     if (const std::string w = render::truncationWarning(result.stats, options.maxDepth); !w.empty())
         std::fprintf(stderr, "weft: warning: %s\n", w.c_str());
     if (result.stats.nonFiniteSamples > 0)
         std::fprintf(stderr, "weft: warning: %lld samples were NaN or infinite and were dropped\n",
                      static_cast<long long>(result.stats.nonFiniteSamples));
-    writeRenderOutputs(o.out, result.image, std::move(stats), o.exposure);
+    writeRenderOutputs(outputs, result.image, statsOf(result.stats), o.exposure);
+    if (result.stats.partial) {
+        const int signal = StopOnSignal::signal();
+        std::fprintf(
+            stderr,
+            "weft: stopped by %s after %lld samples per pixel (up to %lld) of %s: %s "
+            "holds them (\"partial\": true in %s)\n",
+            signal == SIGTERM ? "SIGTERM" : "SIGINT", static_cast<long long>(result.stats.spp),
+            static_cast<long long>(result.stats.sppMax),
+            result.stats.sppRequested > 0 ? std::to_string(result.stats.sppRequested).c_str()
+                                          : "the time budget",
+            outputs.exr.c_str(), outputs.json.c_str());
+        throw ExitStatus{128 + (signal != 0 ? signal : SIGINT)};
+    }
 }
 
 struct RenderMergeOptions {
@@ -125,18 +167,16 @@ struct RenderMergeOptions {
 };
 
 void runRenderMerge(const RenderMergeOptions& o) {
-    const std::string stem = outputStem(o.out);
+    const RenderOutputs outputs(o.out, "");
     checkExposure(o.exposure);
     std::vector<CommandPath> inputs;
     for (const std::string& part : o.parts) {
         inputs.push_back({"part", part});
         inputs.push_back({"part's statistics", render::renderStatsPath(part, "part " + part)});
     }
-    checkOutputsSpareInputs(inputs, {{"--out", o.out},
-                                     {"--out's PNG", stem + ".png"},
-                                     {"--out's statistics", stem + ".json"}});
+    checkOutputsSpareInputs(inputs, outputs.paths());
     const render::MergedRender merged = render::mergeRenderParts(o.parts);
-    writeRenderOutputs(o.out, merged.image, merged.stats, o.exposure);
+    writeRenderOutputs(outputs, merged.image, merged.stats, o.exposure);
 }
 
 }  // namespace
@@ -177,6 +217,10 @@ void addRenderCommand(CLI::App& app) {
         "render.sampler, else independent");
     cmd->add_option("--exposure", o->exposure, "PNG exposure in stops (the EXR stays linear)")
         ->capture_default_str();
+    cmd->add_option("--checkpoint", o->checkpoint,
+                    "Write the image so far (EXR, PNG and statistics with \"partial\": true) "
+                    "every SECONDS while rendering, in [1, 1e6] (docs/render.md, \"Keeping the "
+                    "work\"); Ctrl-C or SIGTERM writes it without this flag too");
     cmd->add_flag("--no-nee", o->noNee,
                   "Turn off next-event estimation (BSDF sampling only; for checking estimators)");
     cmd->add_flag("--quiet", o->quiet,

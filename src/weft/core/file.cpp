@@ -11,6 +11,7 @@
 #include <cctype>
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -334,11 +335,70 @@ void checkOutputsSpareInputs(const std::vector<CommandPath>& inputFiles,
     }
 }
 
+bool sameFilePath(const std::string& a, const std::string& b) {
+    return !a.empty() && !b.empty() && sameFile(resolved(a), resolved(b));
+}
+
 void removeTemporaryOutputs() {
     const RegistryLock lock = lockTemporaries();
     for (const auto& [path, isDirectory] : temporaryOutputs().isDirectory)
         removeTemporary(path, isDirectory);
     temporaryOutputs().isDirectory.clear();
+}
+
+namespace {
+
+// StopOnSignal's state: how many live, their message, the signal received.
+struct StopState {
+    std::mutex mutex;
+    int armed = 0;
+    std::string what;
+};
+StopState& stopState() {
+    static StopState* const state = new StopState;  // never destroyed, as the registry
+    return *state;
+}
+std::atomic<int> stopSignal{0};
+
+// A first SIGINT or SIGTERM while a StopOnSignal lives: recorded and announced.
+bool recordStop(int received) {
+    if (received == SIGHUP || stopSignal.load() != 0) return false;
+    const std::lock_guard<std::mutex> lock(stopState().mutex);
+    if (stopState().armed == 0) return false;
+    stopSignal.store(received);
+    std::fprintf(stderr, "\nweft: %s: stopping; %s will be written (%s again: quit without)\n",
+                 received == SIGINT ? "SIGINT" : "SIGTERM", stopState().what.c_str(),
+                 received == SIGINT ? "Ctrl-C" : "SIGTERM");
+    return true;
+}
+
+}  // namespace
+
+StopOnSignal::StopOnSignal(std::string what) {
+    const std::lock_guard<std::mutex> lock(stopState().mutex);
+    ++stopState().armed;
+    stopState().what = std::move(what);
+}
+
+StopOnSignal::~StopOnSignal() {
+    const std::lock_guard<std::mutex> lock(stopState().mutex);
+    --stopState().armed;
+}
+
+int StopOnSignal::signal() { return stopSignal.load(); }
+
+void checkOutputsWritable(const std::vector<CommandPath>& outputFiles) {
+    for (const CommandPath& out : outputFiles) {
+        if (out.path.empty()) continue;
+        try {
+            std::error_code ec;
+            if (std::filesystem::is_directory(out.path, ec))
+                throw InputError("cannot write '" + out.path + "': it is a directory");
+            discardTemp(-1, writeTemporarySibling(out.path, ""));
+        } catch (const InputError& e) {
+            throw InputError(out.role + ": " + e.what());
+        }
+    }
 }
 
 void removeTemporaryOutputsOnSignals() {
@@ -348,7 +408,9 @@ void removeTemporaryOutputsOnSignals() {
     if (pthread_sigmask(SIG_BLOCK, &signals, nullptr) != 0) return;
     std::thread([signals] {
         int received = 0;
-        if (sigwait(&signals, &received) != 0) return;
+        do {
+            if (sigwait(&signals, &received) != 0) return;
+        } while (recordStop(received));
         // Taken for good: no writer creates, renames or lists a temporary
         // output from now on, so what is removed here stays removed.
         temporaryOutputs().mutex.lock();

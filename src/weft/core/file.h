@@ -64,6 +64,24 @@ void removeTemporaryOutputs();
 // from the host.
 void removeTemporaryOutputsOnSignals();
 
+// A command that can stop early and keep its work (weft render): while a
+// StopOnSignal lives, the first SIGINT or SIGTERM that the clean-up thread
+// above receives does not end the process but is recorded (signal()) and
+// announced on stderr; the command finishes what is in flight, writes its
+// outputs and exits 128 + signal(). A second SIGINT or SIGTERM, or a SIGHUP,
+// takes the clean-up path at once. Without removeTemporaryOutputsOnSignals
+// (the Python module) nothing receives the signals: signal() stays 0.
+class StopOnSignal {
+  public:
+    // `what`: what the stop keeps, for the message ("the samples traced so far").
+    explicit StopOnSignal(std::string what);
+    ~StopOnSignal();
+    StopOnSignal(const StopOnSignal&) = delete;
+    StopOnSignal& operator=(const StopOnSignal&) = delete;
+    // 0, or the signal that asked to stop.
+    static int signal();
+};
+
 // Why a write failed, for a message after "cannot write 'PATH': ": for EFBIG
 // "file too large: SIZE, over this process's file-size limit of N bytes (ulimit
 // -f; RLIMIT_FSIZE)" (or "... over what the file system takes in one file"
@@ -87,6 +105,14 @@ void checkOutputsSpareInputs(const std::vector<CommandPath>& inputFiles,
                              const std::vector<CommandPath>& outputFiles,
                              const std::vector<CommandPath>& inputDirs = {},
                              const std::vector<CommandPath>& outputDirs = {});
+
+// Whether two paths name the same file, compared as checkOutputsSpareInputs does.
+bool sameFilePath(const std::string& a, const std::string& b);
+
+// Before long work: every output file can be written now. InputError naming
+// the role and the path otherwise (its directory missing or not writable, or
+// the path a directory); a probe file is created beside each and removed.
+void checkOutputsWritable(const std::vector<CommandPath>& outputFiles);
 
 // The extension of `path` with its dot, in lower case ("a/B.EXR" -> ".exr"; "" if none),
 // for picking a reader by file type.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <optional>
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
@@ -35,7 +36,23 @@ Part readPart(const std::string& exr, const ReadPartFile& read) {
     Part p;
     p.exr = exr;
     p.jsonPath = renderStatsPath(exr, "part " + exr);
-    p.stats = parseJsonText(read(p.jsonPath), p.jsonPath);
+    // PART.json, or PART.render.json where PART.json was the render's scene.
+    const std::string renamed = exr.substr(0, exr.size() - 4) + kRenderStatsSuffix;
+    auto tryRead = [&](const std::string& path) -> std::optional<nlohmann::json> {
+        try {
+            return parseJsonText(read(path), path);
+        } catch (const InputError&) {
+            return std::nullopt;
+        }
+    };
+    std::optional<nlohmann::json> stats = tryRead(p.jsonPath);
+    if (!stats || (stats->is_object() && !stats->contains("spp")))
+        if (std::optional<nlohmann::json> other = tryRead(renamed)) {
+            stats = std::move(other);
+            p.jsonPath = renamed;
+        }
+    // Neither: read PART.json again for its error.
+    p.stats = stats ? std::move(*stats) : parseJsonText(read(p.jsonPath), p.jsonPath);
     const JsonObjectReader r(p.stats, p.jsonPath);
     if (!r.has("shard"))
         throw InputError(p.jsonPath +

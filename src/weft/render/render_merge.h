@@ -26,6 +26,10 @@ namespace weft::render {
 // PART.exr -> PART.json (the statistics beside an image); InputError naming
 // `what` unless `exr` ends in .exr.
 std::string renderStatsPath(const std::string& exr, const std::string& what);
+// Where PART.json is the render's own scene file, the statistics go to
+// PART.render.json instead (weft render; docs/render.md): the merge reads
+// that one when PART.json is missing or holds no render statistics (no "spp").
+inline constexpr const char* kRenderStatsSuffix = ".render.json";
 
 struct MergedRender {
     Image image;

@@ -537,6 +537,71 @@ TEST_F(RenderTest, ShardsAreTheUnshardedRenderSplitBySample) {
     }
 }
 
+// A render asked to stop keeps every tile it finished: each pixel the mean of
+// the samples its tile reached, the same numbers as a whole render of that
+// many samples (sample s of a pixel is the same path in every pass).
+TEST_F(RenderTest, AStoppedRenderIsTheWholeRenderOfWhatEachTileReached) {
+    const Scene s(scene(kFleece, R"([{"type": "sky"}])", 40, 24), inMode("neural"));  // 3 x 2 tiles
+    RenderOptions options;
+    options.spp = 64;
+    options.seed = 5;
+    options.threads = 1;  // tiles in order: the first three finish the second pass
+    options.quiet = true;
+    int asked = 0;
+    options.stopRequested = [&asked] { return ++asked > 6 + 3; };
+    const RenderResult stopped = render(s, options);
+    EXPECT_TRUE(stopped.stats.partial);
+    EXPECT_EQ(stopped.stats.spp, 1);
+    EXPECT_EQ(stopped.stats.sppMax, 64);
+    EXPECT_EQ(stopped.stats.sppRequested, 64);
+    options.stopRequested = nullptr;
+    const RenderResult whole = render(s, options);
+    EXPECT_FALSE(whole.stats.partial);
+    EXPECT_EQ(whole.stats.spp, 64);
+    options.spp = 1;
+    const RenderResult first = render(s, options);
+    for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 40; ++x) {
+            const bool finished = y < 16;  // tiles 0, 1, 2: the top row
+            const Image& expected = finished ? whole.image : first.image;
+            for (int c = 0; c < 3; ++c) {
+                const size_t i = 3 * (static_cast<size_t>(y) * 40 + x) + c;
+                ASSERT_EQ(stopped.image.pixels[i], expected.pixels[i]) << x << " " << y;
+            }
+        }
+    // Stopped before the first tile: nothing traced, a black image, spp 0.
+    options.spp = 64;
+    options.stopRequested = [] { return true; };
+    const RenderResult none = render(s, options);
+    EXPECT_TRUE(none.stats.partial);
+    EXPECT_EQ(none.stats.spp, 0);
+    for (float v : none.image.pixels) ASSERT_EQ(v, 0.0f);
+}
+
+// Checkpoints hand over the image so far between passes: each the whole render
+// at the checkpoint's spp.
+TEST_F(RenderTest, CheckpointsAreTheWholeRenderSoFar) {
+    const Scene s(scene(kFleece, R"([{"type": "sky"}])", 8, 8), inMode("neural"));
+    RenderOptions options;
+    options.seconds = 2.5;
+    options.checkpointSeconds = 1;
+    options.seed = 2;
+    options.quiet = true;
+    std::vector<RenderResult> checkpoints;
+    options.checkpoint = [&](const RenderResult& r) { checkpoints.push_back(r); };
+    const RenderResult timed = render(s, options);
+    EXPECT_FALSE(timed.stats.partial);
+    ASSERT_GE(checkpoints.size(), 1u);
+    const RenderResult& last = checkpoints.back();
+    EXPECT_TRUE(last.stats.partial);
+    EXPECT_EQ(last.stats.spp, last.stats.sppMax);
+    EXPECT_LT(last.stats.spp, timed.stats.spp);
+    options.seconds = 0;
+    options.checkpointSeconds = 0;
+    options.spp = static_cast<int>(last.stats.spp);
+    EXPECT_EQ(render(s, options).image.pixels, last.image.pixels);
+}
+
 TEST(RenderOptions, BudgetsAndRangesAreValidated) {
     using weft::testing::expectInputError;
     RenderOptions o;

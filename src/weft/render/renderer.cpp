@@ -39,6 +39,10 @@ void RenderOptions::validate() const {
                          " is out of range: allowed (0, 1e6] seconds");
     checkRange("--threads", threads, 0, 1024, " (0: all cores)");
     checkRange("max_depth", maxDepth, 1, 10000);
+    if (checkpointSeconds != 0 &&
+        (!std::isfinite(checkpointSeconds) || checkpointSeconds < 1 || checkpointSeconds > 1e6))
+        throw InputError("--checkpoint " + std::to_string(checkpointSeconds) +
+                         " is out of range: allowed [1, 1e6] seconds");
     if (shard) {
         if (spp == 0)
             throw InputError("--shard needs --spp: a time budget has no fixed range of samples "
@@ -65,12 +69,18 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     options.validate();
     using Clock = std::chrono::steady_clock;
     const auto start = Clock::now();
+    auto secondsSince = [](Clock::time_point t) {
+        return std::chrono::duration<double>(Clock::now() - t).count();
+    };
     const Camera& camera = scene.camera();
     const int width = scene.width(), height = scene.height();
     const int tilesX = (width + kTile - 1) / kTile, tilesY = (height + kTile - 1) / kTile;
     const int tiles = tilesX * tilesY;
     std::vector<double> sum(static_cast<size_t>(width) * height * 3, 0.0);
+    // Samples per pixel each tile has traced: all the same unless stopped in a pass.
+    std::vector<int64_t> tileSamples(static_cast<size_t>(tiles), 0);
     std::atomic<uint64_t> rays{0}, nonFinite{0}, paths{0}, truncated{0};
+    std::atomic<bool> stopped{false};
 
     PathTracerOptions tracer;
     tracer.maxDepth = options.maxDepth;
@@ -80,23 +90,39 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
         options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
     const bool timed = options.spp == 0;
+    // Samples [first, last) of every pixel, for a part its shard's.
+    const int64_t first = options.shard ? options.shard->begin(options.spp) : 0;
+    const int64_t last =
+        timed ? 0 : (options.shard ? options.shard->end(options.spp) : options.spp);
+    // Counted in pixel samples (unknown total for a time budget).
     Progress progress("render " + scene.modeName(),
-                      timed ? 0 : static_cast<uint64_t>(tiles), options.quiet);
+                      timed ? 0 : static_cast<uint64_t>(width) * height * (last - first),
+                      options.quiet);
+    auto stopNow = [&] {
+        if (stopped.load(std::memory_order_relaxed)) return true;
+        if (!options.stopRequested || !options.stopRequested()) return false;
+        stopped.store(true, std::memory_order_relaxed);
+        return true;
+    };
 
-    // Samples [first, last) of every pixel.
-    auto pass = [&](int64_t first, int64_t last) {
+    // Samples [from, to) of every pixel; a tile not started once a stop is
+    // asked for keeps what it had.
+    auto pass = [&](int64_t from, int64_t to) {
         arena.execute([&] {
             tbb::parallel_for(
                 tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
                     PathCounters counters;
                     uint64_t dropped = 0;
                     for (int tile = r.begin(); tile < r.end(); ++tile) {
+                        if (stopNow()) break;
                         const int x0 = (tile % tilesX) * kTile, y0 = (tile / tilesX) * kTile;
-                        for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
-                            for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
+                        const int x1 = std::min(x0 + kTile, width),
+                                  y1 = std::min(y0 + kTile, height);
+                        for (int y = y0; y < y1; ++y) {
+                            for (int x = x0; x < x1; ++x) {
                                 const uint64_t pixel = static_cast<uint64_t>(y) * width + x;
                                 double* acc = &sum[3 * pixel];
-                                for (int64_t s = first; s < last; ++s) {
+                                for (int64_t s = from; s < to; ++s) {
                                     Rng rng = sampleRng(pixel, s, options.seed);
                                     Vec3 org, dir;
                                     SampleStream stream(options.sampler, rng,
@@ -116,7 +142,8 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                                 }
                             }
                         }
-                        progress.add();
+                        tileSamples[static_cast<size_t>(tile)] = to - first;
+                        progress.add(static_cast<uint64_t>(x1 - x0) * (y1 - y0) * (to - from));
                     }
                     rays.fetch_add(counters.rays, std::memory_order_relaxed);
                     paths.fetch_add(counters.paths, std::memory_order_relaxed);
@@ -126,59 +153,81 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
         });
     };
 
-    int64_t done = 0;
     int passes = 0;
-    int64_t first = 0;
-    if (!timed) {
-        const int64_t last = options.shard ? options.shard->end(options.spp) : options.spp;
-        first = options.shard ? options.shard->begin(options.spp) : 0;
-        pass(first, last);
-        done = last - first, passes = 1;
-    } else {
-        int64_t next = 1;
-        while (true) {
-            pass(done, done + next);
-            done += next, ++passes;
-            const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
-            progress.setStatus(std::to_string(done) + " spp");
-            const double perSample = elapsed / static_cast<double>(done);
-            const double left = options.seconds - elapsed;
-            next = std::min<int64_t>(done, static_cast<int64_t>(std::floor(left / perSample)));
+    auto result = [&](bool partial) {
+        RenderResult r;
+        r.image = Image(width, height);
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                const int64_t n =
+                    tileSamples[static_cast<size_t>((y / kTile) * tilesX + x / kTile)];
+                const double inv = n > 0 ? 1.0 / static_cast<double>(n) : 0.0;
+                const size_t i = 3 * (static_cast<size_t>(y) * width + x);
+                for (int c = 0; c < 3; ++c)
+                    r.image.pixels[i + c] = static_cast<float>(sum[i + c] * inv);
+            }
+        const auto [fewest, most] = std::minmax_element(tileSamples.begin(), tileSamples.end());
+        const double seconds = secondsSince(start);
+        RenderStats& st = r.stats;
+        st.mode = scene.modeName();
+        st.width = width, st.height = height;
+        st.spp = *fewest, st.sppMax = *most, st.passes = passes;
+        st.partial = partial;
+        st.sppRequested = timed ? 0 : last - first;
+        st.seconds = seconds;
+        st.secondsPerSpp = seconds / static_cast<double>(std::max<int64_t>(*most, 1));
+        st.rays = rays.load();
+        st.raysPerSecond = seconds > 0 ? static_cast<double>(st.rays) / seconds : 0;
+        st.threads = threads;
+        st.seed = options.seed;
+        st.sampler = options.sampler;
+        st.peakResidentBytes = peakResidentBytes();
+        st.scene = scene.stats();
+        st.nonFiniteSamples = static_cast<int64_t>(nonFinite.load());
+        st.truncatedPaths = static_cast<int64_t>(truncated.load());
+        st.truncatedFraction = paths.load() > 0 ? static_cast<double>(truncated.load()) /
+                                                      static_cast<double>(paths.load())
+                                                : 0.0;
+        st.shard = options.shard;
+        st.shardSpp = options.shard ? options.spp : 0;
+        st.firstSample = first;
+        if (options.shard) st.pixelChecksum = pixelChecksum(r.image);
+        return r;
+    };
+
+    // Passes: 1 spp, then what the time per sample says takes about
+    // max(kPassSeconds, elapsed / 4), at most the checkpoint interval, within
+    // the budget.
+    int64_t done = 0, next = 1;
+    auto lastCheckpoint = start;
+    while (true) {
+        pass(first + done, first + done + next);
+        if (stopped.load()) break;
+        done += next, ++passes;
+        const double elapsed = secondsSince(start);
+        const double perSample = elapsed / static_cast<double>(done);
+        if (timed) progress.setStatus(std::to_string(done) + " spp");
+        double passSeconds = std::max(kPassSeconds, 0.25 * elapsed);
+        if (options.checkpointSeconds > 0)
+            passSeconds = std::min(passSeconds, options.checkpointSeconds);
+        next = std::max<int64_t>(1, static_cast<int64_t>(std::floor(passSeconds / perSample)));
+        if (timed) {
+            next = std::min<int64_t>(
+                {next, done,
+                 static_cast<int64_t>(std::floor((options.seconds - elapsed) / perSample))});
             if (next < 1) break;
+        } else {
+            next = std::min(next, last - first - done);
+            if (next < 1) break;
+        }
+        if (options.checkpoint && options.checkpointSeconds > 0 &&
+            secondsSince(lastCheckpoint) >= options.checkpointSeconds) {
+            options.checkpoint(result(true));
+            lastCheckpoint = Clock::now();
         }
     }
     progress.finish();
-    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-
-    RenderResult result;
-    result.image = Image(width, height);
-    const double inv = 1.0 / static_cast<double>(done);
-    for (size_t i = 0; i < result.image.pixels.size(); ++i)
-        result.image.pixels[i] = static_cast<float>(sum[i] * inv);
-
-    RenderStats& st = result.stats;
-    st.mode = scene.modeName();
-    st.width = width, st.height = height;
-    st.spp = done, st.passes = passes;
-    st.seconds = seconds;
-    st.secondsPerSpp = seconds / static_cast<double>(done);
-    st.rays = rays.load();
-    st.raysPerSecond = seconds > 0 ? static_cast<double>(st.rays) / seconds : 0;
-    st.threads = threads;
-    st.seed = options.seed;
-    st.sampler = options.sampler;
-    st.peakResidentBytes = peakResidentBytes();
-    st.scene = scene.stats();
-    st.nonFiniteSamples = static_cast<int64_t>(nonFinite.load());
-    st.truncatedPaths = static_cast<int64_t>(truncated.load());
-    st.truncatedFraction =
-        paths.load() > 0 ? static_cast<double>(truncated.load()) / static_cast<double>(paths.load())
-                         : 0.0;
-    st.shard = options.shard;
-    st.shardSpp = options.shard ? options.spp : 0;
-    st.firstSample = first;
-    if (options.shard) st.pixelChecksum = pixelChecksum(result.image);
-    return result;
+    return result(stopped.load());
 }
 
 std::string truncationWarning(const RenderStats& stats, int maxDepth) {
@@ -198,6 +247,7 @@ nlohmann::json toJson(const RenderStats& s) {
         {"width", s.width},
         {"height", s.height},
         {"spp", s.spp},
+        {"partial", s.partial},
         {"passes", s.passes},
         {"seconds", s.seconds},
         {"seconds_per_spp", s.secondsPerSpp},
@@ -223,6 +273,10 @@ nlohmann::json toJson(const RenderStats& s) {
         {"yarn_overlap", yarnOverlapJson(s.scene.yarnOverlap)},
         {"appearance", appearanceJson(s.scene)},
     };
+    if (s.partial) {
+        j["spp_requested"] = s.sppRequested;
+        j["spp_max"] = s.sppMax;
+    }
     if (s.shard)
         j["shard"] = {{"index", s.shard->index},
                       {"count", s.shard->count},

@@ -5,9 +5,19 @@
 // averages them. Their numbers come from the sampler of RenderOptions
 // (core/sample_stream.h): independent, or Owen-scrambled Sobol' points that
 // stratify each pixel's samples. Budgets: a fixed number of samples per
-// pixel, or a time budget: progressive passes (1 sample per pixel, then as
-// many as the measured time per sample says fit in what is left, at most
-// doubling) until the time is spent; at least one pass.
+// pixel, or a time budget; either way the samples are traced in passes (1
+// sample per pixel, then as many as the measured time per sample says take
+// about max(kPassSeconds, a quarter of the time so far), at most the
+// checkpoint interval, within the budget): for the time budget until the
+// time is spent, at least one pass.
+//
+// Keeping the work (issue 43): between passes, a checkpoint callback receives
+// the image so far (RenderStats::partial) every `checkpointSeconds`; when
+// stopRequested() turns true (weft render: the first SIGINT or SIGTERM), the
+// tiles being traced finish, no other tile starts, and render() returns what
+// it has, partial, its pixels each the mean of the samples their tile
+// reached (the tiles of the last pass that finished it have more: spp is the
+// fewest, sppMax the most).
 //
 // Determinism: sample s of pixel p draws from Rng(stream p, seed mixed with
 // s) and, with the sobol sampler, from Sobol' point s of that pixel, so the
@@ -21,6 +31,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
@@ -31,6 +42,8 @@
 #include "weft/render/scene.h"
 
 namespace weft::render {
+
+struct RenderResult;
 
 struct RenderOptions {
     int spp = 0;         // > 0: this many samples per pixel
@@ -43,9 +56,16 @@ struct RenderOptions {
     bool quiet = false;  // no progress output
     // A part of an spp render for `weft render merge`: only this shard's samples.
     std::optional<Shard> shard;
+    // Asked between tiles; true: stop early and return the partial image.
+    std::function<bool()> stopRequested;
+    // > 0: `checkpoint` receives the image so far after the first pass that
+    // ends this many seconds after the last checkpoint (or the start).
+    double checkpointSeconds = 0;
+    std::function<void(const RenderResult&)> checkpoint;
 
     // InputError naming the flag and its range (exactly one budget, threads
-    // in [0, 1024], maxDepth in [1, 10000]; a shard needs spp and N <= spp).
+    // in [0, 1024], maxDepth in [1, 10000]; a shard needs spp and N <= spp;
+    // checkpointSeconds 0 or in [1, 1e6]).
     void validate() const;
 };
 
@@ -54,6 +74,10 @@ struct RenderStats {
     int width = 0, height = 0;
     int64_t spp = 0;  // samples per pixel traced (by this shard, for a part)
     int passes = 0;
+    // Stopped early (stopRequested) or a checkpoint: fewer samples than asked
+    // for, sppRequested (0 for a time budget); sppMax, the most any pixel got.
+    bool partial = false;
+    int64_t sppRequested = 0, sppMax = 0;
     double seconds = 0;  // rendering, without the scene build
     double secondsPerSpp = 0;
     uint64_t rays = 0;  // closest-hit and shadow queries
@@ -81,6 +105,10 @@ struct RenderResult {
 };
 
 RenderResult render(const Scene& scene, const RenderOptions& options);
+
+// The shortest pass the renderer plans (seconds): longer passes lose less to
+// the tiles that finish last.
+constexpr double kPassSeconds = 2.0;
 
 // Paths cut at max_depth above this share bias the image visibly (a darker
 // cloth): weft render warns.

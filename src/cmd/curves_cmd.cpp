@@ -1,5 +1,6 @@
 // weft curves info: what a yarn curve file holds and the radius it allows
-// (render/curve_report.h, docs/curves.md).
+// (render/curve_report.h, docs/curves.md); weft curves points: its control
+// points as .npy, for per-point colours.
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -11,6 +12,7 @@
 #include "weft/core/curves.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/npy.h"
 #include "weft/render/curve_report.h"
 
 namespace weft::cmd {
@@ -39,7 +41,7 @@ void printLine(const std::string& label, const std::string& value) {
 }
 
 // The report as a person reads it: one aligned line per quantity.
-void printReport(const std::string& file, const render::CurveReport& r) {
+void printReport(const std::string& file, const CurveSet& set, const render::CurveReport& r) {
     printLine("file", file);
     printLine(
         "curves",
@@ -65,6 +67,8 @@ void printReport(const std::string& file, const render::CurveReport& r) {
                                       point(r.closest->pointB) + ")");
         printLine("largest radius", number(r.largestRadiusWithoutOverlap()) +
                                         " (the yarns overlap nowhere up to this radius)");
+        if (!(r.largestRadiusWithoutOverlap() > 1e-9 * length(r.bounds.hi - r.bounds.lo)))
+            printLine("why", render::zeroRadiusExplanation(set, r));
     } else {
         printLine("min distance", "none (no two yarns, and no parts of one, come close)");
         printLine("largest radius", "unbounded");
@@ -95,7 +99,33 @@ void runInfo(const CurvesInfoOptions& o) {
         j["file"] = o.file;
         writeFileAtomic(o.json, j.dump(2) + "\n");
     }
-    printReport(o.file, report);
+    printReport(o.file, set, report);
+}
+
+struct CurvesPointsOptions {
+    std::string file, out;
+};
+
+// The control points as an (n, 4) float64 array: curve index, x, y, z, in
+// the file's order and units: what a per-point colour file must follow.
+void runPoints(const CurvesPointsOptions& o) {
+    if (lowercaseExtension(o.out) != ".npy")
+        throw InputError("--out " + o.out + ": expected a path ending in .npy");
+    checkOutputsSpareInputs({{"FILE", o.file}}, {{"--out", o.out}});
+    const CurveSet set = readCurves(o.file);
+    std::vector<double> rows;
+    rows.reserve(set.pointCount() * 4);
+    for (size_t c = 0; c < set.curves.size(); ++c)
+        for (const Vec3& p : set.curves[c].points)
+            rows.insert(rows.end(), {static_cast<double>(c), p.x, p.y, p.z});
+    writeNpy(o.out, rows.data(), {set.pointCount(), 4});
+    std::printf("%s\n", nlohmann::json({{"file", o.file},
+                                        {"out", o.out},
+                                        {"curves", set.curves.size()},
+                                        {"points", set.pointCount()},
+                                        {"columns", {"curve", "x", "y", "z"}}})
+                            .dump()
+                            .c_str());
 }
 
 }  // namespace
@@ -117,6 +147,16 @@ void addCurvesCommands(CLI::App& app) {
                          "Yarn radius in the file's units (finite, > 0): report the overlap at it");
     info->add_option("--json", o->json, "Also write the report as JSON (atomically)");
     info->callback([o] { runInfo(*o); });
+
+    auto po = std::make_shared<CurvesPointsOptions>();
+    CLI::App* points = curves->add_subcommand(
+        "points",
+        "The control points of a curve file as an (n, 4) float64 .npy: curve index, x, y, z, in "
+        "the file's order and units; a vertex colour file (.npy (n, 3) or .txt) follows the "
+        "same order (docs/scene-format.md)");
+    points->add_option("file", po->file, "Curve file (.bcc, .txt or .obj)")->required();
+    points->add_option("--out", po->out, "Output POINTS.npy (written atomically)")->required();
+    points->callback([po] { runPoints(*po); });
 }
 
 }  // namespace weft::cmd

@@ -12,6 +12,7 @@
 #include "weft/core/file.h"
 #include "weft/core/image.h"
 #include "weft/core/image_io.h"
+#include "weft/core/npy.h"
 #include "weft/render/curves.h"
 #include "weft/render/scene_file.h"
 
@@ -52,6 +53,65 @@ TEST_F(SceneCliTest, GeneratedWeaveRenders) {
     EXPECT_EQ(stats.at("scene").at("curves"), 8);
     EXPECT_EQ(stats.at("non_finite_samples"), 0);
     EXPECT_EQ(stats.at("scene").at("tubes"), 8 * 3);  // neural mode: one tube per ply
+}
+
+// Issue 43, item 1: `weft scene curves FILE` frames a curve file whole; the
+// scene renders; `weft curves points` writes the points that a per-point
+// colour .npy follows, and the render takes that .npy as vertex colours.
+TEST_F(SceneCliTest, YourOwnCurvesFramedColouredAndRendered) {
+    const std::string knit = std::string(WEFT_CURVE_DATA_DIR) + "/knit-stockinette-tiny.bcc";
+    RunResult r = run("scene curves " + testing::shellQuote(knit) + " --model " + kFleece +
+                      " --view front --width 24 --height 16 --spp 1 --out mine");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json summary = nlohmann::json::parse(r.out);
+    EXPECT_EQ(summary.at("kind"), "curves");
+    EXPECT_EQ(summary.at("yarns"), 22);
+    EXPECT_EQ(summary.at("curve_file").at("radius_from"), "largest_without_overlap");
+    EXPECT_EQ(summary.at("yarn_overlap").at(0).at("overlap_fraction"), 0.0);
+    EXPECT_EQ(r.err, "");
+    // The curves keep the file's basis and point order, scaled.
+    const CurveSet original = readCurves(knit), written = readCurves(path("mine/yarns.bcc"));
+    ASSERT_EQ(written.pointCount(), original.pointCount());
+    const double scale = summary.at("curve_file").at("scale").get<double>();
+    EXPECT_NEAR(written.curves[3].points[5].x, scale * original.curves[3].points[5].x, 1e-6);
+    EXPECT_EQ(written.curves[0].basis, original.curves[0].basis);
+
+    r = run("curves points " + testing::shellQuote(knit) + " --out points.npy");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const NpyMatrix points = readNpyMatrix(path("points.npy"), 4, "");
+    ASSERT_EQ(points.rows, original.pointCount());
+    EXPECT_EQ(points(0, 0), 0.0);
+    EXPECT_EQ(points(points.rows - 1, 0), 21.0);
+    EXPECT_EQ(points(1, 1), original.curves[0].points[1].x);
+    // Colours by height: red at the bottom of the cloth, white at the top.
+    std::vector<double> colours;
+    for (size_t i = 0; i < points.rows; ++i)
+        colours.insert(colours.end(),
+                       {1.0, points(i, 2) > 0 ? 1.0 : 0.0, points(i, 2) > 0 ? 1.0 : 0.0});
+    writeNpy(path("mine/colours.npy"), colours.data(), {points.rows, 3});
+    nlohmann::json scene = nlohmann::json::parse(readFile(path("mine/scene.json")));
+    scene["yarns"][0]["vertex_colours"] = "colours.npy";
+    writeFileAtomic(path("mine/dyed.json"), scene.dump());
+    r = run("render mine/dyed.json --mode fiber --spp 1 --quiet --out dyed.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    // One row short: refused, naming both counts.
+    writeNpy(path("mine/colours.npy"), colours.data(), {points.rows - 1, 3});
+    expectUserError(run("render mine/dyed.json --mode fiber --spp 1 --out dyed.exr"),
+                    {"colours.npy", std::to_string(points.rows - 1) + " colour rows",
+                     std::to_string(points.rows) + " points"});
+
+    expectUserError(run("scene curves --model " + kFleece + " --out x"), {"curve file"});
+    expectUserError(
+        run("scene knit " + testing::shellQuote(knit) + " --model " + kFleece + " --out x"),
+        {"weft scene curves only"});
+    expectUserError(run("scene curves " + testing::shellQuote(knit) + " --model " + kFleece +
+                        " --size 3 --out x"),
+                    {"--size"});
+    expectUserError(run("scene curves " + testing::shellQuote(knit) + " --model " + kFleece +
+                        " --view side --out x"),
+                    {"--view", "side"});
+    expectUserError(run("curves points " + testing::shellQuote(knit) + " --out p.txt"),
+                    {"--out", ".npy"});
 }
 
 TEST_F(SceneCliTest, EveryKindWithDefaults) {

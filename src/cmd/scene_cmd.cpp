@@ -17,7 +17,8 @@ namespace weft::cmd {
 namespace {
 
 struct SceneCmdOptions {
-    std::string kind, out;
+    std::string kind, out, curves, view = "three-quarter";
+    CLI::Option* radiusOpt = nullptr;
     eval::SceneOptions scene;
     std::vector<std::string> colours;      // --colours: "R,G,B" each
     std::vector<std::string> appearances;  // --appearance: "#rrggbb" or "R,G,B" each
@@ -34,6 +35,22 @@ void runScene(SceneCmdOptions o) {
     const eval::SceneKind kind = eval::parseSceneKind(o.kind);
     if (kind == eval::SceneKind::Closeup && o.sizeOpt->count())
         throw InputError("--size applies to weave and knit only (a close-up is one yarn)");
+    if (kind == eval::SceneKind::Curves) {
+        if (o.curves.empty())
+            throw InputError(
+                "weft scene curves needs the curve file: weft scene curves FILE "
+                "--model MODEL.json --out DIR");
+        if (o.sizeOpt->count())
+            throw InputError(
+                "--size applies to weave and knit only (curves draws the file's yarns)");
+        o.scene.curves = o.curves;
+        o.scene.view = eval::parseCurvesView(o.view);
+        // --radius is in the file's units here; the scene's radius stays the default.
+        if (o.radiusOpt->count()) o.scene.curveRadius = o.scene.radius;
+        o.scene.radius = eval::SceneOptions{}.radius;
+    } else if (!o.curves.empty()) {
+        throw InputError("a curve file (" + o.curves + ") applies to weft scene curves only");
+    }
     if (o.stripeOpt->count()) o.scene.stripe = o.stripe;
     // Given means checked (SceneOptions::validate), 0 included.
     if (o.dyeLengthOpt->count()) o.scene.dyeLength = o.dyeLength;
@@ -41,8 +58,9 @@ void runScene(SceneCmdOptions o) {
     for (const std::string& c : o.appearances)
         o.scene.appearances.push_back(parseSrgbColour(c, "--appearance"));
     if (!o.yarn.empty()) o.scene.yarn = readYarnPointArgument(o.yarn, "--yarn");
-    checkOutputsSpareInputs({{"--model", o.scene.model}, {"--envmap", o.scene.envmap}}, {}, {},
-                            {{"--out", o.out}});
+    checkOutputsSpareInputs(
+        {{"--model", o.scene.model}, {"--envmap", o.scene.envmap}, {"FILE", o.curves}}, {}, {},
+        {{"--out", o.out}});
     const eval::GeneratedScene generated = eval::generateScene(kind, o.scene);
     eval::writeScene(generated, o.out);
     std::vector<std::string> warnings;
@@ -66,15 +84,25 @@ void addSceneCommand(CLI::App& app) {
         "Write a generated scene (docs/scenes.md) for `weft render`: DIR/scene.json and "
         "DIR/yarns.txt (DIR/yarns-1.txt, yarns-2.txt with two colours). closeup: one 3-ply "
         "yarn across the frame; weave: an N x N plain weave; knit: N courses of N "
-        "stockinette loops.");
-    cmd->add_option("kind", o->kind, "closeup, weave or knit")->required();
+        "stockinette loops; curves FILE: your own curve file framed whole (yarns.bcc).");
+    cmd->add_option("kind", o->kind, "closeup, weave, knit or curves")->required();
+    cmd->add_option("file", o->curves,
+                    "curves: the curve file (.bcc, .txt, .obj; docs/curves.md), drawn whole");
+    cmd->add_option("--view", o->view,
+                    "curves: where the camera looks from: three-quarter (35 degrees right of the "
+                    "front, 30 above), front (from +z) or top (from +y)")
+        ->capture_default_str();
     cmd->add_option("--model", s.model, "MODEL.json written by `weft fit` (must load)")->required();
     o->sizeOpt = cmd->add_option("--size", s.size,
                                  "weave: N warp and N weft yarns; knit: N courses of N loops; "
                                  "[1, 100]")
                      ->capture_default_str();
-    cmd->add_option("--radius", s.radius, "Yarn radius in scene units, [1e-6, 1000]")
-        ->capture_default_str();
+    o->radiusOpt = cmd->add_option("--radius", s.radius,
+                                   "Yarn radius in scene units, [1e-6, 1000]; for curves in the "
+                                   "file's units (default: the largest radius at which no yarns "
+                                   "overlap, weft curves info), the scene then scaled so that it "
+                                   "is 0.01")
+                       ->capture_default_str();
     cmd->add_option("--plies", s.plies, "Plies per yarn, [1, 16]")->capture_default_str();
     cmd->add_option("--ply-twist", s.plyTwist,
                     "Dimensionless ply twist (scene ply_twist), [-100, 100]")

@@ -19,6 +19,7 @@
 #include "weft/core/json_message.h"
 #include "weft/core/math.h"
 #include "weft/render/camera.h"
+#include "weft/render/curve_report.h"
 #include "weft/render/environment_light.h"
 #include "weft/render/scene.h"
 #include "weft/render/sphere_light.h"
@@ -141,7 +142,8 @@ void spaceDye(CurveSet& set, const std::vector<size_t>& anchor, const SceneOptio
 }
 
 GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera,
-                        const SceneOptions& o, const SceneColours& colours) {
+                        const SceneOptions& o, const SceneColours& colours,
+                        const std::string& extension = ".txt") {
     GeneratedScene g;
     g.endMargin = curves.margin;
     g.colourWarnings = colours.neuralWarnings;
@@ -160,7 +162,7 @@ GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera
         // Space-dyed: one entry, a colour per curve point.
         spaceDye(curves.set, curves.anchor, o, colours.fiber);
         yarn.vertexColours = kVertexColourFile;
-        yarn.curves = yarnCurveFile(0, 1);
+        yarn.curves = yarnCurveFile(0, 1, extension);
         s.yarns.push_back(yarn);
         g.entryOfCurve.assign(curves.set.curves.size(), 0);
         g.curves = std::move(curves.set);
@@ -182,7 +184,7 @@ GeneratedScene assemble(PatternedCurves curves, const render::CameraDesc& camera
     for (size_t c = 0; c < curves.set.curves.size(); ++c)
         g.entryOfCurve.push_back(entryOfGroup[groupOf(c)]);
     for (int e = 0; e < static_cast<int>(s.yarns.size()); ++e)
-        s.yarns[e].curves = yarnCurveFile(e, static_cast<int>(s.yarns.size()));
+        s.yarns[e].curves = yarnCurveFile(e, static_cast<int>(s.yarns.size()), extension);
     g.curves = std::move(curves.set);
     return g;
 }
@@ -241,13 +243,16 @@ void checkFilmShape(SceneKind kind, const SceneOptions& o) {
                          "cannot fill the frame)");
 }
 
-// scene.json, yarns.txt or yarns-N.txt (N = 1, 2, ...): what writeScene writes.
+// scene.json, yarns.txt or yarns-N.txt (N = 1, 2, ...), or the same in .bcc,
+// and colours.txt: what writeScene writes.
 bool isGeneratedSceneFile(const std::string& name) {
-    if (name == "scene.json" || name == "yarns.txt" || name == kVertexColourFile) return true;
-    const std::string prefix = "yarns-", suffix = ".txt";
-    if (name.size() <= prefix.size() + suffix.size() || name.rfind(prefix, 0) != 0 ||
-        name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
-        return false;
+    if (name == "scene.json" || name == "yarns.txt" || name == "yarns.bcc" ||
+        name == kVertexColourFile)
+        return true;
+    const std::string prefix = "yarns-",
+                      suffix = name.size() > 4 ? name.substr(name.size() - 4) : "";
+    if (suffix != ".txt" && suffix != ".bcc") return false;
+    if (name.size() <= prefix.size() + suffix.size() || name.rfind(prefix, 0) != 0) return false;
     const std::string digits =
         name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
     return std::all_of(digits.begin(), digits.end(),
@@ -268,14 +273,36 @@ const char* sceneKindName(SceneKind kind) {
             return "weave";
         case SceneKind::Knit:
             return "knit";
+        case SceneKind::Curves:
+            return "curves";
     }
     return "?";
 }
 
 SceneKind parseSceneKind(const std::string& name) {
-    for (SceneKind k : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit})
+    for (SceneKind k : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit, SceneKind::Curves})
         if (name == sceneKindName(k)) return k;
-    throw InputError("unknown scene kind " + jsonString(name) + ": allowed closeup, weave, knit");
+    throw InputError("unknown scene kind " + jsonString(name) +
+                     ": allowed closeup, weave, knit, curves");
+}
+
+const char* curvesViewName(CurvesView view) {
+    switch (view) {
+        case CurvesView::ThreeQuarter:
+            return "three-quarter";
+        case CurvesView::Front:
+            return "front";
+        case CurvesView::Top:
+            return "top";
+    }
+    return "?";
+}
+
+CurvesView parseCurvesView(const std::string& name) {
+    for (CurvesView v : {CurvesView::ThreeQuarter, CurvesView::Front, CurvesView::Top})
+        if (name == curvesViewName(v)) return v;
+    throw InputError("--view " + jsonString(name) +
+                     " is not a view: allowed three-quarter, front, top");
 }
 
 SceneColours SceneOptions::validate() const {
@@ -386,9 +413,10 @@ Vec3 knitPoint(const KnitGeometry& g, int row, double t) {
 }
 
 render::CameraDesc frameBox(const Bounds3& box, const Vec3& forward, double fovDeg, int width,
-                            int height, double fill) {
+                            int height, double fill, const Vec3& up) {
     render::CameraDesc cam;
     cam.fovDeg = fovDeg;
+    cam.up = up;
     const render::ViewAxes axes = render::viewAxes(forward, cam.up);
     const render::FilmExtent film = render::filmExtent(fovDeg, width, height);
     const Vec3 &f = axes.forward, &r = axes.right, &u = axes.up;
@@ -578,6 +606,64 @@ GeneratedScene knitScene(const SceneOptions& o) {
     return assemble(extendEndsOutOfView(knit, camera, o), camera, o, colours);
 }
 
+GeneratedScene curvesScene(const SceneOptions& o) {
+    const SceneColours colours = o.validate();
+    if (o.curves.empty())
+        throw InputError("weft scene curves needs a curve file (.bcc, .txt, .obj)");
+    if (o.curveRadius) checkReal("--radius", *o.curveRadius, 1e-300, 1e300);
+    CurveSet set = readCurves(o.curves);
+    double radius = 0;
+    std::string from = "given";
+    if (o.curveRadius) {
+        radius = *o.curveRadius;
+    } else {
+        const render::CurveReport report = render::curveReport(set, std::nullopt, o.curves);
+        radius = report.largestRadiusWithoutOverlap();
+        from = "largest_without_overlap";
+        const Bounds3 box = bounds(set);
+        const double diagonal = length(box.hi - box.lo);
+        if (std::isinf(radius)) {
+            // No two points ever come close (one open curve, a plain circle):
+            // a yarn as thick as 1 % of the cloth.
+            radius = kNoContactRadiusFraction * diagonal;
+            from = "one_percent_of_the_box";
+        } else if (!(radius > 1e-9 * diagonal)) {
+            throw InputError(o.curves + ": " + render::zeroRadiusExplanation(set, report) +
+                             "; no yarn radius keeps them apart: give --radius in the file's "
+                             "units (weft curves info " +
+                             o.curves + " --radius R reports the overlap at R)");
+        }
+    }
+    if (!(radius > 0) || !std::isfinite(radius))
+        throw InputError(o.curves + ": no yarn radius could be chosen (the curves' box is empty)");
+    const double scale = o.radius / radius;
+    PatternedCurves curves;
+    for (size_t c = 0; c < set.curves.size(); ++c) {
+        Curve& curve = set.curves[c];
+        for (Vec3& p : curve.points) p = scale * p;
+        curve.radii.clear();
+        curve.colours.clear();
+        curves.group.push_back(
+            o.colourCount() == 2 ? stripeGroup(static_cast<int>(c), o.stripeWidth()) : 0);
+        curves.anchor.push_back(0);
+    }
+    curves.set = std::move(set);
+    Vec3 forward{0, 0, -1}, up{0, 1, 0};
+    if (o.view == CurvesView::Top) forward = {0, -1, 0}, up = {0, 0, -1};
+    if (o.view == CurvesView::ThreeQuarter) {
+        const double azimuth = radians(35.0), elevation = radians(30.0);
+        forward = -Vec3{std::sin(azimuth) * std::cos(elevation), std::sin(elevation),
+                        std::cos(azimuth) * std::cos(elevation)};
+    }
+    const render::CameraDesc camera = frameBox(padded(bounds(curves.set), o.radius), forward,
+                                               kFovDeg, o.width, o.height, kCurvesFill, up);
+    GeneratedScene g = assemble(std::move(curves), camera, o, colours, ".bcc");
+    g.curveRadius = radius;
+    g.curveScale = scale;
+    g.curveRadiusSource = from;
+    return g;
+}
+
 GeneratedScene generateScene(SceneKind kind, const SceneOptions& options) {
     switch (kind) {
         case SceneKind::Closeup:
@@ -586,12 +672,14 @@ GeneratedScene generateScene(SceneKind kind, const SceneOptions& options) {
             return weaveScene(options);
         case SceneKind::Knit:
             return knitScene(options);
+        case SceneKind::Curves:
+            return curvesScene(options);
     }
     throw std::logic_error("unknown scene kind");
 }
 
-std::string yarnCurveFile(int entry, int entryCount) {
-    return entryCount == 1 ? "yarns.txt" : "yarns-" + std::to_string(entry + 1) + ".txt";
+std::string yarnCurveFile(int entry, int entryCount, const std::string& extension) {
+    return entryCount == 1 ? "yarns" + extension : "yarns-" + std::to_string(entry + 1) + extension;
 }
 
 std::vector<CurveSet> entryCurves(const GeneratedScene& generated) {
@@ -618,16 +706,21 @@ nlohmann::json sceneSummary(const GeneratedScene& generated, SceneKind kind, con
         if (!yarn.vertexColours.empty())
             colourFiles.push_back((folder / yarn.vertexColours).string());
     }
-    return {{"kind", sceneKindName(kind)},
-            {"scene", (folder / "scene.json").string()},
-            {"curves", curveFiles},
-            {"colours", colours},
-            {"appearances", appearances},
-            {"vertex_colours", colourFiles},
-            {"yarns", generated.curves.curves.size()},
-            {"points", generated.curves.pointCount()},
-            {"radius", *generated.scene.yarns.at(0).radius},
-            {"yarn_overlap", render::yarnOverlapJson(overlap)}};
+    nlohmann::json summary = {{"kind", sceneKindName(kind)},
+                              {"scene", (folder / "scene.json").string()},
+                              {"curves", curveFiles},
+                              {"colours", colours},
+                              {"appearances", appearances},
+                              {"vertex_colours", colourFiles},
+                              {"yarns", generated.curves.curves.size()},
+                              {"points", generated.curves.pointCount()},
+                              {"radius", *generated.scene.yarns.at(0).radius},
+                              {"yarn_overlap", render::yarnOverlapJson(overlap)}};
+    if (kind == SceneKind::Curves)
+        summary["curve_file"] = {{"radius", generated.curveRadius},
+                                 {"radius_from", generated.curveRadiusSource},
+                                 {"scale", generated.curveScale}};
+    return summary;
 }
 
 std::string vertexColoursText(const CurveSet& curves) {
@@ -672,7 +765,10 @@ void writeScene(const GeneratedScene& generated, const std::string& dir) {
     const std::vector<CurveSet> sets = entryCurves(generated);
     for (size_t e = 0; e < sets.size(); ++e) {
         const render::YarnDesc& yarn = generated.scene.yarns[e];
-        writeFileAtomic(out.path() + "/" + yarn.curves, curvesText(sets[e]));
+        writeFileAtomic(out.path() + "/" + yarn.curves,
+                        lowercaseExtension(yarn.curves) == ".bcc"
+                            ? formatBcc(sets[e], "weft scene curves", yarn.curves)
+                            : curvesText(sets[e]));
         if (!yarn.vertexColours.empty())
             writeFileAtomic(out.path() + "/" + yarn.vertexColours, vertexColoursText(sets[e]));
     }

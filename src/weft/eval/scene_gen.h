@@ -52,9 +52,9 @@
 
 namespace weft::eval {
 
-enum class SceneKind { Closeup, Weave, Knit };
+enum class SceneKind { Closeup, Weave, Knit, Curves };
 
-// "closeup", "weave", "knit".
+// "closeup", "weave", "knit", "curves".
 const char* sceneKindName(SceneKind kind);
 // The inverse; InputError naming `name` and the allowed kinds otherwise.
 SceneKind parseSceneKind(const std::string& name);
@@ -92,6 +92,15 @@ struct SceneColours {
     std::vector<std::string> neuralWarnings;
 };
 
+// Where `weft scene curves` puts the camera (docs/scenes.md, "Your own
+// curves"): in front (+z looking along -z), above (+y looking down, the
+// image's up -z) or three-quarter (35 degrees to the right of the front and
+// 30 above it).
+enum class CurvesView { ThreeQuarter, Front, Top };
+const char* curvesViewName(CurvesView view);
+// The inverse; InputError naming --view and the allowed names otherwise.
+CurvesView parseCurvesView(const std::string& name);
+
 struct SceneOptions {
     std::string model;         // --model: MODEL.json from `weft fit`; must exist and load
     // --yarn: with a family model (weft fit family), the yarn every entry
@@ -116,6 +125,13 @@ struct SceneOptions {
     // --dye-length: space-dyed stretches in radii, [0.5, 10000] whenever given
     // (0 included: unset means no space dyeing); only with two colours.
     std::optional<double> dyeLength;
+    // The curves kind: the curve file (.bcc, .txt, .obj), the view, and the
+    // yarn radius in the file's units (--radius for that kind; unset: the
+    // curve report's largest radius without overlap). The scene is written
+    // in scene units where the yarn radius is `radius` (0.01).
+    std::string curves;
+    CurvesView view = CurvesView::ThreeQuarter;
+    std::optional<double> curveRadius;
 
     // Range checks and the flags' combinations, then the model is loaded
     // (loadYarnModel, once) and the envmap checked for its extension and
@@ -142,10 +158,16 @@ struct GeneratedScene {
     int endMargin = 0;
     // SceneColours::neuralWarnings of the options it was made with.
     std::vector<std::string> colourWarnings;
+    // The curves kind: the yarn radius in the file's units, where it came
+    // from ("given" or "largest_without_overlap"), and the scale from file
+    // units to scene units (radius / curveRadius); 0 for the other kinds.
+    double curveRadius = 0, curveScale = 0;
+    std::string curveRadiusSource;
 };
 
 // "yarns.txt" for a scene with one yarn entry, else "yarns-1.txt", "yarns-2.txt", ...
-std::string yarnCurveFile(int entry, int entryCount);
+// (".bcc" for the curves kind, which keeps a Catmull-Rom file's basis).
+std::string yarnCurveFile(int entry, int entryCount, const std::string& extension = ".txt");
 // The curves of each yarn entry, in entry order (the sets writeScene writes).
 std::vector<CurveSet> entryCurves(const GeneratedScene& generated);
 
@@ -153,6 +175,19 @@ std::vector<CurveSet> entryCurves(const GeneratedScene& generated);
 GeneratedScene closeupScene(const SceneOptions& options);
 GeneratedScene weaveScene(const SceneOptions& options);
 GeneratedScene knitScene(const SceneOptions& options);
+// Any curve file framed whole (docs/scenes.md, "Your own curves"): the
+// curves scaled so that their radius (given, or the largest without overlap)
+// becomes options.radius, a camera from options.view at the smallest distance
+// that keeps every curve (padded by the radius) within kCurvesFill of the
+// film, the paper's lights around it. Two colours alternate every --stripe
+// curves, or along each curve with --dye-length. InputError naming the file
+// when the curves touch or cross (largest radius 0: which curves, where, and
+// whether a closed curve's closing segment does it) and no radius is given.
+GeneratedScene curvesScene(const SceneOptions& options);
+inline constexpr double kCurvesFill = 0.9;
+// A curve set without contact pairs (largest radius unbounded) gets a yarn
+// radius of this share of its box's diagonal.
+inline constexpr double kNoContactRadiusFraction = 0.01;
 GeneratedScene generateScene(SceneKind kind, const SceneOptions& options);
 
 // Plain weave: warp j is (x, j d, (-1)^j A cos(pi x / d)), weft i is
@@ -184,11 +219,11 @@ KnitGeometry knitGeometry(double radius);
 Vec3 knitPoint(const KnitGeometry& g, int row, double t);
 
 // A camera at `box`'s centre minus D * forward, looking at the centre, with
-// up (0, 1, 0): the smallest D for which every corner of the box projects
+// `up`: the smallest D for which every corner of the box projects
 // within `fill` (0 < fill <= 1) of the film's half-width and half-height, so
 // the whole box is in view (the view frustum is convex).
 render::CameraDesc frameBox(const Bounds3& box, const Vec3& forward, double fovDeg, int width,
-                            int height, double fill);
+                            int height, double fill, const Vec3& up = {0, 1, 0});
 
 // A camera looking along `forward` (up (0, 1, 0)) at the centre of the
 // rectangle [x0, x1] x [y0, y1] of the plane z = 0, as far away as it can be

@@ -17,6 +17,7 @@
 #include "weft/core/file.h"
 #include "weft/core/math.h"
 #include "weft/core/test_util.h"
+#include "weft/render/curve_report.h"
 #include "weft/render/environment_light.h"
 #include "weft/render/scene.h"
 #include "weft/render/sphere_light.h"
@@ -787,9 +788,89 @@ TEST_F(SceneGenFiles, TwoColourFilesReadBackAsTwoEntries) {
 }
 
 TEST(SceneGen, KindNames) {
-    for (const SceneKind kind : {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit})
+    for (const SceneKind kind :
+         {SceneKind::Closeup, SceneKind::Weave, SceneKind::Knit, SceneKind::Curves})
         EXPECT_EQ(parseSceneKind(sceneKindName(kind)), kind);
-    expectInputError([] { parseSceneKind("twill"); }, {"twill", "closeup, weave, knit"});
+    expectInputError([] { parseSceneKind("twill"); }, {"twill", "closeup, weave, knit, curves"});
+    for (const CurvesView view : {CurvesView::ThreeQuarter, CurvesView::Front, CurvesView::Top})
+        EXPECT_EQ(parseCurvesView(curvesViewName(view)), view);
+    expectInputError([] { parseCurvesView("side"); }, {"--view", "side", "three-quarter"});
+}
+
+// Issue 43, item 1: any curve file is framed whole from every view and film
+// shape: every point of every curve, grown by the yarn radius, projects
+// inside the film and in front of the camera; the radius is the largest
+// without overlap (the scaled curves' closest contact is two radii).
+TEST(SceneGen, CurveFilesAreFramedWholeFromEveryView) {
+    for (const std::string name : {"knit-stockinette-tiny.bcc", "woven-satin-small.bcc"}) {
+        const std::string file = std::string(WEFT_CURVE_DATA_DIR) + "/" + name;
+        const render::CurveReport original = render::curveReport(readCurves(file));
+        for (const CurvesView view : {CurvesView::ThreeQuarter, CurvesView::Front, CurvesView::Top})
+            for (const auto& [w, h] : {std::pair{160, 120}, {90, 300}}) {
+                SCOPED_TRACE(name + " " + curvesViewName(view) + " " + std::to_string(w));
+                SceneOptions o = options();
+                o.curves = file;
+                o.view = view;
+                o.width = w, o.height = h;
+                const GeneratedScene g = curvesScene(o);
+                EXPECT_EQ(g.curveRadiusSource, "largest_without_overlap");
+                EXPECT_NEAR(g.curveRadius, original.largestRadiusWithoutOverlap(), 1e-12);
+                EXPECT_NEAR(g.curveScale * g.curveRadius, o.radius, 1e-15);
+                EXPECT_NEAR(render::curveReport(g.curves).largestRadiusWithoutOverlap(), o.radius,
+                            1e-6 * o.radius);
+                EXPECT_EQ(g.curves.pointCount(), readCurves(file).pointCount());
+                EXPECT_EQ(g.scene.yarns.at(0).curves, "yarns.bcc");
+                double nearest = std::numeric_limits<double>::infinity();
+                for (const Curve& c : g.curves.curves)
+                    for (const Vec3& p : c.points)
+                        for (int k = 0; k < 8; ++k) {
+                            const Vec3 corner =
+                                p + o.radius * Vec3{k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0,
+                                                    k & 4 ? 1.0 : -1.0};
+                            const FilmPoint fp = project(g.scene.camera, w, h, corner);
+                            ASSERT_GT(fp.depth, 0);
+                            ASSERT_GE(fp.px, 0);
+                            ASSERT_LE(fp.px, w);
+                            ASSERT_GE(fp.py, 0);
+                            ASSERT_LE(fp.py, h);
+                            nearest = std::min({nearest, fp.px, w - fp.px, fp.py, h - fp.py});
+                        }
+                // Not lost in the frame: near the framed margin on the closer side
+                // (the padded box, whose corners the cloth need not reach, is what
+                // touches it).
+                EXPECT_LT(nearest, (0.5 * (1 - kCurvesFill) + 0.05) * std::min(w, h));
+                expectProjectionMatchesCamera(g);
+            }
+    }
+}
+
+// The radius: given in the file's units; 1 % of the box without any contact;
+// refused with the reason when the curves touch, naming a closed curve's
+// long closing segment.
+TEST_F(SceneGenFiles, CurveRadiusIsGivenOrMeasuredOrRefusedWithTheReason) {
+    const std::string straight = path("straight.txt");
+    writeFileAtomic(straight, "0 0 0\n10 0 0\n");
+    SceneOptions o = options();
+    o.curves = straight;
+    GeneratedScene g = curvesScene(o);
+    EXPECT_EQ(g.curveRadiusSource, "one_percent_of_the_box");
+    EXPECT_NEAR(g.curveRadius, 0.1, 1e-12);
+    o.curveRadius = 0.5;
+    g = curvesScene(o);
+    EXPECT_EQ(g.curveRadiusSource, "given");
+    EXPECT_NEAR(g.curveScale, 0.02, 1e-15);
+    EXPECT_NEAR(length(g.curves.curves[0].points[1]), 0.2, 1e-12);
+    // Curve 1 runs along y = -5 and up x = 10 in unit steps, and is closed:
+    // its closing segment, (10, 5) back to (0, -5), crosses curve 0 at (5, 0).
+    std::string text = "0 0 0\n8 0 0\n\n# closed\n";
+    for (int x = 0; x <= 10; ++x) text += std::to_string(x) + " -5 0\n";
+    for (int y = -4; y <= 5; ++y) text += "10 " + std::to_string(y) + " 0\n";
+    writeFileAtomic(path("crossing.txt"), text);
+    o.curves = path("crossing.txt");
+    o.curveRadius.reset();
+    expectInputError([&] { curvesScene(o); },
+                     {"crossing.txt", "curves 0 and 1 touch or cross", "curve 1 is closed",
+                      "closing segment", "spans 14.1", "--radius"});
 }
 
 }  // namespace

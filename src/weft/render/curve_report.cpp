@@ -799,13 +799,83 @@ nlohmann::json toJson(const CurveReport& r) {
     return j;
 }
 
+namespace {
+
+// The segment of `curve` (index k: points k, k + 1; the last one of a closed
+// curve joins its last point to its first) nearest to p, and its length.
+std::pair<size_t, double> nearestSegment(const Curve& curve, const Vec3& p) {
+    const size_t n = curve.points.size(), segments = curve.closed ? n : n - 1;
+    size_t best = 0;
+    double bestDistance = std::numeric_limits<double>::infinity(), bestLength = 0;
+    for (size_t k = 0; k < segments; ++k) {
+        const Vec3 &a = curve.points[k], &b = curve.points[(k + 1) % n];
+        const double d = closestPointsOnSegments(a, b, p, p).distance;
+        if (d < bestDistance) bestDistance = d, best = k, bestLength = length(b - a);
+    }
+    return {best, bestLength};
+}
+
+// A point as "(x, y, z)" in short numbers.
+std::string pointText(const Vec3& p) {
+    // Appended, not "(" + ...: g++ 12 warns (-Wrestrict) on a literal plus a temporary.
+    std::string text = "(";
+    text += formatShort(p.x) + ", " + formatShort(p.y) + ", " + formatShort(p.z) + ")";
+    return text;
+}
+
+}  // namespace
+
+std::string zeroRadiusExplanation(const CurveSet& set, const CurveReport& report) {
+    if (!report.closest) return "the curves have no contact pair";
+    const CurveContact& c = *report.closest;
+    std::string text = c.curveA == c.curveB
+                           ? "curve " + std::to_string(c.curveA) + " comes back onto itself at " +
+                                 pointText(c.pointA)
+                           : "curves " + std::to_string(c.curveA) + " and " +
+                                 std::to_string(c.curveB) + " touch or cross at " +
+                                 pointText(c.pointA);
+    text += " (largest radius without overlap " +
+            formatShort(report.largestRadiusWithoutOverlap()) + ")";
+    for (const auto& [index, point] :
+         {std::pair{c.curveA, c.pointA}, std::pair{c.curveB, c.pointB}}) {
+        const Curve& curve = set.curves.at(index);
+        const size_t n = curve.points.size();
+        if (!curve.closed || n < 3) continue;
+        const auto [segment, span] = nearestSegment(curve, point);
+        if (segment != n - 1) continue;
+        double others = 0;
+        for (size_t k = 0; k + 1 < n; ++k) others += length(curve.points[k + 1] - curve.points[k]);
+        const double mean = others / static_cast<double>(n - 1);
+        if (span <= kLongClosingSegment * mean) continue;
+        text += "; there curve " + std::to_string(index) +
+                " is closed (a negative point count in BCC, \"# closed\" in text) and its "
+                "closing segment, from its last point back to its first, spans " +
+                formatShort(span) + " where its other segments average " + formatShort(mean) +
+                ": if the yarn is open, write it as open";
+        break;
+    }
+    return text;
+}
+
 std::string yarnOverlapWarning(const std::string& scene, size_t yarn, const std::string& curves,
                                const YarnOverlap& o) {
-    if (!o.overlaps()) return "";
+    const std::string entry = (scene.empty() ? std::string("scene") : scene) + ": yarns[" +
+                              std::to_string(yarn) + "] (" + curves + "): ";
+    if (!o.overlaps()) {
+        // Far thinner than the curves allow: most likely a unit mistake.
+        if (!std::isfinite(o.largestRadiusWithoutOverlap) ||
+            o.radius >= kThinYarnFraction * o.largestRadiusWithoutOverlap)
+            return "";
+        return entry + "the yarns cover little of the space between the curves: radius " +
+               formatNumber(o.radius) + " is " +
+               formatPercent(o.radius / o.largestRadiusWithoutOverlap) +
+               " of the largest radius without overlap, " +
+               formatShort(o.largestRadiusWithoutOverlap) +
+               " (curve units or scale wrong? docs/curves.md, \"Choosing a radius and a scale\")";
+    }
     char depth[32];
     std::snprintf(depth, sizeof depth, "%.0f%%", 100 * o.maxDepth);
-    return (scene.empty() ? std::string("scene") : scene) + ": yarns[" + std::to_string(yarn) +
-           "] (" + curves + "): " + formatPercent(o.fraction) +
+    return entry + formatPercent(o.fraction) +
            " of the yarn length lies inside other yarns (up to " + depth +
            " of the diameter) at radius " + formatNumber(o.radius) +
            "; the largest radius without overlap is " +

@@ -188,11 +188,29 @@ struct YarnOverlap {
 std::vector<YarnOverlap> yarnOverlaps(const std::vector<YarnCurves>& yarns,
                                       const std::string& name = "yarns");
 
+// A yarn thinner than this share of its largest radius without overlap
+// leaves most of the space between its curves empty: weft render and weft
+// scene warn (a unit mistake, the yarn 100 times too thin, renders an almost
+// empty image). The generated weave and knit sit at about 1.
+inline constexpr double kThinYarnFraction = 0.1;
+// A closing segment this many times longer than its curve's mean segment is
+// named when it makes the largest radius 0 (zeroRadiusExplanation).
+inline constexpr double kLongClosingSegment = 10;
+
+// Why `report` (of `set`) has a largest radius without overlap of 0 or near
+// it: the curves and the point of its closest contact, and, when a closed
+// curve's closing segment there is more than kLongClosingSegment times its
+// curve's other segments, that: often an open yarn written as closed.
+std::string zeroRadiusExplanation(const CurveSet& set, const CurveReport& report);
+
 // The warning for one scene entry, without the "weft: warning: " prefix, or ""
-// when it does not overlap:
+// when it neither overlaps nor is far too thin:
 //   <scene>: yarns[i] (<curves>): 24.7% of the yarn length lies inside other
 //   yarns (up to 70% of the diameter) at radius 0.25; the largest radius
 //   without overlap is 0.075
+//   <scene>: yarns[i] (<curves>): the yarns cover little of the space between
+//   the curves: radius 0.001 is 1.3% of the largest radius without overlap,
+//   0.075 (...)
 std::string yarnOverlapWarning(const std::string& scene, size_t yarn, const std::string& curves,
                                const YarnOverlap& overlap);
 

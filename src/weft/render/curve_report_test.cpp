@@ -536,6 +536,19 @@ TEST(YarnOverlaps, WarningNamesTheEntryTheFractionAndTheRadius) {
               "overlap is 0.075");
     o.fraction = 0;
     EXPECT_EQ(yarnOverlapWarning("scene.json", 0, "a.txt", o), "");
+    // Issue 43, item 7: a yarn far thinner than its curves allow (units?).
+    o.radius = 0.001;
+    EXPECT_EQ(yarnOverlapWarning("scene.json", 0, "a.txt", o),
+              "scene.json: yarns[0] (a.txt): the yarns cover little of the space between the "
+              "curves: radius 0.001 is 1.3% of the largest radius without overlap, 0.075 (curve "
+              "units or scale wrong? docs/curves.md, \"Choosing a radius and a scale\")");
+    o.radius = kThinYarnFraction * 0.075;
+    EXPECT_EQ(yarnOverlapWarning("scene.json", 0, "a.txt", o), "");
+    o.largestRadiusWithoutOverlap = std::numeric_limits<double>::infinity();
+    o.radius = 1e-9;
+    EXPECT_EQ(yarnOverlapWarning("scene.json", 0, "a.txt", o), "");
+    o.radius = 0.25;
+    o.largestRadiusWithoutOverlap = 0.075;
     const nlohmann::json j = toJson(o, 2, "a.txt");
     EXPECT_EQ(j.at("yarn"), 2);
     EXPECT_EQ(j.at("curves"), "a.txt");

@@ -7,15 +7,39 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/json_message.h"
+#include "weft/core/npy.h"
 #include "weft/core/text_parse.h"
 
 namespace weft::render {
 
 void readVertexColours(const std::string& path, CurveSet* set) {
     const std::string ext = lowercaseExtension(path);
+    if (ext == ".npy") {
+        const NpyMatrix m = readNpyMatrix(path, 3, "vertex colours (one r, g, b row per point)");
+        if (m.rows != set->pointCount())
+            throw InputError(path + ": " + std::to_string(m.rows) + " colour rows but " +
+                             std::to_string(set->pointCount()) +
+                             " points in the curve file (one row per point, in the order "
+                             "`weft curves points` writes)");
+        size_t row = 0;
+        for (Curve& curve : set->curves) {
+            curve.colours.clear();
+            for (size_t i = 0; i < curve.points.size(); ++i, ++row) {
+                for (size_t k = 0; k < 3; ++k)
+                    if (!(m(row, k) >= 0 && m(row, k) <= 1))
+                        throw InputError(path + ": row " + std::to_string(row) + ", column " +
+                                         std::to_string(k) + ": colour value " +
+                                         formatNumber(m(row, k)) +
+                                         " is out of range: allowed [0, 1]");
+                curve.colours.emplace_back(m(row, 0), m(row, 1), m(row, 2));
+            }
+        }
+        return;
+    }
     if (ext != ".txt")
         throw InputError(path + ": unsupported vertex colour file extension '" +
-                         (ext.empty() ? std::string("(none)") : ext) + "' (allowed: .txt)");
+                         (ext.empty() ? std::string("(none)") : ext) + "' (allowed: .txt, .npy)");
     parseVertexColours(readFile(path), path, set);
 }
 

@@ -19,7 +19,9 @@ namespace weft::render {
 // each value in [0, 1], the curves in the order of the curve file and
 // separated by blank lines; '#' starts a comment. InputError naming
 // path:line for a malformed line or a value out of range, and the curve
-// when the colour file's curves or their points do not match the set's.
+// when the colour file's curves or their points do not match the set's. Or
+// .npy: an (n, 3) float32 or float64 array, one row per control point in the
+// curve file's order (`weft curves points`), n the set's point count.
 void readVertexColours(const std::string& path, CurveSet* set);
 void parseVertexColours(std::string_view text, const std::string& pathForErrors, CurveSet* set);
 

@@ -131,7 +131,7 @@ YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
             r.fail("vertex_colours",
                    "give a yarn either \"colour\" (one colour) or \"vertex_colours\" (a colour "
                    "per curve point), not both");
-        y.vertexColours = readFileName(r, "vertex_colours", baseDir, {".txt"});
+        y.vertexColours = readFileName(r, "vertex_colours", baseDir, {".txt", ".npy"});
     }
     if (r.has("mode")) y.mode = readYarnModeName(r, "mode");
     return y;

@@ -229,7 +229,8 @@ void addFitCommand(CLI::App& app) {
     family->add_option("--out", fo->out, "output family model (.json, written atomically)");
     family->add_option("--config", fo->config,
                        "training configuration FIT.json over the family's defaults (--print-config "
-                       "shows them; energy_calibration_degree must stay -1)");
+                       "shows them; energy_calibration_degree: 6 by default, -1 for none, "
+                       "docs/family.md)");
     addSeedOption(*family, fo->seed, "random seed of network initialisation and training samples");
     family->add_option("--threads", fo->threads, "worker threads (0: all cores)");
     family->add_option("--recalibrate", fo->recalibrate,

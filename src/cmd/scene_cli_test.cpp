@@ -76,6 +76,18 @@ TEST_F(SceneCliTest, YourOwnCurvesFramedColouredAndRendered) {
     EXPECT_NEAR(written.curves[3].points[5].x, scale * original.curves[3].points[5].x, 1e-6);
     EXPECT_EQ(written.curves[0].basis, original.curves[0].basis);
 
+    // --floor: one diffuse rectangle under the cloth, drawn with it.
+    r = run("scene curves " + testing::shellQuote(knit) + " --model " + kFleece +
+            " --floor --width 24 --height 16 --spp 1 --out floored");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out).at("objects"), 1);
+    const nlohmann::json floored = nlohmann::json::parse(readFile(path("floored/scene.json")));
+    EXPECT_EQ(floored.at("objects").at(0).at("type"), "rectangle");
+    EXPECT_EQ(floored.at("objects").at(0).at("normal"), nlohmann::json({0.0, 1.0, 0.0}));
+    r = run("render floored/scene.json --quiet --out floored.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("floored.json"))).at("scene").at("triangles"), 2);
+
     r = run("curves points " + testing::shellQuote(knit) + " --out points.npy");
     ASSERT_EQ(r.status, 0) << r.err;
     const NpyMatrix points = readNpyMatrix(path("points.npy"), 4, "");

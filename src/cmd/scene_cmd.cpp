@@ -135,6 +135,9 @@ void addSceneCommand(CLI::App& app) {
                                       "With two colours: space-dyed yarns instead of stripes, "
                                       "the colour alternating every L yarn radii along each "
                                       "yarn (a vertex colour file), [0.5, 10000]");
+    cmd->add_flag("--floor", s.floor,
+                  "Add a diffuse grey floor (scene \"objects\", docs/scene-format.md): under the "
+                  "cloth for curves, behind the patch for the other kinds");
     cmd->add_flag("--quiet", o->quiet, "No warning when the generated yarns overlap");
     cmd->add_option("--out", o->out,
                     "Output directory (replaced only if it holds nothing but an earlier "

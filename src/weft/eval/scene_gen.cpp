@@ -34,6 +34,8 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr double kFovDeg = 30;
+// --floor's side, in box diagonals of the cloth.
+constexpr double kFloorSize = 20;
 // Share of the film's half-width the close-up's framed length spans.
 constexpr double kCloseupFill = 0.95;
 // Close-up: yarn length in radii and samples along it.
@@ -664,18 +666,47 @@ GeneratedScene curvesScene(const SceneOptions& o) {
     return g;
 }
 
+namespace {
+
+// The --floor of a generated scene: under the cloth for the curves kind,
+// behind the patch for the others (SceneOptions::floor).
+void addFloor(GeneratedScene& g, SceneKind kind, const SceneOptions& o) {
+    const Bounds3 box = padded(bounds(g.curves), o.radius);
+    const Vec3 centre = boxCentre(box);
+    render::ObjectDesc floor;
+    floor.type = render::ObjectDesc::Type::Rectangle;
+    const double side = kFloorSize * length(box.hi - box.lo);
+    floor.size = {side, side};
+    if (kind == SceneKind::Curves) {
+        floor.normal = {0, 1, 0};
+        floor.center = {centre.x, box.lo.y, centre.z};
+    } else {
+        floor.normal = {0, 0, 1};
+        floor.center = {centre.x, centre.y, box.lo.z};
+    }
+    g.scene.objects.push_back(floor);
+}
+
+}  // namespace
+
 GeneratedScene generateScene(SceneKind kind, const SceneOptions& options) {
+    GeneratedScene g;
     switch (kind) {
         case SceneKind::Closeup:
-            return closeupScene(options);
+            g = closeupScene(options);
+            break;
         case SceneKind::Weave:
-            return weaveScene(options);
+            g = weaveScene(options);
+            break;
         case SceneKind::Knit:
-            return knitScene(options);
+            g = knitScene(options);
+            break;
         case SceneKind::Curves:
-            return curvesScene(options);
+            g = curvesScene(options);
+            break;
     }
-    throw std::logic_error("unknown scene kind");
+    if (options.floor) addFloor(g, kind, options);
+    return g;
 }
 
 std::string yarnCurveFile(int entry, int entryCount, const std::string& extension) {
@@ -714,6 +745,7 @@ nlohmann::json sceneSummary(const GeneratedScene& generated, SceneKind kind, con
                               {"vertex_colours", colourFiles},
                               {"yarns", generated.curves.curves.size()},
                               {"points", generated.curves.pointCount()},
+                              {"objects", generated.scene.objects.size()},
                               {"radius", *generated.scene.yarns.at(0).radius},
                               {"yarn_overlap", render::yarnOverlapJson(overlap)}};
     if (kind == SceneKind::Curves)

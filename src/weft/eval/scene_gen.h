@@ -132,6 +132,10 @@ struct SceneOptions {
     std::string curves;
     CurvesView view = CurvesView::ThreeQuarter;
     std::optional<double> curveRadius;
+    // --floor: a diffuse grey (0.5) rectangle under the cloth (curves: below
+    // its lowest point, normal +y) or behind it (the other kinds: the patch
+    // faces +z, so behind its back, normal +z), 20 times the cloth's size.
+    bool floor = false;
 
     // Range checks and the flags' combinations, then the model is loaded
     // (loadYarnModel, once) and the envmap checked for its extension and

@@ -265,6 +265,8 @@ nlohmann::json toJson(const RenderStats& s) {
           {"curve_points", s.scene.curvePoints},
           {"tubes", s.scene.tubes},
           {"segments", s.scene.segments},
+          {"objects", s.scene.objects},
+          {"triangles", s.scene.triangles},
           {"geometry_bvh_bytes", s.scene.embreeBytes},
           {"geometry_bvh_peak_bytes", s.scene.embreePeakBytes},
           {"materials", s.scene.materials},

@@ -396,8 +396,35 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
             progress.add();
         }
     }
+    // The objects: each its triangles and its own material.
+    if (desc.objects.size() > kMaxSceneObjects)
+        throw InputError((desc.path.empty() ? std::string("scene") : desc.path) + ": " +
+                         std::to_string(desc.objects.size()) + " objects: allowed at most " +
+                         std::to_string(kMaxSceneObjects) + " (join meshes into one OBJ file)");
+    int64_t triangles = 0;
+    for (size_t i = 0; i < desc.objects.size(); ++i) {
+        const std::string what = (desc.path.empty() ? std::string("scene") : desc.path) +
+                                 ": objects[" + std::to_string(i) + "]";
+        Triangles t;
+        try {
+            t = objectTriangles(desc.objects[i]);
+        } catch (const InputError& e) {
+            throw InputError(what + ": " + e.what());
+        }
+        triangles += static_cast<int64_t>(t.indices.size());
+        if (triangles > kMaxSceneTriangles)
+            throw InputError(what + ": the objects hold more than " +
+                             std::to_string(kMaxSceneTriangles) +
+                             " triangles, the most a scene takes");
+        const int material = static_cast<int>(bsdfs_.size());
+        bsdfs_.push_back(makeSurfaceBsdf(desc.objects[i].material, what + ".material"));
+        plyFrame_.push_back(0);
+        accel_->addTriangles(t.vertices, t.indices, material);
+    }
     accel_->commit();
     progress.finish();
+    stats_.objects = static_cast<int64_t>(desc.objects.size());
+    stats_.triangles = accel_->triangleCount();
     stats_.tubes = accel_->tubeCount();
     stats_.segments = accel_->segmentCount();
     stats_.embreeBytes = accel_->embreeBytes();

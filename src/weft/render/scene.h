@@ -45,6 +45,8 @@ inline constexpr int64_t kMaxSceneSegments = int64_t{200} * 1000 * 1000;
 // have: an InputError naming the yarn entry beyond it. A neural material
 // costs about 0.4 s and 0.5 MB to build (its energy guard and sampling table).
 inline constexpr int kMaxSceneMaterials = 256;
+// Largest number of objects (scene_objects.h) a scene may have.
+inline constexpr size_t kMaxSceneObjects = 1024;
 
 // The overlap check of one yarn entry (curve_report.h): its curves file, as
 // the scene names it, and how much of it lies inside the scene's yarns.
@@ -73,6 +75,8 @@ struct SceneBuildStats {
     int64_t curvePoints = 0;      // their control points
     int64_t tubes = 0;            // plies (neural) or fibers (fiber)
     int64_t segments = 0;         // round linear curve segments handed to Embree
+    int64_t objects = 0;          // floors, backdrops, meshes (scene_objects.h)
+    int64_t triangles = 0;        // their triangles
     int64_t embreeBytes = 0;      // geometry + BVH after the build (memory monitor)
     int64_t embreePeakBytes = 0;  // largest Embree allocation during the build
     int64_t materials = 0;        // distinct (model, colour) BSDFs
@@ -126,6 +130,7 @@ class Scene {
     // n, n) of docs/design.md 2, for fibers the fiber frame with the tangent as
     // +x (fiber_bcsdf.h).
     Frame shadingFrame(const TubeHit& hit) const {
+        if (hit.surface) return Frame::fromZ(hit.normal);  // surface_bsdf.h: z is the normal
         return plyFrame_[hit.material] ? yarnFrame(hit.tangent, hit.normal)
                                        : Frame::fromX(hit.tangent);
     }

@@ -142,7 +142,7 @@ YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
 SceneDesc parseScene(const json& j, const std::string& pathForErrors, const std::string& baseDir) {
     JsonObjectReader r(j, pathForErrors.empty() ? "scene" : pathForErrors, "",
                        JsonIntegers::WholeNumbers);
-    r.allowKeys({"camera", "film", "render", "lights", "yarns"});
+    r.allowKeys({"camera", "film", "render", "lights", "yarns", "objects"});
     SceneDesc s;
     s.path = pathForErrors;
     s.baseDir = baseDir;
@@ -155,6 +155,9 @@ SceneDesc parseScene(const json& j, const std::string& pathForErrors, const std:
     if (r.has("yarns"))
         for (JsonObjectReader& yarn : r.objects("yarns"))
             s.yarns.push_back(readYarn(std::move(yarn), baseDir));
+    if (r.has("objects"))
+        for (JsonObjectReader& object : r.objects("objects"))
+            s.objects.push_back(readObject(std::move(object), baseDir));
     return s;
 }
 
@@ -206,6 +209,12 @@ json toJson(const SceneDesc& scene) {
         yarns.push_back(std::move(yj));
     }
     j["yarns"] = std::move(yarns);
+    // Written only when there are some, so that a scene without keeps its hash.
+    if (!scene.objects.empty()) {
+        json objects = json::array();
+        for (const ObjectDesc& o : scene.objects) objects.push_back(render::toJson(o));
+        j["objects"] = std::move(objects);
+    }
     return j;
 }
 
@@ -222,6 +231,10 @@ std::vector<CommandPath> sceneInputs(const SceneDesc& scene, const std::string& 
         if (!scene.yarns[i].vertexColours.empty())
             inputs.push_back({yarn + "vertex_colours", scene.yarns[i].vertexColours});
     }
+    for (size_t i = 0; i < scene.objects.size(); ++i)
+        if (!scene.objects[i].file.empty())
+            inputs.push_back(
+                {"the scene's objects[" + std::to_string(i) + "].file", scene.objects[i].file});
     return inputs;
 }
 
@@ -257,6 +270,9 @@ std::string sceneHash(const SceneDesc& scene) {
         if (!scene.yarns[i].vertexColours.empty())
             digest(j["yarns"][i]["vertex_colours"], jsonIndexPath("yarns", i) + ".vertex_colours");
     }
+    for (size_t i = 0; i < scene.objects.size(); ++i)
+        if (!scene.objects[i].file.empty())
+            digest(j["objects"][i]["file"], jsonIndexPath("objects", i) + ".file");
     // Object keys dump sorted (std::map), so the text is canonical.
     return hex16(fnv1a64("weft scene hash 1\n" + j.dump()));
 }

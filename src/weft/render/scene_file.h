@@ -10,7 +10,8 @@
 //                 {"type": "sphere", "center": [x,y,z], "radius": r, "radiance": [r,g,b]},
 //                 {"type": "constant", "radiance": [r,g,b]} ],
 //     "yarns":  [ {"curves": "knit.bcc", "scale": 1.0, "radius": 0.02, "plies": 3,
-//                  "ply_twist": 0.3, "model": "fleece.json", "mode": "neural"} ]
+//                  "ply_twist": 0.3, "model": "fleece.json", "mode": "neural"} ],
+//     "objects": [ {"type": "rectangle", ...}, {"type": "mesh", "file": "arm.obj", ...} ]
 //   }
 // Lights are read by their registered type (light.h), yarn modes by name
 // (yarn_mode.h). Parsing validates everything once: a missing required key,
@@ -37,6 +38,7 @@
 #include "weft/core/vec.h"
 #include "weft/render/light.h"
 #include "weft/render/scene_limits.h"
+#include "weft/render/scene_objects.h"
 
 namespace weft::render {
 
@@ -97,6 +99,7 @@ struct SceneDesc {
     RenderDesc render;
     std::vector<std::shared_ptr<const LightDesc>> lights;  // empty: the procedural sky
     std::vector<YarnDesc> yarns;    // may be empty (an environment-only scene)
+    std::vector<ObjectDesc> objects;  // floors, backdrops, meshes (scene_objects.h)
 };
 
 // Parses and validates a scene; `pathForErrors` names it in messages ("scene"
@@ -116,7 +119,7 @@ SceneDesc loadScene(const std::string& path);
 nlohmann::json toJson(const SceneDesc& scene);
 
 // Every file a render of the scene reads: the scene file itself
-// (`scenePath`, when not empty), each yarn's curves and model, each envmap,
+// (`scenePath`, when not empty), each yarn's curves and model, each envmap, each mesh,
 // named by their JSON paths (for core/file.h's checkOutputsSpareInputs).
 std::vector<CommandPath> sceneInputs(const SceneDesc& scene, const std::string& scenePath);
 

@@ -18,12 +18,19 @@ struct OriginContext {
     unsigned geometry;
     unsigned firstSegment, endSegment;
     float selfHitDistance;
+    bool surface;  // the origin is a triangle: firstSegment is its index
 };
 
 void dropOriginTubeHits(const RTCFilterFunctionNArguments* args) {
     const auto* ctx = reinterpret_cast<const OriginContext*>(args->context);
     if (RTCHitN_geomID(args->hit, args->N, 0) != ctx->geometry) return;
     const unsigned segment = RTCHitN_primID(args->hit, args->N, 0);
+    if (ctx->surface) {
+        if (segment == ctx->firstSegment ||
+            RTCRayN_tfar(args->ray, args->N, 0) < ctx->selfHitDistance)
+            args->valid[0] = 0;
+        return;
+    }
     if (segment < ctx->firstSegment || segment >= ctx->endSegment) return;
     const float t = RTCRayN_tfar(args->ray, args->N, 0);
     const float leaving =
@@ -40,7 +47,15 @@ OriginContext makeContext(const TubeId& origin,
     ctx.geometry = RTC_INVALID_GEOMETRY_ID;
     ctx.firstSegment = ctx.endSegment = 0;
     ctx.selfHitDistance = 0.0f;
-    if (origin.valid()) {
+    ctx.surface = false;
+    if (origin.valid() && geometries[origin.geometry].surface) {
+        ctx.context.filter = &dropOriginTubeHits;
+        ctx.geometry = origin.geometry;
+        ctx.surface = true;
+        ctx.firstSegment = origin.tube;
+        ctx.endSegment = origin.tube + 1;
+        ctx.selfHitDistance = geometries[origin.geometry].surfaceSelfHit;
+    } else if (origin.valid()) {
         const TubeAccel::GeometryInfo& info = geometries[origin.geometry];
         ctx.context.filter = &dropOriginTubeHits;
         ctx.geometry = origin.geometry;
@@ -150,6 +165,45 @@ uint32_t TubeAccel::addGeometry(const std::vector<Tube>& tubes, int material,
     return id;
 }
 
+uint32_t TubeAccel::addTriangles(const std::vector<Vec3>& vertices,
+                                 const std::vector<std::array<uint32_t, 3>>& triangles,
+                                 int material) {
+    if (committed_) throw std::logic_error("TubeAccel::addTriangles after commit");
+    if (triangles.empty()) return kNoTube;
+    GeometryInfo info;
+    info.material = material;
+    info.surface = true;
+    RTCGeometry geom = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices.size()));
+    auto* index = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles.size()));
+    device_.check("allocating triangle geometry");
+    Vec3 lo = vertices.front(), hi = vertices.front();
+    for (size_t i = 0; i < vertices.size(); ++i) {
+        const Vec3& p = vertices[i];
+        v[3 * i] = static_cast<float>(p.x), v[3 * i + 1] = static_cast<float>(p.y),
+              v[3 * i + 2] = static_cast<float>(p.z);
+        lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+        hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+    for (size_t t = 0; t < triangles.size(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            if (triangles[t][k] >= vertices.size())
+                throw std::logic_error("TubeAccel: a triangle index beyond the vertices");
+            index[3 * t + k] = triangles[t][k];
+        }
+    info.surfaceSelfHit = static_cast<float>(kSurfaceSelfHit * length(hi - lo));
+    rtcCommitGeometry(geom);
+    const unsigned id = rtcAttachGeometry(scene_, geom);
+    rtcReleaseGeometry(geom);
+    device_.check("adding triangle geometry");
+    if (id != geometries_.size()) throw std::runtime_error("unexpected Embree geometry id");
+    triangles_ += static_cast<int64_t>(triangles.size());
+    geometries_.push_back(std::move(info));
+    return id;
+}
+
 void TubeAccel::commit() {
     rtcCommitScene(scene_);
     device_.check("building the BVH");
@@ -167,6 +221,16 @@ bool TubeAccel::intersect(const Vec3& org, const Vec3& dir, double tMax, const T
     const GeometryInfo& info = geometries_[rh.hit.geomID];
     hit->t = rh.ray.tfar;
     hit->point = org + dir * hit->t;
+    if (info.surface) {
+        hit->surface = true;
+        hit->id = {rh.hit.geomID, rh.hit.primID};
+        hit->material = info.material;
+        hit->normal = normalizeAnyLength(Vec3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z});
+        Vec3 b;
+        coordinateSystem(hit->normal, &hit->tangent, &b);
+        return true;
+    }
+    hit->surface = false;
     hit->id = {rh.hit.geomID, info.tubeOf(rh.hit.primID)};
     hit->material = info.materialAlong.empty()
                         ? info.material

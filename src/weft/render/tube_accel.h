@@ -16,10 +16,18 @@
 //     tube passes through its interior, whose light transport the yarn model
 //     (M, T) or the far-field fiber model already accounts for.
 // A later entry into the same tube (a knit loop coming back) is a real hit.
+//
+// Triangles (the scene's objects, scene_objects.h) share the scene: a hit on
+// one reports its triangle as the "tube" of its TubeId, surface = true, the
+// unit geometric normal as normal (either side: the materials are
+// two-sided) and a tangent orthogonal to it. A ray leaving a triangle drops
+// every hit on that triangle (a plane cannot be met again) and hits on its
+// geometry closer than kSurfaceSelfHit times the geometry's size.
 #pragma once
 
 #include <embree3/rtcore.h>
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -46,7 +54,8 @@ struct TubeHit {
     Vec3 tangent;  // unit segment direction
     Vec3 normal;   // unit, orthogonal to tangent, pointing out of the tube
     TubeId id;
-    int material = -1;  // as given to addGeometry
+    int material = -1;     // as given to addGeometry or addTriangles
+    bool surface = false;  // a triangle of an object, not a tube
 };
 
 class TubeAccel {
@@ -68,6 +77,11 @@ class TubeAccel {
     // only the geometry's record (GeometryInfo::material), no hit reports it.
     uint32_t addGeometry(const std::vector<Tube>& tubes, int material,
                          std::vector<int> materialAlongTubes = {});
+    // Adds one triangle mesh (world vertices and index triples, copied),
+    // shaded with `material`. Returns its geometry id.
+    static constexpr double kSurfaceSelfHit = 1e-7;
+    uint32_t addTriangles(const std::vector<Vec3>& vertices,
+                          const std::vector<std::array<uint32_t, 3>>& triangles, int material);
     // Builds the BVH; call once after the last addGeometry.
     void commit();
 
@@ -79,6 +93,7 @@ class TubeAccel {
 
     int64_t tubeCount() const { return tubes_; }
     int64_t segmentCount() const { return segments_; }
+    int64_t triangleCount() const { return triangles_; }
     size_t geometryCount() const { return geometries_.size(); }
     // Bytes Embree holds (geometry buffers + BVH), from its memory monitor.
     int64_t embreeBytes() const { return device_.allocatedBytes(); }
@@ -87,6 +102,8 @@ class TubeAccel {
     // Per-geometry facts the intersection filter needs (public for the filter).
     struct GeometryInfo {
         int material = -1;
+        bool surface = false;                    // triangles (addTriangles)
+        float surfaceSelfHit = 0;                // triangles: kSurfaceSelfHit x the mesh's diagonal
         std::vector<int> materialAlong;          // empty, or per segment index along a tube
         std::vector<uint32_t> tubeFirstSegment;  // ascending; segment -> tube by binary search
         uint32_t segmentCount = 0;
@@ -101,7 +118,7 @@ class TubeAccel {
     EmbreeDevice device_;
     RTCScene scene_ = nullptr;
     std::vector<GeometryInfo> geometries_;
-    int64_t tubes_ = 0, segments_ = 0;
+    int64_t tubes_ = 0, segments_ = 0, triangles_ = 0;
     bool committed_ = false;
 };
 

@@ -1,0 +1,219 @@
+// Tests of a scene's objects (issue 43, item 2): reading them, the OBJ
+// reader, the rectangle's triangles, and in renders: a diffuse floor under a
+// constant sky (the white-furnace case: every path that leaves it escapes,
+// so its radiance is its reflectance), and objects that occlude yarns in
+// both drawing modes.
+#include "weft/render/scene_objects.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "weft/core/file.h"
+#include "weft/core/test_util.h"
+#include "weft/render/renderer.h"
+#include "weft/render/scene.h"
+#include "weft/render/scene_file.h"
+
+namespace weft::render {
+namespace {
+
+using weft::testing::expectInputError;
+
+const std::string kFleece = std::string(WEFT_SOURCE_DIR) + "/tests/data/fleece-small.json";
+
+TEST(ObjTriangles, FansNegativeIndicesAndSlashFormsAreRead) {
+    const Triangles t = parseObjTriangles(
+        "# a quad and a triangle\n"
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+        "vt 0 0\nvn 0 0 1\n"
+        "f 1/1/1 2/1/1 3//1 4\n"
+        "v 2 2 2\n"
+        "f -1 -2 -3\n"
+        "o ignored\ns off\n",
+        "quad.obj");
+    ASSERT_EQ(t.vertices.size(), 5u);
+    ASSERT_EQ(t.indices.size(), 3u);
+    EXPECT_EQ(t.indices[0], (std::array<uint32_t, 3>{0, 1, 2}));
+    EXPECT_EQ(t.indices[1], (std::array<uint32_t, 3>{0, 2, 3}));
+    EXPECT_EQ(t.indices[2], (std::array<uint32_t, 3>{4, 3, 2}));
+}
+
+TEST(ObjTriangles, BadLinesAreNamed) {
+    expectInputError([] { parseObjTriangles("v 0 0\n", "a.obj"); }, {"a.obj:1", "'v x y z'"});
+    expectInputError([] { parseObjTriangles("v 0 0 nan\n", "a.obj"); },
+                     {"a.obj:1", "out of range"});
+    expectInputError([] { parseObjTriangles("v 0 0 0\nv 1 0 0\nf 1 2\n", "a.obj"); },
+                     {"a.obj:3", "at least 3"});
+    expectInputError([] { parseObjTriangles("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "a.obj"); },
+                     {"a.obj:4", "index 4", "3 vertices"});
+    expectInputError([] { parseObjTriangles("v 0 0 0\nf 0 1 1\n", "a.obj"); }, {"a.obj:2", "'0'"});
+    expectInputError([] { parseObjTriangles("v 0 0 0\n", "a.obj"); }, {"a.obj", "no faces"});
+}
+
+TEST(SceneObjects, RectangleIsTwoTrianglesOfItsSizeAroundItsCentre) {
+    ObjectDesc o;
+    o.center = {1, 2, 3};
+    o.normal = {0, 1, 0};
+    o.size = {4, 6};
+    const Triangles t = objectTriangles(o);
+    ASSERT_EQ(t.indices.size(), 2u);
+    for (const Vec3& p : t.vertices) {
+        EXPECT_NEAR(p.y, 2, 1e-12);
+        EXPECT_NEAR(std::abs(p.x - 1), 2, 1e-12);  // width along x
+        EXPECT_NEAR(std::abs(p.z - 3), 3, 1e-12);  // height along z
+    }
+    // Both triangles face the same way.
+    for (const auto& tri : t.indices) {
+        const Vec3 n =
+            cross(t.vertices[tri[1]] - t.vertices[tri[0]], t.vertices[tri[2]] - t.vertices[tri[0]]);
+        EXPECT_GT(std::abs(n.y), 0);
+    }
+}
+
+class SceneObjectsTest : public weft::testing::TempDirTest {
+  protected:
+    std::string scene(
+        const std::string& objects, const std::string& yarns = "",
+        const std::string& lights = R"({"type": "constant", "radiance": [1, 1, 1]})") {
+        writeFileAtomic(path("yarn.txt"), "-0.2 0 0\n0 0.01 0\n0.2 0 0\n");
+        return R"({"camera": {"from": [0, 0.6, 1], "to": [0, 0, 0], "fov_deg": 10},
+                   "film": {"width": 12, "height": 12}, "render": {"spp": 16, "seed": 4},
+                   "lights": [)" +
+               lights + R"(], "yarns": [)" + yarns + R"(], "objects": [)" + objects + "]}";
+    }
+    RenderResult render(const std::string& text, const std::string& mode, bool nee = true,
+                        int spp = 16) {
+        const SceneDesc desc = parseSceneText(text, path("scene.json"), dir_.string());
+        SceneOptions so;
+        so.mode = mode;
+        const Scene s(desc, so);
+        RenderOptions o;
+        o.spp = spp;
+        o.seed = 4;
+        o.quiet = true;
+        o.nextEventEstimation = nee;
+        return weft::render::render(s, o);
+    }
+};
+
+const std::string kYarn = R"({"curves": "yarn.txt", "radius": 0.03, "plies": 3, "ply_twist": 0.3,
+                              "model": ")" +
+                          kFleece + R"("})";
+
+// The white-furnace case of a surface: under a constant sky of radiance 1,
+// a diffuse floor that sees nothing but the sky returns its reflectance.
+// BSDF sampling alone is exact (every path escapes with weight R); with
+// next-event estimation it is right in expectation.
+TEST_F(SceneObjectsTest, ADiffuseFloorUnderAConstantSkyReturnsItsReflectance) {
+    const std::string floor =
+        R"({"type": "rectangle", "center": [0, -0.05, 0], "size": [1000, 1000],
+        "material": {"type": "diffuse", "reflectance": [0.2, 0.5, 0.9]}})";
+    const RenderResult exact = render(scene(floor), "neural", false);
+    EXPECT_EQ(exact.stats.scene.objects, 1);
+    EXPECT_EQ(exact.stats.scene.triangles, 2);
+    for (size_t i = 0; i < exact.image.pixels.size(); ++i)
+        ASSERT_NEAR(exact.image.pixels[i], (i % 3 == 0 ? 0.2 : i % 3 == 1 ? 0.5 : 0.9), 1e-6) << i;
+    const RenderResult mis = render(scene(floor), "neural", true, 256);
+    Rgb mean;
+    for (size_t i = 0; i < mis.image.pixels.size(); ++i) mean[i % 3] += mis.image.pixels[i] / 144.0;
+    EXPECT_NEAR(mean.r, 0.2, 0.004);
+    EXPECT_NEAR(mean.g, 0.5, 0.01);
+    EXPECT_NEAR(mean.b, 0.9, 0.018);
+}
+
+// An object between the camera and a yarn hides it in every drawing mode:
+// the image is the one without the yarn, to the bit (the same paths). Without
+// the object the yarn shows.
+TEST_F(SceneObjectsTest, ObjectsOccludeYarnsInEveryMode) {
+    writeFileAtomic(path("screen.obj"),
+                    "v -5 -5 0.5\nv 5 -5 0.5\nv 5 5 0.5\nv -5 5 0.5\nf 1 2 3 4\n");
+    const std::string screens[] = {
+        R"({"type": "rectangle", "center": [0, 0.3, 0.5], "normal": [0, 0.6, 1], "size": [10, 10],
+            "material": {"type": "conductor", "colour": [0.9, 0.6, 0.3], "roughness": 0.5}})",
+        R"({"type": "mesh", "file": "screen.obj", "scale": 1, "translate": [0, 0, 0.1]})"};
+    for (const std::string& screen : screens)
+        for (const std::string mode : {"neural", "fiber"}) {
+            SCOPED_TRACE(mode + " " + screen.substr(0, 30));
+            const RenderResult hidden = render(scene(screen, kYarn), mode);
+            const RenderResult alone = render(scene(screen), mode);
+            EXPECT_EQ(hidden.image.pixels, alone.image.pixels);
+            const RenderResult seen = render(scene("", kYarn), mode);
+            const RenderResult empty = render(scene(""), mode);
+            EXPECT_NE(seen.image.pixels, empty.image.pixels);
+        }
+}
+
+// A floor lights a yarn from below: the yarn above a white floor is brighter
+// than above a black one (the floor takes part in transport, not just occlusion).
+TEST_F(SceneObjectsTest, AFloorReflectsLightOntoTheYarn) {
+    const auto floor = [](double r) {
+        const std::string v = std::to_string(r);
+        return R"({"type": "rectangle", "center": [0, -0.1, 0], "size": [10, 10],
+                   "material": {"type": "diffuse", "reflectance": [)" +
+               v + "," + v + "," + v + "]}}";
+    };
+    const std::string above =
+        R"({"type": "sphere", "center": [0, 3, 0], "radius": 0.5, "radiance": [5, 5, 5]})";
+    for (const std::string mode : {"neural", "fiber"}) {
+        double sum[2] = {0, 0};
+        for (int k = 0; k < 2; ++k) {
+            const RenderResult r =
+                render(scene(floor(k == 0 ? 0.0 : 1.0), kYarn, above), mode, true, 32);
+            for (float v : r.image.pixels) sum[k] += v;
+        }
+        EXPECT_GT(sum[1], 1.05 * sum[0]) << mode;
+    }
+}
+
+TEST_F(SceneObjectsTest, ObjectsAreValidatedAndWrittenBack) {
+    const auto parse = [&](const std::string& objects) {
+        return parseSceneText(scene(objects), path("scene.json"), dir_.string());
+    };
+    expectInputError([&] { parse(R"({"type": "sphere"})"); },
+                     {"objects[0].type", "\"rectangle\", \"mesh\"", "sphere"});
+    expectInputError([&] { parse(R"({"type": "rectangle"})"); },
+                     {"objects[0]", "missing key \"center\""});
+    expectInputError(
+        [&] { parse(R"({"type": "rectangle", "center": [0,0,0], "normal": [0,0,0]})"); },
+        {"objects[0].normal"});
+    expectInputError([&] { parse(R"({"type": "rectangle", "center": [0,0,0], "file": "a.obj"})"); },
+                     {"objects[0]", "file"});
+    expectInputError([&] { parse(R"({"type": "mesh", "file": "a.stl"})"); },
+                     {"objects[0].file", ".obj"});
+    expectInputError(
+        [&] {
+            parse(
+                R"({"type": "rectangle", "center": [0,0,0], "material": {"type": "diffuse", "reflectance": [0, 2, 0]}})");
+        },
+        {"objects[0].material.reflectance", "[0, 1]"});
+    expectInputError(
+        [&] {
+            parse(
+                R"({"type": "rectangle", "center": [0,0,0], "material": {"type": "conductor", "roughness": 0}})");
+        },
+        {"objects[0].material.roughness", "0.01"});
+    expectInputError(
+        [&] {
+            parse(
+                R"({"type": "rectangle", "center": [0,0,0], "material": {"type": "diffuse", "roughness": 0.5}})");
+        },
+        {"objects[0].material", "roughness"});
+    // A missing mesh file: named when the scene is built.
+    const SceneDesc missing = parse(R"({"type": "mesh", "file": "missing.obj"})");
+    expectInputError([&] { Scene s(missing); }, {"objects[0]", "missing.obj"});
+    // Round trip.
+    const SceneDesc s =
+        parse(R"({"type": "rectangle", "center": [1, 2, 3], "normal": [0, 2, 0], "size": [3, 4],
+        "material": {"type": "conductor", "colour": [0.1, 0.2, 0.3], "roughness": 0.25}})");
+    const SceneDesc again = parseScene(toJson(s), "again.json", dir_.string());
+    ASSERT_EQ(again.objects.size(), 1u);
+    EXPECT_EQ(toJson(again), toJson(s));
+    EXPECT_EQ(again.objects[0].normal, (Vec3{0, 1, 0}));
+    EXPECT_EQ(again.objects[0].material.roughness, 0.25);
+}
+
+}  // namespace
+}  // namespace weft::render

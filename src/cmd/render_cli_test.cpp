@@ -17,6 +17,7 @@
 
 #include "cli_test_util.h"
 #include "weft/core/file.h"
+#include "weft/core/image.h"
 #include "weft/core/image_io.h"
 #include "weft/eval/image_compare.h"
 
@@ -534,6 +535,33 @@ TEST_F(RenderCliTest, BadInputIsNamed) {
     writeFileAtomic(path("yarn.txt"), "0 0 0\n1 nan 0\n");
     expectUserError(run("render scene.json --spp 1 --out a.exr"), {"yarn.txt", "2"});
     EXPECT_FALSE(std::filesystem::exists(path("a.exr")));
+}
+
+// Issue 43, item 4: --aov writes IMAGE.<pass>.exr beside the image (listed in
+// the statistics' outputs); --exposure auto picks and records the stops.
+TEST_F(RenderCliTest, PassesAndAutoExposure) {
+    RunResult r =
+        run("render scene.json --spp 2 --aov albedo,depth,yarn_id,normal --exposure auto "
+            "--quiet --out p.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    for (const std::string pass : {"albedo", "normal", "depth", "yarn_id"}) {
+        const Image image = readImage(path("p." + pass + ".exr"));
+        EXPECT_EQ(image.width, 16);
+        EXPECT_EQ(image.height, 12);
+    }
+    const nlohmann::json stats = nlohmann::json::parse(readFile(path("p.json")));
+    EXPECT_EQ(stats.at("outputs").at("depth"), "p.depth.exr");
+    EXPECT_TRUE(stats.at("exposure_auto").get<bool>());
+    EXPECT_NEAR(stats.at("exposure").get<double>(), autoExposure(readImage(path("p.exr"))), 1e-9);
+    expectUserError(run("render scene.json --spp 1 --aov albedo,zdepth --out q.exr"),
+                    {"--aov", "zdepth", "albedo, normal, depth, yarn_id"});
+    expectUserError(run("render scene.json --spp 2 --shard 0/2 --aov depth --out q.exr"),
+                    {"--aov", "--shard"});
+    expectUserError(run("render scene.json --spp 1 --exposure bright --out q.exr"),
+                    {"--exposure", "bright", "auto"});
+    expectUserError(run("render scene.json --spp 1 --exposure 65 --out q.exr"),
+                    {"--exposure", "[-64, 64]"});
+    EXPECT_FALSE(std::filesystem::exists(path("q.exr")));
 }
 
 // Issue 43, item 3: outputs that cannot be written fail before the render

@@ -4,13 +4,17 @@
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "commands.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/image.h"
 #include "weft/core/image_io.h"
+#include "weft/core/text_parse.h"
 #include "weft/render/render_merge.h"
 #include "weft/render/renderer.h"
 #include "weft/render/scene.h"
@@ -23,7 +27,8 @@ namespace {
 struct RenderCmdOptions {
     std::string scene, mode, out, yarnSampling = "tabulated", shard, sampler;
     int spp = 0, threads = 0;
-    double seconds = 0, exposure = 0, checkpoint = 0;
+    double seconds = 0, checkpoint = 0;
+    std::string exposure = "0", aovs;
     uint64_t seed = 0;
     CLI::Option *sppOpt = nullptr, *timeOpt = nullptr, *seedOpt = nullptr, *shardOpt = nullptr,
                 *samplerOpt = nullptr;
@@ -36,35 +41,65 @@ std::string outputStem(const std::string& out) {
     return json.substr(0, json.size() - 5);
 }
 
-// A render's three outputs: IMAGE.exr, IMAGE.png and the statistics,
-// IMAGE.json, or IMAGE.render.json where IMAGE.json is the scene file
-// (`weft render knit.json --out knit.exr`; docs/render.md).
+// A render's outputs: IMAGE.exr, IMAGE.png and the statistics, IMAGE.json, or
+// IMAGE.render.json where IMAGE.json is the scene file (`weft render
+// knit.json --out knit.exr`; docs/render.md); and IMAGE.<pass>.exr for each
+// render pass (--aov).
 struct RenderOutputs {
     std::string exr, png, json;
+    std::vector<std::pair<std::string, std::string>> passes;  // (name, IMAGE.<name>.exr)
 
-    RenderOutputs(const std::string& out, const std::string& sceneFile)
+    RenderOutputs(const std::string& out, const std::string& sceneFile, unsigned aovs = 0)
         : exr(out), png(outputStem(out) + ".png"), json(outputStem(out) + ".json") {
         if (sameFilePath(json, sceneFile)) json = outputStem(out) + render::kRenderStatsSuffix;
+        for (const render::Aov aov : render::kAovs)
+            if (aovs & aov)
+                passes.emplace_back(render::aovName(aov),
+                                    outputStem(out) + "." + render::aovName(aov) + ".exr");
     }
     std::vector<CommandPath> paths() const {
-        return {{"--out", exr}, {"--out's PNG", png}, {"--out's statistics", json}};
+        std::vector<CommandPath> p = {
+            {"--out", exr}, {"--out's PNG", png}, {"--out's statistics", json}};
+        for (const auto& [name, path] : passes) p.push_back({"--aov " + name, path});
+        return p;
     }
 };
 
-// The three outputs, all or none (each through a temporary file renamed into place).
-void writeRenderFiles(const RenderOutputs& out, const Image& image, nlohmann::json& stats,
-                      double exposure) {
-    stats["exposure"] = exposure;
+// "auto" (nullopt) or stops in [-64, 64]; InputError naming the flag otherwise.
+std::optional<double> parseExposure(const std::string& text, const std::string& flag) {
+    if (text == "auto") return std::nullopt;
+    double stops = 0;
+    if (!parseNumber(std::string_view(text), &stops))
+        throw InputError(flag + " \"" + text +
+                         "\": expected stops (a number in [-64, 64]) or auto");
+    if (!std::isfinite(stops) || std::abs(stops) > 64)
+        throw InputError(flag + " " + text + " is out of range: allowed [-64, 64] stops, or auto");
+    return stops;
+}
+
+// The outputs, all or none (each through a temporary file renamed into place).
+void writeRenderFiles(const RenderOutputs& out, const Image& image,
+                      const std::vector<std::pair<std::string, Image>>& passes,
+                      nlohmann::json& stats, std::optional<double> exposure) {
+    const double stops = exposure ? *exposure : autoExposure(image);
+    stats["exposure"] = stops;
+    if (!exposure) stats["exposure_auto"] = true;
     stats["outputs"] = {{"exr", out.exr}, {"png", out.png}, {"json", out.json}};
-    writeFilesAtomic({{out.exr, encodeExr(image, out.exr)},
-                      {out.png, encodePng(image, exposure)},
-                      {out.json, stats.dump(2) + "\n"}});
+    std::vector<std::pair<std::string, std::string>> files = {{out.exr, encodeExr(image, out.exr)},
+                                                              {out.png, encodePng(image, stops)}};
+    for (size_t k = 0; k < out.passes.size() && k < passes.size(); ++k) {
+        stats["outputs"][out.passes[k].first] = out.passes[k].second;
+        files.push_back({out.passes[k].second, encodeExr(passes[k].second, out.passes[k].second)});
+    }
+    files.push_back({out.json, stats.dump(2) + "\n"});
+    writeFilesAtomic(files);
 }
 
 // writeRenderFiles, then the one-line summary.
-void writeRenderOutputs(const RenderOutputs& out, const Image& image, nlohmann::json stats,
-                        double exposure) {
-    writeRenderFiles(out, image, stats, exposure);
+void writeRenderOutputs(const RenderOutputs& out, const Image& image,
+                        const std::vector<std::pair<std::string, Image>>& passes,
+                        nlohmann::json stats, std::optional<double> exposure) {
+    writeRenderFiles(out, image, passes, stats, exposure);
     nlohmann::json line = {{"exr", out.exr},         {"png", out.png},
                            {"json", out.json},       {"mode", stats.at("mode")},
                            {"spp", stats.at("spp")}, {"seconds", stats.at("seconds")}};
@@ -72,19 +107,14 @@ void writeRenderOutputs(const RenderOutputs& out, const Image& image, nlohmann::
     std::printf("%s\n", line.dump().c_str());
 }
 
-void checkExposure(double exposure) {
-    if (!std::isfinite(exposure) || std::abs(exposure) > 64)
-        throw InputError("--exposure " + std::to_string(exposure) +
-                         " is out of range: allowed [-64, 64] stops");
-}
-
 void runRender(const RenderCmdOptions& o) {
     // Not CLI11-required: `weft render merge` does without them.
     if (o.scene.empty() || o.out.empty())
         throw InputError("weft render needs SCENE and --out IMAGE.exr (or: weft render merge "
                          "PART.exr... --out IMAGE.exr)");
-    const RenderOutputs outputs(o.out, o.scene);
-    checkExposure(o.exposure);
+    const unsigned aovs = o.aovs.empty() ? 0 : render::parseAovs(o.aovs);
+    const RenderOutputs outputs(o.out, o.scene, aovs);
+    const std::optional<double> exposure = parseExposure(o.exposure, "--exposure");
     render::SceneOptions sceneOptions;
     if (!o.mode.empty()) sceneOptions.mode = render::yarnModeNamed(o.mode).name();
     sceneOptions.quiet = o.quiet;
@@ -108,6 +138,7 @@ void runRender(const RenderCmdOptions& o) {
     options.quiet = o.quiet;
     if (o.shardOpt->count()) options.shard = Shard::parse(o.shard, "--shard");
     options.checkpointSeconds = o.checkpoint;
+    options.aovs = aovs;
     options.validate();
 
     const std::string hash = render::sceneHash(desc);
@@ -132,7 +163,7 @@ void runRender(const RenderCmdOptions& o) {
     // The image so far, every --checkpoint seconds (partial: true in its statistics).
     options.checkpoint = [&](const render::RenderResult& partial) {
         nlohmann::json stats = statsOf(partial.stats);
-        writeRenderFiles(outputs, partial.image, stats, o.exposure);
+        writeRenderFiles(outputs, partial.image, partial.aovs, stats, exposure);
     };
     // The first SIGINT or SIGTERM: the tiles in flight finish, the image so far is written.
     const StopOnSignal stop("the image of the samples traced so far");
@@ -144,7 +175,7 @@ void runRender(const RenderCmdOptions& o) {
     if (result.stats.nonFiniteSamples > 0)
         std::fprintf(stderr, "weft: warning: %lld samples were NaN or infinite and were dropped\n",
                      static_cast<long long>(result.stats.nonFiniteSamples));
-    writeRenderOutputs(outputs, result.image, statsOf(result.stats), o.exposure);
+    writeRenderOutputs(outputs, result.image, result.aovs, statsOf(result.stats), exposure);
     if (result.stats.partial) {
         const int signal = StopOnSignal::signal();
         std::fprintf(
@@ -162,13 +193,12 @@ void runRender(const RenderCmdOptions& o) {
 
 struct RenderMergeOptions {
     std::vector<std::string> parts;
-    std::string out;
-    double exposure = 0;
+    std::string out, exposure = "0";
 };
 
 void runRenderMerge(const RenderMergeOptions& o) {
     const RenderOutputs outputs(o.out, "");
-    checkExposure(o.exposure);
+    const std::optional<double> exposure = parseExposure(o.exposure, "--exposure");
     std::vector<CommandPath> inputs;
     for (const std::string& part : o.parts) {
         inputs.push_back({"part", part});
@@ -176,7 +206,7 @@ void runRenderMerge(const RenderMergeOptions& o) {
     }
     checkOutputsSpareInputs(inputs, outputs.paths());
     const render::MergedRender merged = render::mergeRenderParts(o.parts);
-    writeRenderOutputs(outputs, merged.image, merged.stats, o.exposure);
+    writeRenderOutputs(outputs, merged.image, {}, merged.stats, exposure);
 }
 
 }  // namespace
@@ -215,8 +245,15 @@ void addRenderCommand(CLI::App& app) {
         "independent (random numbers) or sobol (Owen-scrambled Sobol' points: each pixel's "
         "samples stratified, less noise at the same spp; docs/render.md). Default: the scene's "
         "render.sampler, else independent");
-    cmd->add_option("--exposure", o->exposure, "PNG exposure in stops (the EXR stays linear)")
+    cmd->add_option("--exposure", o->exposure,
+                    "PNG exposure in stops, [-64, 64], or auto (the 99th percentile of the "
+                    "luminance to 0.9: about 1 % of the pixels clip); the EXR stays linear")
         ->capture_default_str();
+    cmd->add_option(
+        "--aov", o->aovs,
+        "Render passes, comma-separated: albedo, normal, depth, yarn_id, each written "
+        "to IMAGE.<pass>.exr (first-hit values averaged over the pixel's samples; for "
+        "denoisers and compositing, docs/render.md \"Render passes\"); not with --shard");
     cmd->add_option("--checkpoint", o->checkpoint,
                     "Write the image so far (EXR, PNG and statistics with \"partial\": true) "
                     "every SECONDS while rendering, in [1, 1e6] (docs/render.md, \"Keeping the "
@@ -240,7 +277,9 @@ void addRenderCommand(CLI::App& app) {
     merge->add_option("parts", mo->parts,
                       "the N parts PART.exr (each with PART.json beside it), in any order")
         ->required();
-    merge->add_option("--exposure", mo->exposure, "PNG exposure in stops (the EXR stays linear)")
+    merge
+        ->add_option("--exposure", mo->exposure,
+                     "PNG exposure in stops, [-64, 64], or auto (the EXR stays linear)")
         ->capture_default_str();
     merge->add_option("--out", mo->out, "Output IMAGE.exr (IMAGE.png and IMAGE.json beside it)")
         ->required();

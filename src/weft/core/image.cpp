@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <string_view>
+#include <vector>
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
@@ -53,6 +54,20 @@ double linearToSrgb(double v) {
 double srgbToLinear(double v) {
     v = std::clamp(v, 0.0, 1.0);
     return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+}
+
+double autoExposure(const Image& image) {
+    std::vector<double> lum;
+    lum.reserve(image.pixels.size() / 3);
+    for (size_t i = 0; i + 2 < image.pixels.size(); i += 3)
+        lum.push_back(luminance({image.pixels[i], image.pixels[i + 1], image.pixels[i + 2]}));
+    if (lum.empty()) return 0;
+    const size_t k =
+        std::min(lum.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(lum.size())));
+    std::nth_element(lum.begin(), lum.begin() + static_cast<std::ptrdiff_t>(k), lum.end());
+    const double p99 = lum[k];
+    if (!(p99 > 0) || !std::isfinite(p99)) return 0;
+    return std::clamp(std::log2(kAutoExposureTarget / p99), -64.0, 64.0);
 }
 
 std::string encodePng(const Image& image, double exposure) {

@@ -59,6 +59,13 @@ inline Rgb srgbToLinear(const Rgb& c) {
     return Rgb(srgbToLinear(c.r), srgbToLinear(c.g), srgbToLinear(c.b));
 }
 
+// The exposure (stops) at which the 99th percentile of the image's pixel
+// luminance maps to kAutoExposureTarget, so that about 1 % of the pixels
+// clip (`--exposure auto`); 0 for an image with no positive luminance;
+// within [-64, 64].
+inline constexpr double kAutoExposureTarget = 0.9;
+double autoExposure(const Image& image);
+
 // PNG bytes of the image (8-bit sRGB, exposure in stops).
 std::string encodePng(const Image& image, double exposure = 0.0);
 void writePng(const std::string& path, const Image& image, double exposure = 0.0);

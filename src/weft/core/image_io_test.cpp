@@ -72,6 +72,20 @@ void writeExrChannels(const std::string& path, int w, int h, Imath::V2i origin,
     file.writePixels(h);
 }
 
+// --exposure auto: the 99th percentile of the luminance maps to 0.9.
+TEST(AutoExposure, MapsThe99thPercentileLuminanceTo0point9) {
+    Image image(10, 10);
+    for (int i = 0; i < 100; ++i) image.set(i % 10, i / 10, Rgb(0.01 * (i + 1)));  // 0.01 .. 1
+    // The 99th of 100 sorted values (index 99 * 0.99 -> 99) is 1.0; scaled by 8, 8.0.
+    EXPECT_NEAR(autoExposure(image), std::log2(0.9 / 1.0), 1e-12);
+    for (float& v : image.pixels) v *= 8;
+    EXPECT_NEAR(autoExposure(image), std::log2(0.9 / 8.0), 1e-12);
+    EXPECT_EQ(autoExposure(Image(4, 4)), 0.0);  // black: no change
+    Image dim(1, 1);
+    dim.set(0, 0, Rgb(1e-30));
+    EXPECT_EQ(autoExposure(dim), 64.0);  // clamped
+}
+
 TEST_F(ImageFiles, ExrRoundTripIsBitExact) {
     Image image(5, 3);
     // Finite values only: a NaN or infinite pixel is refused where images

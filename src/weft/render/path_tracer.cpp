@@ -80,7 +80,7 @@ Rgb directLight(const Scene& scene, const ShadingPoint& bsdf, const TubeHit& hit
 }  // namespace
 
 Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, SampleStream& stream,
-                 const PathTracerOptions& options, PathCounters& counters) {
+                 const PathTracerOptions& options, PathCounters& counters, FirstHit* first) {
     const auto& lights = scene.lights();
     const double lightPick = lights.empty() ? 0.0 : 1.0 / static_cast<double>(lights.size());
     const bool nee = options.nextEventEstimation && !lights.empty();
@@ -124,6 +124,12 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Sampl
         }
 
         const ShadingPoint bsdf(scene, hit, -dir, throughput);
+        if (depth == 0 && first) {
+            first->hit = true;
+            first->depth = hit.t;
+            first->normal = dot(hit.normal, dir) > 0 ? -hit.normal : hit.normal;
+            first->geometry = hit.id.geometry;
+        }
 
         if (nee) {
             const int pick = std::min(static_cast<int>(stream.get1D() * lights.size()),
@@ -136,6 +142,7 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Sampl
         const std::array<double, 2> dirU = stream.get2D();
         const BsdfSampleInput u = {lobeU, dirU[0], dirU[1]};
         const BsdfSample s = bsdf.sample(u, stream.rng());
+        if (depth == 0 && first && s.valid()) first->albedo = s.weight;
         if (!s.valid() || s.weight.isBlack()) break;
         throughput *= s.weight;
         if (!throughput.isFinite()) break;

@@ -57,7 +57,21 @@ struct PathCounters {
     uint64_t truncated = 0;  // paths cut at maxDepth
 };
 
+// What a camera ray met first, for the render passes (renderer.h, issue 43):
+// filled by pathRadiance when asked for.
+struct FirstHit {
+    bool hit = false;  // a tube or an object (not a light, not the sky)
+    double depth = 0;  // distance along the unit ray to the hit
+    Vec3 normal;       // world shading normal there, turned towards the ray's origin
+    // The weight of the BSDF sample drawn there (eval / pdf, 0 when absorbed):
+    // an unbiased estimate of the BSDF's albedo for that incident direction.
+    Rgb albedo;
+    uint32_t geometry = kNoTube;  // TubeHit::id.geometry
+};
+
+// `first`, when not null, receives the first hit of the path.
 Rgb pathRadiance(const Scene& scene, const Vec3& org, const Vec3& dir, SampleStream& stream,
-                 const PathTracerOptions& options, PathCounters& counters);
+                 const PathTracerOptions& options, PathCounters& counters,
+                 FirstHit* first = nullptr);
 
 }  // namespace weft::render

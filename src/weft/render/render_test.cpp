@@ -602,6 +602,53 @@ TEST_F(RenderTest, CheckpointsAreTheWholeRenderSoFar) {
     EXPECT_EQ(render(s, options).image.pixels, last.image.pixels);
 }
 
+// Issue 43, item 4: the render passes. A lossless fiber's first BSDF sample
+// has channel-average weight exactly 1 (fiber_bcsdf.h picks lobes by the
+// throughput: WhiteFurnaceOfLosslessFibers), so on a yarn that fills the
+// frame the albedo pass is exactly 1 everywhere; depth is the camera's
+// distance to the yarn's front, the normal faces the camera, yarn_id is
+// entry 0 + 1. Looking away from the yarn every pass is 0.
+TEST_F(RenderTest, PassesGiveTheFirstHitsAlbedoNormalDepthAndYarn) {
+    SceneDesc desc =
+        scene(writeLosslessModel(), R"([{"type": "constant", "radiance": [1, 1, 1]}])");
+    desc.yarns[0].radius = 0.3;  // fills the 5-degree view
+    RenderOptions options;
+    options.spp = 16;
+    options.quiet = true;
+    options.aovs = kAovAlbedo | kAovNormal | kAovDepth | kAovYarnId;
+    const Scene filled(desc, inMode("fiber"));
+    const RenderResult r = render(filled, options);
+    ASSERT_EQ(r.aovs.size(), 4u);
+    EXPECT_EQ(r.aovs[0].first, "albedo");
+    EXPECT_EQ(r.aovs[3].first, "yarn_id");
+    const Image &albedo = r.aovs[0].second, &normal = r.aovs[1].second, &depth = r.aovs[2].second,
+                &id = r.aovs[3].second;
+    for (int y = 0; y < 12; ++y)
+        for (int x = 0; x < 12; ++x) {
+            EXPECT_NEAR(albedo.get(x, y).average(), 1.0, 1e-5) << x << " " << y;
+            EXPECT_EQ(id.get(x, y).r, 1.0);
+            EXPECT_GT(normal.get(x, y).b, 0.2);  // fibers turned towards the camera at +z
+            // The front of the yarn (1 - 0.3) and of its plies and fibers behind it.
+            EXPECT_GT(depth.get(x, y).r, 0.65);
+            EXPECT_LT(depth.get(x, y).r, 0.85);
+        }
+    // The passes do not change the image.
+    options.aovs = 0;
+    EXPECT_EQ(render(filled, options).image.pixels, r.image.pixels);
+    // Looking away: the sky only.
+    desc.camera.to = {0, 0, 2};
+    options.aovs = kAovAlbedo | kAovNormal | kAovDepth | kAovYarnId;
+    const RenderResult away = render(Scene(desc, inMode("fiber")), options);
+    for (const auto& [name, pass] : away.aovs)
+        for (float v : pass.pixels) ASSERT_EQ(v, 0.0f) << name;
+    // Not with a shard; names are checked.
+    options.aovs = kAovDepth;
+    options.shard = Shard{0, 2};
+    weft::testing::expectInputError([&] { options.validate(); }, {"--aov", "--shard"});
+    EXPECT_EQ(parseAovs("depth,albedo"), unsigned(kAovDepth | kAovAlbedo));
+    weft::testing::expectInputError([] { parseAovs("albedo,z"); }, {"--aov", "\"z\"", "yarn_id"});
+}
+
 TEST(RenderOptions, BudgetsAndRangesAreValidated) {
     using weft::testing::expectInputError;
     RenderOptions o;

@@ -43,12 +43,48 @@ void RenderOptions::validate() const {
         (!std::isfinite(checkpointSeconds) || checkpointSeconds < 1 || checkpointSeconds > 1e6))
         throw InputError("--checkpoint " + std::to_string(checkpointSeconds) +
                          " is out of range: allowed [1, 1e6] seconds");
+    if (aovs != 0 && shard)
+        throw InputError(
+            "--aov does not apply to --shard parts: weft render merge merges the image "
+            "only; render the passes in one process");
     if (shard) {
         if (spp == 0)
             throw InputError("--shard needs --spp: a time budget has no fixed range of samples "
                              "to split");
         shard->validate(spp, "--shard", "samples per pixel");
     }
+}
+
+const char* aovName(Aov aov) {
+    switch (aov) {
+        case kAovAlbedo:
+            return "albedo";
+        case kAovNormal:
+            return "normal";
+        case kAovDepth:
+            return "depth";
+        case kAovYarnId:
+            return "yarn_id";
+    }
+    return "?";
+}
+
+unsigned parseAovs(const std::string& list) {
+    unsigned mask = 0;
+    size_t start = 0;
+    while (start <= list.size()) {
+        const size_t comma = std::min(list.find(',', start), list.size());
+        const std::string name = list.substr(start, comma - start);
+        bool known = false;
+        for (const Aov aov : kAovs)
+            if (name == aovName(aov)) mask |= aov, known = true;
+        if (!known)
+            throw InputError("--aov \"" + name +
+                             "\" is not a pass: allowed albedo, normal, depth, "
+                             "yarn_id (comma-separated)");
+        start = comma + 1;
+    }
+    return mask;
 }
 
 SamplerKind parseSampler(const std::string& name, const std::string& field) {
@@ -81,6 +117,11 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     std::vector<int64_t> tileSamples(static_cast<size_t>(tiles), 0);
     std::atomic<uint64_t> rays{0}, nonFinite{0}, paths{0}, truncated{0};
     std::atomic<bool> stopped{false};
+    // The passes' sums (3 albedo, 3 normal, 1 depth per pixel) and each
+    // pixel's first sample's id.
+    const bool withAovs = options.aovs != 0;
+    std::vector<double> passSum(withAovs ? static_cast<size_t>(width) * height * 7 : 0, 0.0);
+    std::vector<int> passId(withAovs ? static_cast<size_t>(width) * height : 0, 0);
 
     PathTracerOptions tracer;
     tracer.maxDepth = options.maxDepth;
@@ -132,8 +173,16 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                                     // them before the stream (same images).
                                     const std::array<double, 2> film = stream.get2D();
                                     camera.ray(x + film[1], y + film[0], &org, &dir);
-                                    const Rgb L =
-                                        pathRadiance(scene, org, dir, stream, tracer, counters);
+                                    FirstHit hit;
+                                    const Rgb L = pathRadiance(scene, org, dir, stream, tracer,
+                                                               counters, withAovs ? &hit : nullptr);
+                                    if (withAovs) {
+                                        double* p = &passSum[7 * pixel];
+                                        for (int c = 0; c < 3; ++c)
+                                            p[c] += hit.albedo[c], p[3 + c] += hit.normal[c];
+                                        p[6] += hit.hit ? hit.depth : 0.0;
+                                        if (s == 0) passId[pixel] = scene.passId(hit.geometry);
+                                    }
                                     if (!L.isFinite()) {
                                         ++dropped;
                                         continue;
@@ -166,6 +215,25 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                 for (int c = 0; c < 3; ++c)
                     r.image.pixels[i + c] = static_cast<float>(sum[i + c] * inv);
             }
+        for (const Aov aov : kAovs) {
+            if (!(options.aovs & aov)) continue;
+            Image pass(width, height);
+            for (int y = 0; y < height; ++y)
+                for (int x = 0; x < width; ++x) {
+                    const int64_t n =
+                        tileSamples[static_cast<size_t>((y / kTile) * tilesX + x / kTile)];
+                    const double inv = n > 0 ? 1.0 / static_cast<double>(n) : 0.0;
+                    const size_t pixel = static_cast<size_t>(y) * width + x;
+                    const double* p = &passSum[7 * pixel];
+                    Rgb v;
+                    if (aov == kAovAlbedo) v = Rgb(p[0], p[1], p[2]) * inv;
+                    if (aov == kAovNormal) v = Rgb(p[3], p[4], p[5]) * inv;
+                    if (aov == kAovDepth) v = Rgb(p[6] * inv);
+                    if (aov == kAovYarnId) v = Rgb(n > 0 ? passId[pixel] : 0);
+                    pass.set(x, y, v);
+                }
+            r.aovs.emplace_back(aovName(aov), std::move(pass));
+        }
         const auto [fewest, most] = std::minmax_element(tileSamples.begin(), tileSamples.end());
         const double seconds = secondsSince(start);
         RenderStats& st = r.stats;

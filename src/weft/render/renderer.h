@@ -35,6 +35,8 @@
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "weft/core/image.h"
 #include "weft/core/shard.h"
@@ -44,6 +46,19 @@
 namespace weft::render {
 
 struct RenderResult;
+
+// Render passes (issue 43, docs/render.md "Render passes"): what each
+// camera ray met first, averaged over the pixel's samples (yarn_id: its first
+// sample's). albedo: the first BSDF sample's weight (an unbiased estimate of
+// the BSDF's albedo there; 0 where the ray escapes); normal: the world
+// shading normal turned towards the camera (0 where it escapes); depth: the
+// distance to the first hit (0 where it escapes); yarn_id: the yarn entry i
+// as i + 1, object j as -(j + 1), 0 for the sky or a light.
+enum Aov : unsigned { kAovAlbedo = 1, kAovNormal = 2, kAovDepth = 4, kAovYarnId = 8 };
+inline constexpr Aov kAovs[] = {kAovAlbedo, kAovNormal, kAovDepth, kAovYarnId};
+const char* aovName(Aov aov);  // "albedo", "normal", "depth", "yarn_id"
+// "albedo,normal" -> a mask; InputError naming --aov and the allowed names otherwise.
+unsigned parseAovs(const std::string& list);
 
 struct RenderOptions {
     int spp = 0;         // > 0: this many samples per pixel
@@ -62,6 +77,7 @@ struct RenderOptions {
     // ends this many seconds after the last checkpoint (or the start).
     double checkpointSeconds = 0;
     std::function<void(const RenderResult&)> checkpoint;
+    unsigned aovs = 0;  // Aov bits: the passes to compute (not with a shard)
 
     // InputError naming the flag and its range (exactly one budget, threads
     // in [0, 1024], maxDepth in [1, 10000]; a shard needs spp and N <= spp;
@@ -102,6 +118,9 @@ struct RenderStats {
 struct RenderResult {
     Image image;  // linear RGB, the mean of the samples
     RenderStats stats;
+    // The passes asked for, in kAovs order: (name, image; depth and yarn_id
+    // in all three channels).
+    std::vector<std::pair<std::string, Image>> aovs;
 };
 
 RenderResult render(const Scene& scene, const RenderOptions& options);

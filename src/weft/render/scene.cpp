@@ -384,14 +384,16 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
                         along[k] = materials.material(y, plies[j].colours[k]);
                 }
                 const int first = vertexColoured ? along.front() : material;
+                uint32_t id = kNoTube;
                 if (mode.drawsPlies()) {
-                    accel_->addGeometry({toTube(plies[j])}, first, std::move(along));
+                    id = accel_->addGeometry({toTube(plies[j])}, first, std::move(along));
                 } else {
                     // Seeded by where the ply is, not by the render seed.
                     const uint64_t seed = mixBits(mixBits(mixBits(y + 1) ^ (c + 1)) ^ (j + 1));
-                    accel_->addGeometry(fiberTubes(plies[j], fibers, seed), first,
-                                        std::move(along));
+                    id = accel_->addGeometry(fiberTubes(plies[j], fibers, seed), first,
+                                             std::move(along));
                 }
+                if (id != kNoTube) passIds_.push_back(static_cast<int>(y) + 1);
             }
             progress.add();
         }
@@ -419,7 +421,8 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
         const int material = static_cast<int>(bsdfs_.size());
         bsdfs_.push_back(makeSurfaceBsdf(desc.objects[i].material, what + ".material"));
         plyFrame_.push_back(0);
-        accel_->addTriangles(t.vertices, t.indices, material);
+        if (accel_->addTriangles(t.vertices, t.indices, material) != kNoTube)
+            passIds_.push_back(-static_cast<int>(i) - 1);
     }
     accel_->commit();
     progress.finish();

@@ -126,6 +126,11 @@ class Scene {
     // it: the YarnBsdf (neural), DualScatteringBsdf (dual) or FiberBcsdf
     // (fiber) of its model.
     const Bsdf& bsdf(int material) const { return *bsdfs_[material]; }
+    // What a geometry of the accel draws, for the yarn_id pass: yarn entry i
+    // as i + 1, object j as -(j + 1); 0 for none (kNoTube).
+    int passId(uint32_t geometry) const {
+        return geometry < passIds_.size() ? passIds_[geometry] : 0;
+    }
     // The local frame of that BSDF at a hit: for plies the yarn frame (t, t x
     // n, n) of docs/design.md 2, for fibers the fiber frame with the tangent as
     // +x (fiber_bcsdf.h).
@@ -143,6 +148,7 @@ class Scene {
     std::vector<std::unique_ptr<Light>> lights_;
     std::vector<std::unique_ptr<Bsdf>> bsdfs_;  // one per material
     std::vector<uint8_t> plyFrame_;             // per material: its mode draws plies
+    std::vector<int> passIds_;                  // per accel geometry (passId)
     SceneBuildStats stats_;
 };
 

@@ -34,9 +34,12 @@
 #include "weft/core/curves.h"
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/image.h"
+#include "weft/core/image_io.h"
 #include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/limits.h"
+#include "weft/core/progress.h"
 #include "weft/core/rng.h"
 #include "weft/core/text_parse.h"
 #include "weft/eval/scene_gen.h"
@@ -532,6 +535,24 @@ void walkArgs(Options& o, const py::object& bins, const py::object& maxDepth,
     if (!shard.is_none()) o.shard = shardOf(shard);
 }
 
+// Progress of a long call with quiet=False, as lines on Python's sys.stderr,
+// which Jupyter shows (the process's own stderr, where the CLI writes, it
+// does not). Installed while the call runs; the lines come from worker
+// threads, which take the GIL to write them (every long call releases it).
+std::unique_ptr<ScopedProgressSink> progressToPython(bool quiet) {
+    if (quiet) return nullptr;
+    return std::make_unique<ScopedProgressSink>([](const std::string& line) {
+        py::gil_scoped_acquire gil;
+        try {
+            py::object err = py::module_::import("sys").attr("stderr");
+            err.attr("write")(line);
+            err.attr("flush")();
+        } catch (const py::error_already_set&) {
+            // sys.stderr closed or replaced by something that cannot write: drop the line.
+        }
+    });
+}
+
 py::object pyGatherFamily(const py::object& points, const py::object& paths, const py::object& out,
                           const py::object& box, const py::object& seed, const py::object& bins,
                           const py::object& maxDepth, const py::object& threads,
@@ -553,6 +574,7 @@ py::object pyGatherFamily(const py::object& points, const py::object& paths, con
     o.validate();
     const std::string dir = pathOf(out, "out");
     json summary;
+    const auto progress = progressToPython(quiet);
     {
         py::gil_scoped_release release;
         summary = familyGatherSummaryJson(o, gatherFamily(o, dir), dir);
@@ -624,6 +646,7 @@ py::dict pyGather(const py::object& preset, const py::object& params, const py::
         outPath = pathOf(out, "out");
         dir = std::make_unique<TempDirCommit>(outPath);  // fails now, not after the walks
     }
+    const auto progress = progressToPython(quiet);
     if (!shard.is_none()) {
         // A part: its integer sums (gather_merge.h), written for gather_merge with out=DIR.
         GatherSums sums;
@@ -795,6 +818,7 @@ py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object
             throw InputError(path + ": the folder " + parent.string() + " does not exist");
     }
     std::optional<FitResult> result;
+    const auto progress = progressToPython(quiet);
     {
         py::gil_scoped_release release;
         const RdmData rdm = loadRdm(rdmDir);
@@ -850,6 +874,54 @@ py::array_t<float> imageArray(const Image& image) {
     return pixels;
 }
 
+// weft.save_image: .exr (linear float) or .png (8-bit sRGB after 2^exposure,
+// clamped; exposure a number of stops or "auto", core/image.h autoExposure).
+py::object pySaveImage(const py::object& pathArg, const py::object& imageArg,
+                       const py::object& exposureArg) {
+    const std::string path = pathOf(pathArg, "path");
+    const std::string ext = lowercaseExtension(path);
+    if (ext != ".exr" && ext != ".png")
+        throw InputError("path " + path + ": expected .exr (linear) or .png (tone-mapped)");
+    const auto array =
+        py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(imageArg);
+    if (!array || array.ndim() != 3 || array.shape(2) != 3 || array.shape(0) < 1 ||
+        array.shape(1) < 1 || array.shape(0) > 16384 || array.shape(1) > 16384)
+        throw InputError("image: expected an (H, W, 3) array of floats, H and W in [1, 16384]");
+    Image image(static_cast<int>(array.shape(1)), static_cast<int>(array.shape(0)));
+    std::copy(array.data(), array.data() + image.pixels.size(), image.pixels.begin());
+    checkFinitePixels(image, "image");
+    double stops = 0;
+    bool automatic = false;
+    if (py::isinstance<py::str>(exposureArg)) {
+        if (exposureArg.cast<std::string>() != "auto")
+            throw InputError("exposure: expected stops (a number in [-64, 64]) or \"auto\"");
+        automatic = true;
+        stops = autoExposure(image);
+    } else {
+        stops = exposureArg.cast<double>();
+        if (!std::isfinite(stops) || std::abs(stops) > 64)
+            throw InputError("exposure " + formatNumber(stops) +
+                             " is out of range: allowed [-64, 64] stops, or \"auto\"");
+    }
+    if (ext == ".exr" && (automatic || stops != 0))
+        throw InputError("exposure applies to .png: an .exr stays linear");
+    {
+        py::gil_scoped_release release;
+        writeFileAtomic(path, ext == ".exr" ? encodeExr(image, path) : encodePng(image, stops));
+    }
+    return py::float_(stops);
+}
+
+py::array_t<float> pyReadImage(const py::object& pathArg) {
+    const std::string path = pathOf(pathArg, "path");
+    Image image;
+    {
+        py::gil_scoped_release release;
+        image = readImageOrPng(path);
+    }
+    return imageArray(image);
+}
+
 py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const py::object& spp,
                    const py::object& seconds, const py::object& threads, const py::object& seed,
                    bool nee, const std::string& yarnSampling, const py::object& sampler,
@@ -901,6 +973,7 @@ py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const
     options.validate();
     std::optional<render::RenderResult> result;
     std::string hash;
+    const auto progress = progressToPython(quiet);
     {
         py::gil_scoped_release release;
         hash = render::sceneHash(desc);
@@ -1298,14 +1371,23 @@ PYBIND11_MODULE(weft, m) {
 
     m.def("render", &pyRender, py::arg("scene"), py::kw_only(), py::arg("mode") = py::none(),
           py::arg("spp") = py::none(), py::arg("seconds") = py::none(), py::arg("threads") = 0,
-          py::arg("seed") = py::none(), py::arg("nee") = true, py::arg("yarn_sampling") = "tabulated",
-          py::arg("sampler") = py::none(), py::arg("base_dir") = py::none(),
-          py::arg("shard") = py::none(),
-          py::arg("quiet") = true,
+          py::arg("seed") = py::none(), py::arg("nee") = true,
+          py::arg("yarn_sampling") = "tabulated", py::arg("sampler") = py::none(),
+          py::arg("base_dir") = py::none(), py::arg("shard") = py::none(), py::arg("quiet") = true,
           "`weft render`: a scene file or dict to an (H,W,3) float32 linear RGB image and the "
           "statistics dict; mode (\"neural\", \"fiber\" or \"dual\") draws every yarn so, "
           "over the yarns' own \"mode\" (None: each yarn's, neural where it names none); "
-          "shard=(k, n) traces only shard k of n of the spp samples.");
+          "shard=(k, n) traces only shard k of n of the spp samples. quiet=False shows the "
+          "progress on sys.stderr (as Jupyter shows it). weft.save_image writes the image.");
+
+    m.def("save_image", &pySaveImage, py::arg("path"), py::arg("image"), py::kw_only(),
+          py::arg("exposure") = 0.0,
+          "Write an (H,W,3) linear RGB image (as render returns it): .exr as linear float, "
+          ".png as 8-bit sRGB after 2^exposure, clamped; exposure in stops or \"auto\" (the "
+          "99th percentile of the luminance to 0.9, as `weft render --exposure auto`). "
+          "Written atomically; returns the stops used.");
+    m.def("read_image", &pyReadImage, py::arg("path"),
+          "Read an .exr, .hdr or .png (decoded from sRGB) as an (H,W,3) float32 linear RGB array.");
 
     m.def("render_merge", &renderMerge, py::arg("parts"),
           "`weft render merge`: the sample-weighted mean of the PART.exr files (PART.json "

@@ -47,13 +47,35 @@ std::string formatDuration(double seconds) {
     return buf;
 }
 
+std::mutex sinkMutex;
+ProgressSink& installedSink() {
+    static ProgressSink* const sink = new ProgressSink;  // never destroyed
+    return *sink;
+}
+
+ProgressSink currentSink() {
+    const std::lock_guard<std::mutex> lock(sinkMutex);
+    return installedSink();
+}
+
 }  // namespace
+
+ScopedProgressSink::ScopedProgressSink(ProgressSink sink) {
+    const std::lock_guard<std::mutex> lock(sinkMutex);
+    previous_ = std::exchange(installedSink(), std::move(sink));
+}
+
+ScopedProgressSink::~ScopedProgressSink() {
+    const std::lock_guard<std::mutex> lock(sinkMutex);
+    installedSink() = std::move(previous_);
+}
 
 Progress::Progress(std::string label, uint64_t total, bool quiet)
     : label_(std::move(label)),
       total_(total),
+      sink_(currentSink()),
       quiet_(quiet),
-      tty_(::isatty(STDERR_FILENO) != 0),
+      tty_(!sink_ && ::isatty(STDERR_FILENO) != 0),
       intervalNs_(tty_ ? kTtyIntervalNs : kPlainIntervalNs),
       start_(Clock::now()),
       nextPrintNs_(quiet ? std::numeric_limits<int64_t>::max() : intervalNs_) {}
@@ -149,6 +171,10 @@ void Progress::print(int64_t now, bool final) {
         line += '\n';
     }
     // One write per line so that other stderr output does not split it.
+    if (sink_) {
+        sink_(line);
+        return;
+    }
     std::fwrite(line.data(), 1, line.size(), out_);
     std::fflush(out_);
 }

@@ -16,10 +16,27 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <mutex>
 #include <string>
 
 namespace weft {
+
+// Where progress lines go instead of stderr, for a host that owns the
+// standard error stream (the Python module sends them to sys.stderr, which
+// Jupyter shows). While a sink is installed, new Progress objects print plain
+// lines (no '\r' redraws) to it, one call per line, under their print lock.
+using ProgressSink = std::function<void(const std::string& line)>;
+class ScopedProgressSink {
+  public:
+    explicit ScopedProgressSink(ProgressSink sink);  // the previous one comes back after
+    ~ScopedProgressSink();
+    ScopedProgressSink(const ScopedProgressSink&) = delete;
+    ScopedProgressSink& operator=(const ScopedProgressSink&) = delete;
+
+  private:
+    ProgressSink previous_;
+};
 
 class Progress {
 public:
@@ -48,6 +65,7 @@ private:
 
     std::string label_;
     uint64_t total_;
+    ProgressSink sink_;  // the installed sink at construction, or none
     bool quiet_, tty_;
     int64_t intervalNs_;
     Clock::time_point start_;

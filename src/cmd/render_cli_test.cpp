@@ -537,6 +537,60 @@ TEST_F(RenderCliTest, BadInputIsNamed) {
     EXPECT_FALSE(std::filesystem::exists(path("a.exr")));
 }
 
+// Issue 43, item 5: an animation. Curves named with a frame pattern render
+// to numbered outputs; a frame whose files are the same renders the same
+// image (one seed for every frame: static parts do not flicker); frames
+// finished earlier are kept, a changed or partial one is rendered again;
+// --frame-shard K/N takes every N-th frame; a turntable turns the camera.
+TEST_F(RenderCliTest, AnimationFramesResumeShardAndTurntable) {
+    const std::string still = "-0.2 0 0\n0 0.01 0\n0.2 0 0\n";
+    writeFileAtomic(path("yarn.0001.txt"), still);
+    writeFileAtomic(path("yarn.0002.txt"), still);
+    writeFileAtomic(path("yarn.0003.txt"), "-0.2 0.02 0\n0 0.03 0\n0.2 0.02 0\n");
+    nlohmann::json scene = nlohmann::json::parse(readFile(path("scene.json")));
+    scene["yarns"][0]["curves"] = "yarn.%04d.txt";
+    writeFileAtomic(path("anim.json"), scene.dump());
+    expectUserError(run("render anim.json --out a.exr"), {"anim.json", "--frames"});
+    RunResult r = run("render anim.json --frames 1:3 --quiet --out a.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto pixels = [&](const std::string& f) { return readImage(path(f)).pixels; };
+    EXPECT_EQ(pixels("a.0001.exr"), pixels("a.0002.exr"));
+    EXPECT_NE(pixels("a.0001.exr"), pixels("a.0003.exr"));
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("a.0003.json"))).at("frame"), 3);
+    // Resume: 1 kept; 2 was partial, 3's curves changed: both rendered again.
+    nlohmann::json stats = nlohmann::json::parse(readFile(path("a.0002.json")));
+    stats["partial"] = true;
+    writeFileAtomic(path("a.0002.json"), stats.dump());
+    writeFileAtomic(path("yarn.0003.txt"), "-0.2 0.03 0\n0 0.03 0\n0.2 0.03 0\n");
+    r = run("render anim.json --frames 1:3 --quiet --out a.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(contains(r.out, R"({"exr":"a.0001.exr","frame":1,"kept":true})")) << r.out;
+    EXPECT_FALSE(contains(r.out, R"("frame":2,"kept")")) << r.out;
+    EXPECT_FALSE(contains(r.out, R"("frame":3,"kept")")) << r.out;
+    EXPECT_FALSE(nlohmann::json::parse(readFile(path("a.0002.json"))).at("partial").get<bool>());
+    // A shard of the frames, and --out's own pattern.
+    r = run("render anim.json --frames 1:3 --frame-shard 1/2 --quiet --out s-%02d.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(path("s-01.exr")));
+    EXPECT_TRUE(std::filesystem::exists(path("s-02.exr")));
+    EXPECT_FALSE(std::filesystem::exists(path("s-03.exr")));
+    // A turntable of a still yarn: frame 1 is the camera as given, frame 3 of 4 looks from behind.
+    r = run("render scene.json --frames 1:4 --turntable 360 --quiet --out t.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    ASSERT_EQ(run("render scene.json --quiet --out plain.exr").status, 0);
+    EXPECT_EQ(pixels("t.0001.exr"), pixels("plain.exr"));
+    EXPECT_NE(pixels("t.0002.exr"), pixels("plain.exr"));
+    // Bad patterns and flags are named.
+    scene["yarns"][0]["curves"] = "yarn.%x.txt";
+    writeFileAtomic(path("bad.json"), scene.dump());
+    expectUserError(run("render bad.json --frames 1:2 --out b.exr"), {"yarns[0].curves", "%0Nd"});
+    expectUserError(run("render anim.json --frames 3:1 --out b.exr"), {"--frames", "FIRST:LAST"});
+    expectUserError(run("render anim.json --frames 1:2 --shard 0/2 --out b.exr"),
+                    {"--frame-shard"});
+    expectUserError(run("render scene.json --frame-shard 0/2 --out b.exr"),
+                    {"--frame-shard", "--frames"});
+}
+
 // Issue 43, item 4: --aov writes IMAGE.<pass>.exr beside the image (listed in
 // the statistics' outputs); --exposure auto picks and records the stops.
 TEST_F(RenderCliTest, PassesAndAutoExposure) {

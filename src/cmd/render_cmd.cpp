@@ -2,6 +2,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -14,6 +15,7 @@
 #include "weft/core/file.h"
 #include "weft/core/image.h"
 #include "weft/core/image_io.h"
+#include "weft/core/json_message.h"
 #include "weft/core/text_parse.h"
 #include "weft/render/render_merge.h"
 #include "weft/render/renderer.h"
@@ -28,7 +30,9 @@ struct RenderCmdOptions {
     std::string scene, mode, out, yarnSampling = "tabulated", shard, sampler;
     int spp = 0, threads = 0;
     double seconds = 0, checkpoint = 0;
-    std::string exposure = "0", aovs;
+    std::string exposure = "0", aovs, frames, frameShard;
+    double turntable = 0;
+    CLI::Option* turntableOpt = nullptr;
     uint64_t seed = 0;
     CLI::Option *sppOpt = nullptr, *timeOpt = nullptr, *seedOpt = nullptr, *shardOpt = nullptr,
                 *samplerOpt = nullptr;
@@ -107,19 +111,18 @@ void writeRenderOutputs(const RenderOutputs& out, const Image& image,
     std::printf("%s\n", line.dump().c_str());
 }
 
-void runRender(const RenderCmdOptions& o) {
-    // Not CLI11-required: `weft render merge` does without them.
-    if (o.scene.empty() || o.out.empty())
-        throw InputError("weft render needs SCENE and --out IMAGE.exr (or: weft render merge "
-                         "PART.exr... --out IMAGE.exr)");
-    const unsigned aovs = o.aovs.empty() ? 0 : render::parseAovs(o.aovs);
-    const RenderOutputs outputs(o.out, o.scene, aovs);
-    const std::optional<double> exposure = parseExposure(o.exposure, "--exposure");
+// What every frame of one `weft render` shares.
+struct RenderSetup {
+    unsigned aovs = 0;
+    std::optional<double> exposure;
     render::SceneOptions sceneOptions;
-    if (!o.mode.empty()) sceneOptions.mode = render::yarnModeNamed(o.mode).name();
-    sceneOptions.quiet = o.quiet;
-    sceneOptions.yarn.sampling = parseYarnSampling(o.yarnSampling, "--yarn-sampling");
-    const render::SceneDesc desc = render::loadScene(o.scene);
+};
+
+// Renders `desc` to `outputs` (the whole of a plain render, one frame of an
+// animation); a render stopped by a signal writes what it has and throws
+// ExitStatus. `frame`: the frame number for the statistics, or none.
+void renderOne(const RenderCmdOptions& o, const RenderSetup& setup, const render::SceneDesc& desc,
+               const RenderOutputs& outputs, std::optional<int> frame) {
     checkOutputsSpareInputs(render::sceneInputs(desc, o.scene), outputs.paths());
     // Before the scene is built and rendered: a bad destination fails now.
     checkOutputsWritable(outputs.paths());
@@ -138,11 +141,11 @@ void runRender(const RenderCmdOptions& o) {
     options.quiet = o.quiet;
     if (o.shardOpt->count()) options.shard = Shard::parse(o.shard, "--shard");
     options.checkpointSeconds = o.checkpoint;
-    options.aovs = aovs;
+    options.aovs = setup.aovs;
     options.validate();
 
     const std::string hash = render::sceneHash(desc);
-    const render::Scene scene(desc, sceneOptions);
+    const render::Scene scene(desc, setup.sceneOptions);
     if (!o.quiet)
         for (const std::string& w :
              render::yarnOverlapWarnings(desc.path, scene.stats().yarnOverlap))
@@ -155,15 +158,16 @@ void runRender(const RenderCmdOptions& o) {
         stats["scene_file"] = o.scene;
         stats["scene_hash"] = hash;
         stats["next_event_estimation"] = !o.noNee;
-        stats["yarn_sampling"] = yarnSamplingName(sceneOptions.yarn.sampling);
+        stats["yarn_sampling"] = yarnSamplingName(setup.sceneOptions.yarn.sampling);
         stats["max_depth"] = options.maxDepth;
         stats["version"] = WEFT_VERSION;
+        if (frame) stats["frame"] = *frame;
         return stats;
     };
     // The image so far, every --checkpoint seconds (partial: true in its statistics).
     options.checkpoint = [&](const render::RenderResult& partial) {
         nlohmann::json stats = statsOf(partial.stats);
-        writeRenderFiles(outputs, partial.image, partial.aovs, stats, exposure);
+        writeRenderFiles(outputs, partial.image, partial.aovs, stats, setup.exposure);
     };
     // The first SIGINT or SIGTERM: the tiles in flight finish, the image so far is written.
     const StopOnSignal stop("the image of the samples traced so far");
@@ -175,7 +179,7 @@ void runRender(const RenderCmdOptions& o) {
     if (result.stats.nonFiniteSamples > 0)
         std::fprintf(stderr, "weft: warning: %lld samples were NaN or infinite and were dropped\n",
                      static_cast<long long>(result.stats.nonFiniteSamples));
-    writeRenderOutputs(outputs, result.image, result.aovs, statsOf(result.stats), exposure);
+    writeRenderOutputs(outputs, result.image, result.aovs, statsOf(result.stats), setup.exposure);
     if (result.stats.partial) {
         const int signal = StopOnSignal::signal();
         std::fprintf(
@@ -188,6 +192,101 @@ void runRender(const RenderCmdOptions& o) {
                                           : "the time budget",
             outputs.exr.c_str(), outputs.json.c_str());
         throw ExitStatus{128 + (signal != 0 ? signal : SIGINT)};
+    }
+}
+
+// "A:B" (A <= B, both in [0, kMaxFrame]); InputError naming --frames otherwise.
+std::pair<int, int> parseFrames(const std::string& text) {
+    const size_t colon = text.find(':');
+    int a = 0, b = 0;
+    if (colon == std::string::npos || !parseNumber(std::string_view(text).substr(0, colon), &a) ||
+        !parseNumber(std::string_view(text).substr(colon + 1), &b) || a < 0 || b < a ||
+        b > render::kMaxFrame)
+        throw InputError("--frames \"" + text + "\": expected FIRST:LAST, 0 <= FIRST <= LAST <= " +
+                         std::to_string(render::kMaxFrame));
+    return {a, b};
+}
+
+// A frame finished earlier: its statistics say complete, of this frame's scene
+// (hash) and of the samples asked for.
+bool finishedEarlier(const RenderOutputs& outputs, const std::string& hash, int spp) {
+    std::error_code ec;
+    if (!std::filesystem::exists(outputs.exr, ec) || !std::filesystem::exists(outputs.json, ec))
+        return false;
+    try {
+        const nlohmann::json stats = nlohmann::json::parse(readFile(outputs.json));
+        return !stats.value("partial", true) && stats.value("scene_hash", "") == hash &&
+               (spp == 0 || stats.value("spp", 0) == spp);
+    } catch (const std::exception&) {
+        return false;
+    }
+}
+
+void runRender(const RenderCmdOptions& o) {
+    // Not CLI11-required: `weft render merge` does without them.
+    if (o.scene.empty() || o.out.empty())
+        throw InputError(
+            "weft render needs SCENE and --out IMAGE.exr (or: weft render merge "
+            "PART.exr... --out IMAGE.exr)");
+    RenderSetup setup;
+    setup.aovs = o.aovs.empty() ? 0 : render::parseAovs(o.aovs);
+    setup.exposure = parseExposure(o.exposure, "--exposure");
+    if (!o.mode.empty()) setup.sceneOptions.mode = render::yarnModeNamed(o.mode).name();
+    setup.sceneOptions.quiet = o.quiet;
+    setup.sceneOptions.yarn.sampling = parseYarnSampling(o.yarnSampling, "--yarn-sampling");
+    render::SceneDesc desc = render::loadScene(o.scene);
+    if (!o.frames.empty()) {
+        const auto [a, b] = parseFrames(o.frames);
+        desc.animation.first = a, desc.animation.last = b;
+    }
+    if (o.turntableOpt->count()) {
+        if (!std::isfinite(o.turntable) || std::abs(o.turntable) > 3600)
+            throw InputError("--turntable " + formatNumber(o.turntable) +
+                             " is out of range: allowed [-3600, 3600] degrees");
+        desc.animation.turntableDeg = o.turntable;
+    }
+    const bool animated =
+        render::isAnimated(desc) || desc.animation.hasRange() || desc.animation.turntableDeg != 0;
+    if (!animated) {
+        if (!o.frameShard.empty())
+            throw InputError("--frame-shard applies to an animation (--frames)");
+        renderOne(o, setup, desc, RenderOutputs(o.out, o.scene, setup.aovs), std::nullopt);
+        return;
+    }
+    if (!desc.animation.hasRange())
+        throw InputError(o.scene +
+                         ": an animation (a frame pattern in a file name, or a "
+                         "turntable) needs its frames: \"animation\": {\"frames\": [FIRST, LAST]} "
+                         "or --frames FIRST:LAST");
+    if (o.shardOpt->count())
+        throw InputError(
+            "--shard splits one image's samples; an animation splits its frames: "
+            "--frame-shard K/N");
+    // Every frame by default: shard 0 of 1.
+    const Shard frameShard =
+        o.frameShard.empty() ? Shard{0, 1} : Shard::parse(o.frameShard, "--frame-shard");
+    // IMAGE.%04d.exr unless --out names its own pattern.
+    std::string pattern = o.out;
+    if (!render::hasFramePattern(pattern)) {
+        const std::string stem = outputStem(o.out);
+        pattern = stem + ".%04d" + o.out.substr(stem.size());
+    }
+    render::frameFileName(pattern, 0, "--out");
+    const int first = desc.animation.first, last = desc.animation.last;
+    for (int f = first; f <= last; ++f) {
+        if ((f - first) % frameShard.count != frameShard.index) continue;
+        const render::SceneDesc frameDesc = render::sceneAtFrame(desc, f, first, last);
+        const RenderOutputs outputs(render::frameFileName(pattern, f, "--out"), o.scene,
+                                    setup.aovs);
+        if (finishedEarlier(
+                outputs, render::sceneHash(frameDesc),
+                o.sppOpt->count() ? o.spp : (o.timeOpt->count() ? 0 : desc.render.spp))) {
+            std::printf("%s\n", nlohmann::json({{"frame", f}, {"exr", outputs.exr}, {"kept", true}})
+                                    .dump()
+                                    .c_str());
+            continue;
+        }
+        renderOne(o, setup, frameDesc, outputs, f);
     }
 }
 
@@ -263,6 +362,18 @@ void addRenderCommand(CLI::App& app) {
     cmd->add_flag("--quiet", o->quiet,
                   "No progress output and no warning about yarns that overlap (the statistics "
                   "still record yarn_overlap)");
+    cmd->add_option("--frames", o->frames,
+                    "FIRST:LAST: render these frames of an animation (file names with a frame "
+                    "pattern such as knit.%04d.bcc, docs/render.md \"Animation\"), over the "
+                    "scene's animation.frames; outputs IMAGE.%04d.exr (or --out's own pattern); "
+                    "frames finished earlier are kept");
+    cmd->add_option("--frame-shard", o->frameShard,
+                    "K/N: render only frames FIRST + K, FIRST + K + N, ... (a Slurm array task "
+                    "each, docs/cluster.md)");
+    o->turntableOpt = cmd->add_option(
+        "--turntable", o->turntable,
+        "DEGREES: turn the camera about +y through camera.to by this much over the frames "
+        "(an animation: needs --frames), [-3600, 3600]");
     o->shardOpt = cmd->add_option(
         "--shard", o->shard,
         "K/N: trace only shard K (0..N-1) of N of the --spp samples, [K spp/N, (K+1) spp/N) of "

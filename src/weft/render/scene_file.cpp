@@ -18,6 +18,7 @@
 #include "weft/core/json_file.h"
 #include "weft/core/json_message.h"
 #include "weft/core/json_reader.h"
+#include "weft/core/math.h"
 #include "weft/core/text_parse.h"
 #include "weft/render/scene_reader.h"
 #include "weft/render/yarn_mode.h"
@@ -142,7 +143,7 @@ YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
 SceneDesc parseScene(const json& j, const std::string& pathForErrors, const std::string& baseDir) {
     JsonObjectReader r(j, pathForErrors.empty() ? "scene" : pathForErrors, "",
                        JsonIntegers::WholeNumbers);
-    r.allowKeys({"camera", "film", "render", "lights", "yarns", "objects"});
+    r.allowKeys({"camera", "film", "render", "lights", "yarns", "objects", "animation"});
     SceneDesc s;
     s.path = pathForErrors;
     s.baseDir = baseDir;
@@ -158,6 +159,27 @@ SceneDesc parseScene(const json& j, const std::string& pathForErrors, const std:
     if (r.has("objects"))
         for (JsonObjectReader& object : r.objects("objects"))
             s.objects.push_back(readObject(std::move(object), baseDir));
+    if (r.has("animation")) {
+        const JsonObjectReader a = r.object("animation", {"frames", "turntable_deg"});
+        if (a.has("frames")) {
+            const std::vector<int64_t> f = a.integers("frames", 2, 2, {0, kMaxFrame});
+            if (f[1] < f[0])
+                a.failOutOfRange("frames",
+                                 "[" + std::to_string(f[0]) + ", " + std::to_string(f[1]) + "]",
+                                 "[first, last] with first <= last");
+            s.animation.first = static_cast<int>(f[0]);
+            s.animation.last = static_cast<int>(f[1]);
+        }
+        if (a.has("turntable_deg"))
+            s.animation.turntableDeg = a.number("turntable_deg", NumberRange::closed(-3600, 3600));
+    }
+    // Every pattern must be well formed (checked now, not at the first frame).
+    for (size_t i = 0; i < s.yarns.size(); ++i) {
+        frameFileName(s.yarns[i].curves, 0, jsonIndexPath("yarns", i) + ".curves");
+        frameFileName(s.yarns[i].vertexColours, 0, jsonIndexPath("yarns", i) + ".vertex_colours");
+    }
+    for (size_t i = 0; i < s.objects.size(); ++i)
+        frameFileName(s.objects[i].file, 0, jsonIndexPath("objects", i) + ".file");
     return s;
 }
 
@@ -209,6 +231,11 @@ json toJson(const SceneDesc& scene) {
         yarns.push_back(std::move(yj));
     }
     j["yarns"] = std::move(yarns);
+    if (scene.animation.hasRange() || scene.animation.turntableDeg != 0) {
+        json a = {{"turntable_deg", scene.animation.turntableDeg}};
+        if (scene.animation.hasRange()) a["frames"] = {scene.animation.first, scene.animation.last};
+        j["animation"] = std::move(a);
+    }
     // Written only when there are some, so that a scene without keeps its hash.
     if (!scene.objects.empty()) {
         json objects = json::array();
@@ -216,6 +243,74 @@ json toJson(const SceneDesc& scene) {
         j["objects"] = std::move(objects);
     }
     return j;
+}
+
+namespace {
+
+// The position and width of a name's frame pattern ("%d": width 0), or npos.
+struct FramePattern {
+    size_t at = std::string::npos, length = 0;
+    int width = 0;
+};
+FramePattern findFramePattern(const std::string& name, const std::string& what) {
+    FramePattern p;
+    for (size_t i = 0; i < name.size(); ++i) {
+        if (name[i] != '%') continue;
+        size_t k = i + 1;
+        int width = 0;
+        if (k + 1 < name.size() && name[k] == '0' && name[k + 1] >= '1' && name[k + 1] <= '9')
+            width = name[k + 1] - '0', k += 2;
+        if (k >= name.size() || name[k] != 'd')
+            throw InputError(what + ": \"" + name +
+                             "\" has a '%' that is not a frame pattern (%d or %0Nd, N in [1, 9])");
+        if (p.at != std::string::npos)
+            throw InputError(what + ": \"" + name + "\" has more than one frame pattern");
+        p = {i, k + 1 - i, width};
+        i = k;
+    }
+    return p;
+}
+
+}  // namespace
+
+bool hasFramePattern(const std::string& name) {
+    return findFramePattern(name, "file").at != std::string::npos;
+}
+
+std::string frameFileName(const std::string& pattern, int frame, const std::string& what) {
+    const FramePattern p = findFramePattern(pattern, what);
+    if (p.at == std::string::npos) return pattern;
+    std::string number = std::to_string(frame);
+    if (static_cast<int>(number.size()) < p.width)
+        number.insert(0, static_cast<size_t>(p.width) - number.size(), '0');
+    return pattern.substr(0, p.at) + number + pattern.substr(p.at + p.length);
+}
+
+bool isAnimated(const SceneDesc& scene) {
+    for (const YarnDesc& y : scene.yarns)
+        if (hasFramePattern(y.curves) || hasFramePattern(y.vertexColours)) return true;
+    for (const ObjectDesc& o : scene.objects)
+        if (hasFramePattern(o.file)) return true;
+    return false;
+}
+
+SceneDesc sceneAtFrame(const SceneDesc& scene, int frame, int first, int last) {
+    SceneDesc s = scene;
+    for (size_t i = 0; i < s.yarns.size(); ++i) {
+        s.yarns[i].curves = frameFileName(s.yarns[i].curves, frame, "curves");
+        s.yarns[i].vertexColours = frameFileName(s.yarns[i].vertexColours, frame, "vertex_colours");
+    }
+    for (ObjectDesc& o : s.objects) o.file = frameFileName(o.file, frame, "file");
+    if (scene.animation.turntableDeg != 0) {
+        const double angle = radians(scene.animation.turntableDeg) * (frame - first) /
+                             static_cast<double>(last - first + 1);
+        const double c = std::cos(angle), sn = std::sin(angle);
+        const Vec3 d = s.camera.from - s.camera.to;
+        s.camera.from = s.camera.to + Vec3{c * d.x + sn * d.z, d.y, -sn * d.x + c * d.z};
+        const Vec3 u = s.camera.up;
+        s.camera.up = {c * u.x + sn * u.z, u.y, -sn * u.x + c * u.z};
+    }
+    return s;
 }
 
 std::vector<CommandPath> sceneInputs(const SceneDesc& scene, const std::string& scenePath) {

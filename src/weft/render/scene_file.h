@@ -91,6 +91,18 @@ struct YarnDesc {
     std::string mode;
 };
 
+// An animation (issue 43, docs/render.md "Animation"): file names with a
+// frame pattern ("knit.%04d.bcc": one %d or %0Nd, N in [1, 9]) read the
+// file of each frame; frames first..last are rendered by
+// `weft render --frames` (which may override them); turntableDeg turns the
+// camera about the vertical (+y) through camera.to by that many degrees over
+// the frames (frame f at turntableDeg (f - first) / (last - first + 1)).
+struct AnimationDesc {
+    int first = 0, last = -1;  // last < first: no range given
+    double turntableDeg = 0;   // finite, |.| <= 3600
+    bool hasRange() const { return last >= first; }
+};
+
 struct SceneDesc {
     std::string path;     // the scene file (for messages); "" when parsed from memory
     std::string baseDir;  // folder relative paths were resolved against
@@ -100,7 +112,20 @@ struct SceneDesc {
     std::vector<std::shared_ptr<const LightDesc>> lights;  // empty: the procedural sky
     std::vector<YarnDesc> yarns;    // may be empty (an environment-only scene)
     std::vector<ObjectDesc> objects;  // floors, backdrops, meshes (scene_objects.h)
+    AnimationDesc animation;          // "animation": {"frames": [first, last], "turntable_deg"}
 };
+
+// Largest frame number (and span) an animation takes.
+inline constexpr int kMaxFrame = 9999999;
+// Whether a file name holds a frame pattern (%d or %0Nd), and the name for
+// frame f; InputError naming `what` for a malformed or repeated pattern.
+bool hasFramePattern(const std::string& name);
+std::string frameFileName(const std::string& pattern, int frame, const std::string& what);
+// Whether any file of the scene (curves, vertex colours, meshes) is a frame pattern.
+bool isAnimated(const SceneDesc& scene);
+// The scene of frame `frame` of `first..last` (the range the render uses):
+// every pattern filled in, the camera turned by the turntable.
+SceneDesc sceneAtFrame(const SceneDesc& scene, int frame, int first, int last);
 
 // Parses and validates a scene; `pathForErrors` names it in messages ("scene"
 // when empty) and relative paths resolve against `baseDir`.

@@ -278,7 +278,7 @@ TEST(SceneFile, UnknownKeysAreNamedWithTheirPath) {
                       "fov_deg)"});
     expectInputError([] { parseJson(fullWith("/cameras", json::object())); },
                      {"scene.json: unknown key \"cameras\" (allowed: camera, film, render, "
-                      "lights, yarns, objects)"});
+                      "lights, yarns, objects, animation)"});
     expectInputError([] { parseJson(fullWith("/film/depth", 8)); },
                      {"film: unknown key \"depth\" (allowed: width, height)"});
     expectInputError([] { parseJson(fullWith("/render/samples", 8)); },
@@ -1168,6 +1168,31 @@ TEST(SceneFileFuzz, MutatedScenesParseOrThrowInputError) {
         "%.2f s\n",
         kCases, accepted + rejected, accepted, rejected, seconds);
     EXPECT_GE(kCases, 10000u);
+}
+
+// Issue 43, item 5: frame patterns and the turntable.
+TEST(SceneAnimation, FramePatternsAndTheTurntable) {
+    EXPECT_EQ(frameFileName("knit.%04d.bcc", 7, "c"), "knit.0007.bcc");
+    EXPECT_EQ(frameFileName("knit.%d.bcc", 12345, "c"), "knit.12345.bcc");
+    EXPECT_EQ(frameFileName("knit.%02d.bcc", 123, "c"), "knit.123.bcc");
+    EXPECT_EQ(frameFileName("plain.bcc", 3, "c"), "plain.bcc");
+    EXPECT_TRUE(hasFramePattern("a%d.txt"));
+    EXPECT_FALSE(hasFramePattern("a.txt"));
+    weft::testing::expectInputError([] { frameFileName("a%d%d.txt", 1, "yarns[0].curves"); },
+                                    {"yarns[0].curves", "more than one"});
+    weft::testing::expectInputError([] { frameFileName("a%s.txt", 1, "yarns[0].curves"); },
+                                    {"yarns[0].curves", "%0Nd"});
+    SceneDesc s;
+    s.camera.from = {0, 1, 2};
+    s.camera.to = {0, 1, 0};
+    s.animation = {10, 13, 360};
+    // Frame 11 of 10..13: a quarter turn about +y through `to`.
+    const SceneDesc f = sceneAtFrame(s, 11, 10, 13);
+    EXPECT_NEAR(f.camera.from.x, 2, 1e-12);
+    EXPECT_NEAR(f.camera.from.y, 1, 1e-12);
+    EXPECT_NEAR(f.camera.from.z, 0, 1e-12);
+    EXPECT_EQ(f.camera.to, s.camera.to);
+    EXPECT_EQ(sceneAtFrame(s, 10, 10, 13).camera.from, s.camera.from);
 }
 
 }  // namespace

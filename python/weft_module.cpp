@@ -912,6 +912,23 @@ py::object pySaveImage(const py::object& pathArg, const py::object& imageArg,
     return py::float_(stops);
 }
 
+py::array_t<double> pyCurvesPoints(const py::object& pathArg) {
+    const std::string path = pathOf(pathArg, "path");
+    CurveSet set;
+    {
+        py::gil_scoped_release release;
+        set = readCurves(path);
+    }
+    py::array_t<double> points(std::vector<py::ssize_t>{static_cast<py::ssize_t>(set.pointCount()), 4});
+    double* out = points.mutable_data();
+    for (size_t c = 0; c < set.curves.size(); ++c)
+        for (const Vec3& p : set.curves[c].points) {
+            *out++ = static_cast<double>(c);
+            *out++ = p.x, *out++ = p.y, *out++ = p.z;
+        }
+    return points;
+}
+
 py::array_t<float> pyReadImage(const py::object& pathArg) {
     const std::string path = pathOf(pathArg, "path");
     Image image;
@@ -1031,9 +1048,23 @@ py::object pyScene(const std::string& kindName, const py::object& model, const p
                    const py::object& width, const py::object& height, const py::object& spp,
                    const py::object& envmap, const py::object& colours,
                    const py::object& appearances, const py::object& stripe,
-                   const py::object& dyeLength, const py::object& yarn) {
+                   const py::object& dyeLength, const py::object& yarn, const py::object& curves,
+                   const py::object& curveRadius, const std::string& view, bool floor) {
     const eval::SceneKind kind = eval::parseSceneKind(kindName);
     eval::SceneOptions o;
+    // The curves kind: a curve file framed whole (docs/scenes.md, "Your own curves").
+    if ((kind == eval::SceneKind::Curves) != !curves.is_none())
+        throw InputError(kind == eval::SceneKind::Curves
+                             ? "curves: the \"curves\" kind needs the curve file (curves=PATH)"
+                             : "curves= applies to the \"curves\" kind only");
+    if (!curves.is_none()) o.curves = pathOf(curves, "curves");
+    if (!curveRadius.is_none()) {
+        if (kind != eval::SceneKind::Curves)
+            throw InputError("curve_radius applies to the \"curves\" kind only (radius= elsewhere)");
+        o.curveRadius = curveRadius.cast<double>();
+    }
+    o.view = eval::parseCurvesView(view);
+    o.floor = floor;
     // A family model's yarn (docs/family.md): a dict as weft yarn at takes.
     if (!yarn.is_none())
         o.yarn = readUserJson(
@@ -1068,7 +1099,8 @@ py::object pyScene(const std::string& kindName, const py::object& model, const p
         for (size_t k = 0; k < py::len(list); ++k)
             o.appearances.push_back(srgbArg(list[k], jsonIndexPath("appearances", k)));
     }
-    checkOutputsSpareInputs({{"model", o.model}, {"envmap", o.envmap}}, {}, {}, {{"out", dir}});
+    checkOutputsSpareInputs({{"model", o.model}, {"envmap", o.envmap}, {"curves", o.curves}}, {}, {},
+                            {{"out", dir}});
     json summary;
     std::vector<std::string> warnings;
     {
@@ -1352,8 +1384,12 @@ PYBIND11_MODULE(weft, m) {
           py::arg("spp") = 64, py::arg("envmap") = py::none(), py::arg("colours") = py::none(),
           py::arg("appearances") = py::none(), py::arg("stripe") = py::none(),
           py::arg("dye_length") = py::none(), py::arg("yarn") = py::none(),
-          "`weft scene`: writes the generated scene folder `out` (\"closeup\", \"weave\" or "
-          "\"knit\") and returns its summary dict; colours=[(r, g, b)] colours every yarn, two "
+          py::arg("curves") = py::none(), py::arg("curve_radius") = py::none(),
+          py::arg("view") = "three-quarter", py::arg("floor") = false,
+          "`weft scene`: writes the generated scene folder `out` (\"closeup\", \"weave\", "
+          "\"knit\", or \"curves\" with curves=FILE framed whole from view=, its radius "
+          "curve_radius in the file's units or the largest without overlap; floor=True adds a "
+          "floor) and returns its summary dict; colours=[(r, g, b)] colours every yarn, two "
           "colours make a striped knit or a check weave (stripe yarns per stripe, default 2), or "
           "with "
           "dye_length=L space-dyed yarns (the colour alternating every L yarn radii); "
@@ -1380,6 +1416,10 @@ PYBIND11_MODULE(weft, m) {
           "shard=(k, n) traces only shard k of n of the spp samples. quiet=False shows the "
           "progress on sys.stderr (as Jupyter shows it). weft.save_image writes the image.");
 
+    m.def("curves_points", &pyCurvesPoints, py::arg("path"),
+          "`weft curves points`: the control points of a curve file as an (n, 4) float64 array "
+          "(curve index, x, y, z) in the file's order and units; an (n, 3) colour array in that "
+          "order, saved as .npy, is a yarn's vertex_colours (docs/scene-format.md).");
     m.def("save_image", &pySaveImage, py::arg("path"), py::arg("image"), py::kw_only(),
           py::arg("exposure") = 0.0,
           "Write an (H,W,3) linear RGB image (as render returns it): .exr as linear float, "

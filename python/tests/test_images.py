@@ -72,3 +72,23 @@ def test_progress_goes_to_python_stderr(tmp_path, monkeypatch):
     captured.truncate(0)
     weft.render(small_scene(tmp_path), base_dir=tmp_path)
     assert captured.getvalue() == ""
+
+
+def test_scene_of_your_own_curves_with_a_floor(cli, tmp_path):
+    knit = os.path.join(ROOT, "data", "curves", "knit-stockinette-tiny.bcc")
+    summary = weft.scene("curves", curves=knit, model=FLEECE, out=tmp_path / "mine", width=24,
+                         height=16, spp=1, floor=True, view="front")
+    assert summary["kind"] == "curves" and summary["objects"] == 1
+    assert summary["curve_file"]["radius_from"] == "largest_without_overlap"
+    cli("scene", "curves", knit, "--model", FLEECE, "--out", tmp_path / "cli", "--width", 24,
+        "--height", 16, "--spp", 1, "--floor", "--view", "front", "--quiet")
+    assert (tmp_path / "mine" / "scene.json").read_text().replace(str(tmp_path / "mine"), "") == \
+        (tmp_path / "cli" / "scene.json").read_text().replace(str(tmp_path / "cli"), "")
+    points = weft.curves_points(knit)
+    assert points.shape == (826, 4) and points[0, 0] == 0 and points[-1, 0] == 21
+    cli("curves", "points", knit, "--out", tmp_path / "p.npy")
+    np.testing.assert_array_equal(np.load(tmp_path / "p.npy"), points)
+    with pytest.raises(ValueError, match="curve file"):
+        weft.scene("curves", model=FLEECE, out=tmp_path / "x")
+    with pytest.raises(ValueError, match="--view"):
+        weft.scene("curves", curves=knit, model=FLEECE, out=tmp_path / "x", view="side")

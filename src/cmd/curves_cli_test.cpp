@@ -40,6 +40,20 @@ TEST_F(CurvesCliTest, PrintsTheReport) {
     const RunResult thin = run("curves info pair.txt --radius 0.1");
     ASSERT_EQ(thin.status, 0) << thin.err;
     EXPECT_TRUE(contains(thin.out, "overlap          at radius 0.1: none\n")) << thin.out;
+    EXPECT_FALSE(contains(thin.out, "note")) << thin.out;
+    // Issue 43, item 7: far thinner than the curves allow (a unit mistake?).
+    const RunResult tiny = run("curves info pair.txt --radius 0.0015");
+    ASSERT_EQ(tiny.status, 0) << tiny.err;
+    EXPECT_TRUE(contains(tiny.out,
+                         "note             radius 0.0015 is 1% of the largest radius "
+                         "without overlap"))
+        << tiny.out;
+    // Curves that cross: largest radius 0, and why.
+    writeFileAtomic(path("cross.txt"), "0 -1 0\n0 1 0\n\n-1 0 0\n1 0 0\n");
+    const RunResult cross = run("curves info cross.txt");
+    ASSERT_EQ(cross.status, 0) << cross.err;
+    EXPECT_TRUE(contains(cross.out, "why              curves 0 and 1 touch or cross at (0, 0, 0)"))
+        << cross.out;
     // Without --radius there is no overlap line.
     const RunResult plain = run("curves info pair.txt");
     ASSERT_EQ(plain.status, 0) << plain.err;

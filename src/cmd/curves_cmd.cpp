@@ -84,6 +84,12 @@ void printReport(const std::string& file, const CurveSet& set, const render::Cur
                                        std::to_string(r.overlap->curvesOverlapping) + " of " +
                                        std::to_string(r.curves) + " curves"
                                  : at + "none");
+        if (r.overlap->radius < render::kThinYarnFraction * r.largestRadiusWithoutOverlap())
+            printLine("note",
+                      "radius " + number(r.overlap->radius) + " is " +
+                          number(100 * r.overlap->radius / r.largestRadiusWithoutOverlap()) +
+                          "% of the largest radius without overlap: the yarns cover little "
+                          "of the space between the curves (units? docs/curves.md)");
     }
 }
 

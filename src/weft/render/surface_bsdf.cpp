@@ -31,23 +31,25 @@ Vec3 up(const Vec3& w, double side) { return {w.x, w.y, side * w.z}; }
 
 }  // namespace
 
+void TwoSidedBsdf::prepare(const Vec3& wi, BsdfIncident& in) const {
+    in.emplace(wi, SideState{sideOf(wi)});
+}
+
+double TwoSidedBsdf::side(const BsdfIncident& in) { return in.get<SideState>().side; }
+
 DiffuseBsdf::DiffuseBsdf(const Rgb& reflectance, const std::string& what)
     : reflectance_(reflectance) {
     checkColour(reflectance, what);
 }
 
-void DiffuseBsdf::prepare(const Vec3& wi, BsdfIncident& in) const {
-    in.emplace(wi, SideState{sideOf(wi)});
-}
-
 BsdfEval DiffuseBsdf::evalPdf(const BsdfIncident& in, const Vec3& wo) const {
-    const double cosO = in.get<SideState>().side * wo.z;
+    const double cosO = side(in) * wo.z;
     if (!(cosO > 0)) return {};
     return {reflectance_ * (kInvPi * cosO), cosineHemispherePdf(cosO)};
 }
 
 BsdfSample DiffuseBsdf::sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng&) const {
-    const Vec3 wo = up(sampleCosineHemisphere(u[1], u[2]), in.get<SideState>().side);
+    const Vec3 wo = up(sampleCosineHemisphere(u[1], u[2]), side(in));
     return BsdfSample::fromEval(wo, evalPdf(in, wo), 0);
 }
 
@@ -75,13 +77,9 @@ double ConductorBsdf::masking(const Vec3& w) const {
     return 1 / (1 + lambda);
 }
 
-void ConductorBsdf::prepare(const Vec3& wi, BsdfIncident& in) const {
-    in.emplace(wi, SideState{sideOf(wi)});
-}
-
 BsdfEval ConductorBsdf::evalPdf(const BsdfIncident& in, const Vec3& woIn) const {
-    const double side = in.get<SideState>().side;
-    const Vec3 wi = up(in.wi(), side), wo = up(woIn, side);
+    const double sign = side(in);
+    const Vec3 wi = up(in.wi(), sign), wo = up(woIn, sign);
     if (!(wi.z > 0) || !(wo.z > 0)) return {};
     const Vec3 sum = wi + wo;
     const double len = length(sum);
@@ -99,8 +97,8 @@ BsdfEval ConductorBsdf::evalPdf(const BsdfIncident& in, const Vec3& woIn) const 
 }
 
 BsdfSample ConductorBsdf::sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng&) const {
-    const double side = in.get<SideState>().side;
-    const Vec3 wi = up(in.wi(), side);
+    const double sign = side(in);
+    const Vec3 wi = up(in.wi(), sign);
     if (!(wi.z > 0)) return {};
     // h from D(h) cos h: tan^2 theta_h = a^2 u / (1 - u), phi uniform.
     const double tan2 = alpha_ * alpha_ * u[1] / std::max(1e-300, 1 - u[1]);
@@ -109,7 +107,7 @@ BsdfSample ConductorBsdf::sample(const BsdfIncident& in, const BsdfSampleInput& 
     const Vec3 h{sinH * std::cos(phi), sinH * std::sin(phi), cosH};
     const Vec3 wo = 2 * dot(wi, h) * h - wi;
     if (!(wo.z > 0)) return {};
-    return BsdfSample::fromEval(up(wo, side), evalPdf(in, up(wo, side)), 0);
+    return BsdfSample::fromEval(up(wo, sign), evalPdf(in, up(wo, sign)), 0);
 }
 
 }  // namespace weft::render

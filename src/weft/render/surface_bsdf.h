@@ -26,34 +26,40 @@
 
 namespace weft::render {
 
-class DiffuseBsdf final : public Bsdf {
+// What both share: prepare() records the side of the surface wi lies on
+// (side(in): +1 above, -1 below), which every lobe is mirrored by.
+class TwoSidedBsdf : public Bsdf {
+  public:
+    void prepare(const Vec3& wi, BsdfIncident& in) const final;
+    using Bsdf::evalPdf;
+    using Bsdf::sample;
+
+  protected:
+    static double side(const BsdfIncident& in);
+};
+
+class DiffuseBsdf final : public TwoSidedBsdf {
   public:
     // reflectance: each channel in [0, 1].
     DiffuseBsdf(const Rgb& reflectance, const std::string& what);
 
-    void prepare(const Vec3& wi, BsdfIncident& in) const override;
     BsdfEval evalPdf(const BsdfIncident& in, const Vec3& wo) const override;
     BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const override;
     size_t memoryBytes() const override { return sizeof(*this); }
-    using Bsdf::evalPdf;
-    using Bsdf::sample;
 
   private:
     Rgb reflectance_;
 };
 
-class ConductorBsdf final : public Bsdf {
+class ConductorBsdf final : public TwoSidedBsdf {
   public:
     // colour (F0): each channel in [0, 1]; roughness alpha in [kMinRoughness, 1].
     static constexpr double kMinRoughness = 0.01;
     ConductorBsdf(const Rgb& colour, double roughness, const std::string& what);
 
-    void prepare(const Vec3& wi, BsdfIncident& in) const override;
     BsdfEval evalPdf(const BsdfIncident& in, const Vec3& wo) const override;
     BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const override;
     size_t memoryBytes() const override { return sizeof(*this); }
-    using Bsdf::evalPdf;
-    using Bsdf::sample;
 
     // The microfacet distribution D(h) and Smith's G1(w) (h, w in the local frame).
     double distribution(const Vec3& h) const;

@@ -31,8 +31,6 @@ namespace weft::render {
 class TwoSidedBsdf : public Bsdf {
   public:
     void prepare(const Vec3& wi, BsdfIncident& in) const final;
-    using Bsdf::evalPdf;
-    using Bsdf::sample;
 
   protected:
     static double side(const BsdfIncident& in);
@@ -46,6 +44,8 @@ class DiffuseBsdf final : public TwoSidedBsdf {
     BsdfEval evalPdf(const BsdfIncident& in, const Vec3& wo) const override;
     BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const override;
     size_t memoryBytes() const override { return sizeof(*this); }
+    using Bsdf::evalPdf;
+    using Bsdf::sample;
 
   private:
     Rgb reflectance_;
@@ -60,6 +60,8 @@ class ConductorBsdf final : public TwoSidedBsdf {
     BsdfEval evalPdf(const BsdfIncident& in, const Vec3& wo) const override;
     BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const override;
     size_t memoryBytes() const override { return sizeof(*this); }
+    using Bsdf::evalPdf;
+    using Bsdf::sample;
 
     // The microfacet distribution D(h) and Smith's G1(w) (h, w in the local frame).
     double distribution(const Vec3& h) const;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "fuzz_util.h"
+#include "weft/core/error.h"
 #include "weft/render/render_merge.h"
 
 namespace {
@@ -39,8 +40,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         parts.push_back(stem + ".exr");
     }
     weft::fuzz::expectOnlyInputErrors([&] {
-        const weft::render::MergedRender merged = weft::render::mergeRenderParts(
-            parts, [&](const std::string& path) { return files.at(path); });
+        // As readFile: a file that is not there is an InputError (the merge
+        // looks for PART.render.json when PART.json holds no statistics).
+        const weft::render::MergedRender merged =
+            weft::render::mergeRenderParts(parts, [&](const std::string& path) {
+                const auto it = files.find(path);
+                if (it == files.end())
+                    throw weft::InputError("cannot read '" + path + "': No such file or directory");
+                return it->second;
+            });
         // What `weft render merge` then writes of the statistics.
         (void)merged.stats.dump(2);
         (void)merged.stats.at("mode").get<std::string>();

@@ -899,9 +899,7 @@ py::object pySaveImage(const py::object& pathArg, const py::object& imageArg,
         stops = autoExposure(image);
     } else {
         stops = exposureArg.cast<double>();
-        if (!std::isfinite(stops) || std::abs(stops) > 64)
-            throw InputError("exposure " + formatNumber(stops) +
-                             " is out of range: allowed [-64, 64] stops, or \"auto\"");
+        checkExposureStops(stops, "exposure");
     }
     if (ext == ".exr" && (automatic || stops != 0))
         throw InputError("exposure applies to .png: an .exr stays linear");
@@ -919,13 +917,9 @@ py::array_t<double> pyCurvesPoints(const py::object& pathArg) {
         py::gil_scoped_release release;
         set = readCurves(path);
     }
+    const std::vector<double> rows = pointRows(set);
     py::array_t<double> points(std::vector<py::ssize_t>{static_cast<py::ssize_t>(set.pointCount()), 4});
-    double* out = points.mutable_data();
-    for (size_t c = 0; c < set.curves.size(); ++c)
-        for (const Vec3& p : set.curves[c].points) {
-            *out++ = static_cast<double>(c);
-            *out++ = p.x, *out++ = p.y, *out++ = p.z;
-        }
+    std::copy(rows.begin(), rows.end(), points.mutable_data());
     return points;
 }
 

@@ -119,11 +119,7 @@ void runPoints(const CurvesPointsOptions& o) {
         throw InputError("--out " + o.out + ": expected a path ending in .npy");
     checkOutputsSpareInputs({{"FILE", o.file}}, {{"--out", o.out}});
     const CurveSet set = readCurves(o.file);
-    std::vector<double> rows;
-    rows.reserve(set.pointCount() * 4);
-    for (size_t c = 0; c < set.curves.size(); ++c)
-        for (const Vec3& p : set.curves[c].points)
-            rows.insert(rows.end(), {static_cast<double>(c), p.x, p.y, p.z});
+    const std::vector<double> rows = pointRows(set);
     writeNpy(o.out, rows.data(), {set.pointCount(), 4});
     std::printf("%s\n", nlohmann::json({{"file", o.file},
                                         {"out", o.out},

@@ -76,8 +76,7 @@ std::optional<double> parseExposure(const std::string& text, const std::string& 
     if (!parseNumber(std::string_view(text), &stops))
         throw InputError(flag + " \"" + text +
                          "\": expected stops (a number in [-64, 64]) or auto");
-    if (!std::isfinite(stops) || std::abs(stops) > 64)
-        throw InputError(flag + " " + text + " is out of range: allowed [-64, 64] stops, or auto");
+    checkExposureStops(stops, flag);
     return stops;
 }
 

@@ -86,6 +86,15 @@ size_t segmentCount(const CurveSet& set) {
     return n;
 }
 
+std::vector<double> pointRows(const CurveSet& set) {
+    std::vector<double> rows;
+    rows.reserve(set.pointCount() * 4);
+    for (size_t c = 0; c < set.curves.size(); ++c)
+        for (const Vec3& p : set.curves[c].points)
+            rows.insert(rows.end(), {static_cast<double>(c), p.x, p.y, p.z});
+    return rows;
+}
+
 Bounds3 bounds(const CurveSet& set) {
     Bounds3 b;
     for (const Curve& c : set.curves)

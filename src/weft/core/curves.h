@@ -100,6 +100,10 @@ void writeCurveText(const std::string& path, const CurveSet& set);
 size_t segmentCount(const Curve& curve);
 size_t segmentCount(const CurveSet& set);
 
+// The control points as rows (curve index, x, y, z), in file order: the
+// (n, 4) array of `weft curves points` and Python's curves_points.
+std::vector<double> pointRows(const CurveSet& set);
+
 // Box around all control points (for Catmull-Rom curves the spline may bulge
 // slightly beyond it). Radii are not included.
 Bounds3 bounds(const CurveSet& set);

@@ -9,6 +9,7 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/hash.h"
+#include "weft/core/json_message.h"
 
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #define STBI_WRITE_NO_STDIO
@@ -68,6 +69,12 @@ double autoExposure(const Image& image) {
     const double p99 = lum[k];
     if (!(p99 > 0) || !std::isfinite(p99)) return 0;
     return std::clamp(std::log2(kAutoExposureTarget / p99), -64.0, 64.0);
+}
+
+void checkExposureStops(double stops, const std::string& what) {
+    if (!std::isfinite(stops) || std::abs(stops) > 64)
+        throw InputError(what + " " + formatNumber(stops) +
+                         " is out of range: allowed [-64, 64] stops, or auto");
 }
 
 std::string encodePng(const Image& image, double exposure) {

@@ -65,6 +65,9 @@ inline Rgb srgbToLinear(const Rgb& c) {
 // within [-64, 64].
 inline constexpr double kAutoExposureTarget = 0.9;
 double autoExposure(const Image& image);
+// InputError "<what> <stops> is out of range: allowed [-64, 64] stops, or
+// auto" unless the stops are finite and within it.
+void checkExposureStops(double stops, const std::string& what);
 
 // PNG bytes of the image (8-bit sRGB, exposure in stops).
 std::string encodePng(const Image& image, double exposure = 0.0);

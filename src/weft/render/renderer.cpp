@@ -203,13 +203,16 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     };
 
     int passes = 0;
+    // The samples pixel (x, y) has: its tile's.
+    auto samplesAt = [&](int x, int y) {
+        return tileSamples[static_cast<size_t>((y / kTile) * tilesX + x / kTile)];
+    };
     auto result = [&](bool partial) {
         RenderResult r;
         r.image = Image(width, height);
         for (int y = 0; y < height; ++y)
             for (int x = 0; x < width; ++x) {
-                const int64_t n =
-                    tileSamples[static_cast<size_t>((y / kTile) * tilesX + x / kTile)];
+                const int64_t n = samplesAt(x, y);
                 const double inv = n > 0 ? 1.0 / static_cast<double>(n) : 0.0;
                 const size_t i = 3 * (static_cast<size_t>(y) * width + x);
                 for (int c = 0; c < 3; ++c)
@@ -220,8 +223,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
             Image pass(width, height);
             for (int y = 0; y < height; ++y)
                 for (int x = 0; x < width; ++x) {
-                    const int64_t n =
-                        tileSamples[static_cast<size_t>((y / kTile) * tilesX + x / kTile)];
+                    const int64_t n = samplesAt(x, y);
                     const double inv = n > 0 ? 1.0 / static_cast<double>(n) : 0.0;
                     const size_t pixel = static_cast<size_t>(y) * width + x;
                     const double* p = &passSum[7 * pixel];

@@ -55,7 +55,8 @@ struct RenderOutputs {
 
     RenderOutputs(const std::string& out, const std::string& sceneFile, unsigned aovs = 0)
         : exr(out), png(outputStem(out) + ".png"), json(outputStem(out) + ".json") {
-        if (sameFilePath(json, sceneFile)) json = outputStem(out) + render::kRenderStatsSuffix;
+        if (sameFilePath(json, sceneFile))
+            json = render::renamedRenderStatsPath(out, "--out " + out);
         for (const render::Aov aov : render::kAovs)
             if (aovs & aov)
                 passes.emplace_back(render::aovName(aov),
@@ -117,11 +118,19 @@ struct RenderSetup {
     render::SceneOptions sceneOptions;
 };
 
+// The spp a render of `desc` asks for: --spp, else the scene's; 0 for --time.
+int requestedSpp(const RenderCmdOptions& o, const render::SceneDesc& desc) {
+    return o.sppOpt->count() ? o.spp : (o.timeOpt->count() ? 0 : desc.render.spp);
+}
+
 // Renders `desc` to `outputs` (the whole of a plain render, one frame of an
 // animation); a render stopped by a signal writes what it has and throws
-// ExitStatus. `frame`: the frame number for the statistics, or none.
+// ExitStatus. `knownHash`: the scene's sceneHash when the caller has it (a
+// frame's resume check), else computed here. `frame`: the frame number for
+// the statistics, or none.
 void renderOne(const RenderCmdOptions& o, const RenderSetup& setup, const render::SceneDesc& desc,
-               const RenderOutputs& outputs, std::optional<int> frame) {
+               const std::optional<std::string>& knownHash, const RenderOutputs& outputs,
+               std::optional<int> frame) {
     checkOutputsSpareInputs(render::sceneInputs(desc, o.scene), outputs.paths());
     // Before the scene is built and rendered: a bad destination fails now.
     checkOutputsWritable(outputs.paths());
@@ -129,7 +138,7 @@ void renderOne(const RenderCmdOptions& o, const RenderSetup& setup, const render
     render::RenderOptions options;
     // Flags override the scene's spp; RenderOptions::validate checks that
     // exactly one budget is left and its range.
-    options.spp = o.sppOpt->count() ? o.spp : (o.timeOpt->count() ? 0 : desc.render.spp);
+    options.spp = requestedSpp(o, desc);
     options.seconds = o.timeOpt->count() ? o.seconds : 0;
     options.threads = o.threads;
     options.seed = o.seedOpt->count() ? o.seed : desc.render.seed;
@@ -143,7 +152,7 @@ void renderOne(const RenderCmdOptions& o, const RenderSetup& setup, const render
     options.aovs = setup.aovs;
     options.validate();
 
-    const std::string hash = render::sceneHash(desc);
+    const std::string hash = knownHash ? *knownHash : render::sceneHash(desc);
     const render::Scene scene(desc, setup.sceneOptions);
     if (!o.quiet)
         for (const std::string& w :
@@ -249,7 +258,8 @@ void runRender(const RenderCmdOptions& o) {
     if (!animated) {
         if (!o.frameShard.empty())
             throw InputError("--frame-shard applies to an animation (--frames)");
-        renderOne(o, setup, desc, RenderOutputs(o.out, o.scene, setup.aovs), std::nullopt);
+        renderOne(o, setup, desc, std::nullopt, RenderOutputs(o.out, o.scene, setup.aovs),
+                  std::nullopt);
         return;
     }
     if (!desc.animation.hasRange())
@@ -277,15 +287,15 @@ void runRender(const RenderCmdOptions& o) {
         const render::SceneDesc frameDesc = render::sceneAtFrame(desc, f, first, last);
         const RenderOutputs outputs(render::frameFileName(pattern, f, "--out"), o.scene,
                                     setup.aovs);
-        if (finishedEarlier(
-                outputs, render::sceneHash(frameDesc),
-                o.sppOpt->count() ? o.spp : (o.timeOpt->count() ? 0 : desc.render.spp))) {
+        // Hashed once: the resume check and the frame's statistics.
+        const std::string hash = render::sceneHash(frameDesc);
+        if (finishedEarlier(outputs, hash, requestedSpp(o, desc))) {
             std::printf("%s\n", nlohmann::json({{"frame", f}, {"exr", outputs.exr}, {"kept", true}})
                                     .dump()
                                     .c_str());
             continue;
         }
-        renderOne(o, setup, frameDesc, outputs, f);
+        renderOne(o, setup, frameDesc, hash, outputs, f);
     }
 }
 

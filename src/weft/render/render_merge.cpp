@@ -37,7 +37,7 @@ Part readPart(const std::string& exr, const ReadPartFile& read) {
     p.exr = exr;
     p.jsonPath = renderStatsPath(exr, "part " + exr);
     // PART.json, or PART.render.json where PART.json was the render's scene.
-    const std::string renamed = exr.substr(0, exr.size() - 4) + kRenderStatsSuffix;
+    const std::string renamed = renamedRenderStatsPath(exr, "part " + exr);
     auto tryRead = [&](const std::string& path) -> std::optional<nlohmann::json> {
         try {
             return parseJsonText(read(path), path);
@@ -107,6 +107,11 @@ std::string renderStatsPath(const std::string& exr, const std::string& what) {
         throw InputError(what + ": expected a path ending in .exr (its statistics are the .json "
                                 "beside it)");
     return exr.substr(0, exr.size() - ext.size()) + ".json";
+}
+
+std::string renamedRenderStatsPath(const std::string& exr, const std::string& what) {
+    const std::string json = renderStatsPath(exr, what);
+    return json.substr(0, json.size() - 5) + kRenderStatsSuffix;
 }
 
 MergedRender mergeRenderParts(const std::vector<std::string>& exrPaths) {

@@ -30,6 +30,8 @@ std::string renderStatsPath(const std::string& exr, const std::string& what);
 // PART.render.json instead (weft render; docs/render.md): the merge reads
 // that one when PART.json is missing or holds no render statistics (no "spp").
 inline constexpr const char* kRenderStatsSuffix = ".render.json";
+// PART.exr -> PART.render.json; the same check of `exr` as renderStatsPath.
+std::string renamedRenderStatsPath(const std::string& exr, const std::string& what);
 
 struct MergedRender {
     Image image;

@@ -77,22 +77,42 @@ void checkExposureStops(double stops, const std::string& what) {
                          " is out of range: allowed [-64, 64] stops, or auto");
 }
 
-std::string encodePng(const Image& image, double exposure) {
+namespace {
+
+// The image tone-mapped as the PNG shows it: exposure, then 8-bit sRGB.
+std::vector<unsigned char> displayBytes(const Image& image, double exposure, const char* format) {
     if (image.width <= 0 || image.height <= 0)
-        throw InputError("cannot encode an empty image as PNG");
+        throw InputError(std::string("cannot encode an empty image as ") + format);
     const double scale = std::exp2(exposure);
     std::vector<unsigned char> bytes(image.pixels.size());
     for (size_t i = 0; i < bytes.size(); ++i) {
         const double v = std::isfinite(image.pixels[i]) ? image.pixels[i] * scale : 0.0;
         bytes[i] = static_cast<unsigned char>(std::lround(255.0 * linearToSrgb(v)));
     }
+    return bytes;
+}
+
+void appendBytes(void* context, void* data, int size) {
+    static_cast<std::string*>(context)->append(static_cast<const char*>(data), size);
+}
+
+}  // namespace
+
+std::string encodePng(const Image& image, double exposure) {
+    const std::vector<unsigned char> bytes = displayBytes(image, exposure, "PNG");
     std::string out;
-    auto append = [](void* context, void* data, int size) {
-        static_cast<std::string*>(context)->append(static_cast<const char*>(data), size);
-    };
-    if (!stbi_write_png_to_func(append, &out, image.width, image.height, 3, bytes.data(),
+    if (!stbi_write_png_to_func(appendBytes, &out, image.width, image.height, 3, bytes.data(),
                                 image.width * 3))
         throw std::runtime_error("PNG encoding failed");
+    return out;
+}
+
+std::string encodeJpeg(const Image& image, double exposure, int quality) {
+    const std::vector<unsigned char> bytes = displayBytes(image, exposure, "JPEG");
+    std::string out;
+    if (!stbi_write_jpg_to_func(appendBytes, &out, image.width, image.height, 3, bytes.data(),
+                                std::clamp(quality, 1, 100)))
+        throw std::runtime_error("JPEG encoding failed");
     return out;
 }
 

@@ -72,5 +72,8 @@ void checkExposureStops(double stops, const std::string& what);
 // PNG bytes of the image (8-bit sRGB, exposure in stops).
 std::string encodePng(const Image& image, double exposure = 0.0);
 void writePng(const std::string& path, const Image& image, double exposure = 0.0);
+// JPEG bytes of the same 8-bit sRGB image at `quality` in [1, 100] (weft
+// view's frames: a tenth of the PNG's size for a noisy render).
+std::string encodeJpeg(const Image& image, double exposure = 0.0, int quality = 85);
 
 }  // namespace weft

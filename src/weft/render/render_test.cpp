@@ -649,6 +649,47 @@ TEST_F(RenderTest, PassesGiveTheFirstHitsAlbedoNormalDepthAndYarn) {
     weft::testing::expectInputError([] { parseAovs("albedo,z"); }, {"--aov", "\"z\"", "yarn_id"});
 }
 
+// weft view's passes (issue 44): sample ranges [a, b) of every pixel, and
+// bands of rows, are the same samples as the whole render's: the
+// sample-weighted mean of [0, 1) and [1, 5) is the 5 spp image, and a band
+// is the whole image's rows (other rows 0).
+TEST_F(RenderTest, SampleRangesAndRowBandsAreTheWholeRendersSamples) {
+    const Scene built(scene(kFleece, R"([{"type": "sky"}])", 20, 36), inMode("neural"));
+    RenderOptions o;
+    o.spp = 5;
+    o.seed = 11;
+    o.threads = 2;
+    o.quiet = true;
+    const Image whole = render(built, o).image;
+    o.samples = {0, 1};
+    const Image first = render(built, o).image;
+    o.samples = {1, 5};
+    const RenderResult rest = render(built, o);
+    EXPECT_EQ(rest.stats.spp, 4);
+    double largest = 0, sum = 0;
+    for (size_t i = 0; i < whole.pixels.size(); ++i) {
+        const double mean = (first.pixels[i] + 4.0 * rest.image.pixels[i]) / 5.0;
+        largest = std::max(largest, std::abs(mean - whole.pixels[i]) / (1e-3 + whole.pixels[i]));
+        sum += whole.pixels[i];
+    }
+    EXPECT_GT(sum, 0.0);
+    EXPECT_LT(largest, 1e-5);
+    o.samples.reset();
+    o.rows = {16, 36};
+    const RenderResult band = render(built, o);
+    EXPECT_EQ(band.stats.spp, 5);
+    for (int y = 0; y < 36; ++y)
+        for (int x = 0; x < 20; ++x)
+            EXPECT_EQ(band.image.get(x, y), y >= 16 ? whole.get(x, y) : Rgb(0.0)) << x << ", " << y;
+    o.rows = {8, 20};
+    weft::testing::expectInputError([&] { render(built, o); }, {"rows [8, 20)", "multiple of 16"});
+    o.rows = {16, 40};
+    weft::testing::expectInputError([&] { render(built, o); }, {"rows [16, 40)", "36 rows"});
+    o.rows.reset();
+    o.samples = {3, 6};
+    weft::testing::expectInputError([&] { render(built, o); }, {"samples [3, 6)", "spp (5)"});
+}
+
 TEST(RenderOptions, BudgetsAndRangesAreValidated) {
     using weft::testing::expectInputError;
     RenderOptions o;

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <tuple>
 
 #include "weft/core/error.h"
 #include "weft/core/progress.h"
@@ -19,7 +20,7 @@ namespace weft::render {
 
 namespace {
 
-constexpr int kTile = 16;
+constexpr int kTile = kRenderTile;
 
 // The generator of sample `sample` of pixel `pixel`: independent of passes and threads.
 Rng sampleRng(uint64_t pixel, int64_t sample, uint64_t seed) {
@@ -52,6 +53,21 @@ void RenderOptions::validate() const {
             throw InputError("--shard needs --spp: a time budget has no fixed range of samples "
                              "to split");
         shard->validate(spp, "--shard", "samples per pixel");
+    }
+    if (rows && (rows->first < 0 || rows->first % kRenderTile != 0 || rows->second <= rows->first ||
+                 shard || aovs != 0))
+        throw InputError("rows [" + std::to_string(rows->first) + ", " +
+                         std::to_string(rows->second) +
+                         "): allowed a first row that is a multiple of " +
+                         std::to_string(kRenderTile) + " below the end, and no --shard or --aov");
+    if (samples) {
+        if (shard || spp == 0 || aovs != 0)
+            throw InputError("a sample range needs --spp, and no --shard or --aov");
+        if (samples->first < 0 || samples->first >= samples->second || samples->second > spp)
+            throw InputError("samples [" + std::to_string(samples->first) + ", " +
+                             std::to_string(samples->second) +
+                             ") is out of range: allowed 0 <= first < end <= spp (" +
+                             std::to_string(spp) + ")");
     }
 }
 
@@ -111,7 +127,14 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     const Camera& camera = scene.camera();
     const int width = scene.width(), height = scene.height();
     const int tilesX = (width + kTile - 1) / kTile, tilesY = (height + kTile - 1) / kTile;
+    // The tiles [firstTile, endTile) of the rows asked for (all by default).
+    if (options.rows && options.rows->second > height)
+        throw InputError("rows [" + std::to_string(options.rows->first) + ", " +
+                         std::to_string(options.rows->second) + ") end below the image's " +
+                         std::to_string(height) + " rows");
     const int tiles = tilesX * tilesY;
+    const int firstTile = options.rows ? options.rows->first / kTile * tilesX : 0;
+    const int endTile = options.rows ? (options.rows->second + kTile - 1) / kTile * tilesX : tiles;
     std::vector<double> sum(static_cast<size_t>(width) * height * 3, 0.0);
     // Samples per pixel each tile has traced: all the same unless stopped in a pass.
     std::vector<int64_t> tileSamples(static_cast<size_t>(tiles), 0);
@@ -132,9 +155,9 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     tbb::task_arena arena(threads);
     const bool timed = options.spp == 0;
     // Samples [first, last) of every pixel, for a part its shard's.
-    const int64_t first = options.shard ? options.shard->begin(options.spp) : 0;
-    const int64_t last =
-        timed ? 0 : (options.shard ? options.shard->end(options.spp) : options.spp);
+    int64_t first = options.shard ? options.shard->begin(options.spp) : 0;
+    int64_t last = timed ? 0 : (options.shard ? options.shard->end(options.spp) : options.spp);
+    if (options.samples) std::tie(first, last) = *options.samples;
     // Counted in pixel samples (unknown total for a time budget).
     Progress progress("render " + scene.modeName(),
                       timed ? 0 : static_cast<uint64_t>(width) * height * (last - first),
@@ -151,7 +174,8 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     auto pass = [&](int64_t from, int64_t to) {
         arena.execute([&] {
             tbb::parallel_for(
-                tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
+                tbb::blocked_range<int>(firstTile, endTile, 1),
+                [&](const tbb::blocked_range<int>& r) {
                     PathCounters counters;
                     uint64_t dropped = 0;
                     for (int tile = r.begin(); tile < r.end(); ++tile) {
@@ -236,7 +260,8 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                 }
             r.aovs.emplace_back(aovName(aov), std::move(pass));
         }
-        const auto [fewest, most] = std::minmax_element(tileSamples.begin(), tileSamples.end());
+        const auto [fewest, most] =
+            std::minmax_element(tileSamples.begin() + firstTile, tileSamples.begin() + endTile);
         const double seconds = secondsSince(start);
         RenderStats& st = r.stats;
         st.mode = scene.modeName();

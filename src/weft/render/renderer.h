@@ -78,6 +78,15 @@ struct RenderOptions {
     double checkpointSeconds = 0;
     std::function<void(const RenderResult&)> checkpoint;
     unsigned aovs = 0;  // Aov bits: the passes to compute (not with a shard)
+    // Only samples [first, end) of every pixel (weft view's progressive
+    // passes, issue 44): the image is their mean, so the sample-weighted mean
+    // of consecutive ranges is the image of an spp render, as for shards.
+    // Needs 0 <= first < end <= spp; not with a shard.
+    std::optional<std::pair<int64_t, int64_t>> samples;
+    // Only pixel rows [first, end) (weft view's bands of a slow sample): the
+    // tiles of those rows; the other pixels are 0 and the statistics count
+    // the band's tiles. first a multiple of kRenderTile, end <= the height.
+    std::optional<std::pair<int, int>> rows;
 
     // InputError naming the flag and its range (exactly one budget, threads
     // in [0, 1024], maxDepth in [1, 10000]; a shard needs spp and N <= spp;
@@ -124,6 +133,9 @@ struct RenderResult {
 };
 
 RenderResult render(const Scene& scene, const RenderOptions& options);
+
+// The side of the square tiles the renderer schedules (pixels).
+constexpr int kRenderTile = 16;
 
 // The shortest pass the renderer plans (seconds): longer passes lose less to
 // the tiles that finish last.

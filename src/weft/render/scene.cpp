@@ -296,18 +296,10 @@ nlohmann::json appearanceJson(const SceneBuildStats& stats) {
 }
 
 Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
-    : camera_(desc.camera, desc.film.width, desc.film.height),
-      width_(desc.film.width),
-      height_(desc.film.height),
-      accel_(std::make_unique<TubeAccel>()) {
+    : accel_(std::make_unique<TubeAccel>()) {
     const auto start = std::chrono::steady_clock::now();
-    // The film: double RGB sums while rendering, then the float image and its
-    // EXR and PNG encodings: about 56 bytes per pixel.
-    checkMemoryBudget(static_cast<double>(width_) * height_ * 56.0,
-                      (desc.path.empty() ? std::string("scene") : desc.path) + ": the film (" +
-                          std::to_string(width_) + " x " + std::to_string(height_) + ")");
-    for (const auto& light : desc.lights) lights_.push_back(light->create());
-    if (lights_.empty()) lights_.push_back(std::make_unique<EnvironmentLight>(skyLight()));
+    setView(desc);
+    setLights(desc);
 
     // One material per distinct model file, colour and mode (SceneMaterials).
     const std::vector<const YarnMode*> modes = entryModes(desc, options.mode);
@@ -437,6 +429,25 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
         stats_.materialBytes += static_cast<int64_t>(bsdf->memoryBytes());
     stats_.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void Scene::setView(const SceneDesc& desc) {
+    // The film: double RGB sums while rendering, then the float image and its
+    // EXR and PNG encodings: about 56 bytes per pixel.
+    checkMemoryBudget(static_cast<double>(desc.film.width) * desc.film.height * 56.0,
+                      (desc.path.empty() ? std::string("scene") : desc.path) + ": the film (" +
+                          std::to_string(desc.film.width) + " x " +
+                          std::to_string(desc.film.height) + ")");
+    camera_ = Camera(desc.camera, desc.film.width, desc.film.height);
+    width_ = desc.film.width;
+    height_ = desc.film.height;
+}
+
+void Scene::setLights(const SceneDesc& desc) {
+    std::vector<std::unique_ptr<Light>> lights;
+    for (const auto& light : desc.lights) lights.push_back(light->create());
+    if (lights.empty()) lights.push_back(std::make_unique<EnvironmentLight>(skyLight()));
+    lights_ = std::move(lights);
 }
 
 }  // namespace weft::render

@@ -112,6 +112,12 @@ class Scene {
   public:
     explicit Scene(const SceneDesc& desc, const SceneOptions& options = {});
 
+    // What weft view changes without building the geometry again (issue 44):
+    // the camera and film of `desc` (checked as the constructor checks them),
+    // and its lights. Not while a render of this scene runs.
+    void setView(const SceneDesc& desc);
+    void setLights(const SceneDesc& desc);
+
     // The drawing mode of every yarn, or "mixed" when they differ (neural for
     // a scene without yarns).
     const std::string& modeName() const { return modeName_; }
@@ -143,7 +149,7 @@ class Scene {
   private:
     std::string modeName_;
     Camera camera_;
-    int width_, height_;
+    int width_ = 0, height_ = 0;
     std::unique_ptr<TubeAccel> accel_;
     std::vector<std::unique_ptr<Light>> lights_;
     std::vector<std::unique_ptr<Bsdf>> bsdfs_;  // one per material

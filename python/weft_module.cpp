@@ -57,6 +57,7 @@
 #include "weft/render/renderer.h"
 #include "weft/render/scene.h"
 #include "weft/render/scene_file.h"
+#include "weft/view/view_server.h"
 #include "weft/yarn/family_model.h"
 #include "weft/yarn/material_preset.h"
 #include "weft/yarn/yarn_appearance.h"
@@ -933,6 +934,43 @@ py::array_t<float> pyReadImage(const py::object& pathArg) {
     return imageArray(image);
 }
 
+// weft.view: a ViewSession and its server, alive while the object is
+// (docs/view.md, "From Python"); in a notebook the object shows the page.
+class PyView {
+  public:
+    PyView(const view::ViewOptions& options, const view::ServerOptions& server)
+        : session_(std::make_unique<view::ViewSession>(options)),
+          server_(std::make_unique<view::ViewServer>(*session_, server)) {}
+    ~PyView() { stop(); }
+    std::string url() const {
+        if (!server_) throw InputError("this view is stopped");
+        return server_->url();
+    }
+    py::object state() const { return pyFromJson(live().state()); }
+    py::object stats() const { return pyFromJson(live().stats()); }
+    py::object save() { return pyFromJson(live().save()); }
+    void stop() {
+        py::gil_scoped_release release;
+        if (server_) server_->stop();
+        if (session_) session_->stop();
+        server_.reset();
+        session_.reset();
+    }
+    std::string html() const {
+        if (!server_) return "<p>weft view: stopped</p>";
+        return "<iframe src=\"" + server_->url() +
+               "\" width=\"100%\" height=\"720\" style=\"border:0\"></iframe>";
+    }
+
+  private:
+    view::ViewSession& live() const {
+        if (!session_) throw InputError("this view is stopped");
+        return *session_;
+    }
+    std::unique_ptr<view::ViewSession> session_;
+    std::unique_ptr<view::ViewServer> server_;
+};
+
 py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const py::object& spp,
                    const py::object& seconds, const py::object& threads, const py::object& seed,
                    bool nee, const std::string& yarnSampling, const py::object& sampler,
@@ -1423,6 +1461,41 @@ PYBIND11_MODULE(weft, m) {
     m.def("read_image", &pyReadImage, py::arg("path"),
           "Read an .exr, .hdr or .png (decoded from sRGB) as an (H,W,3) float32 linear RGB array.");
 
+    py::class_<PyView>(m, "View",
+                       "A live `weft view` page served from this process (weft.view); shown "
+                       "inline in a notebook, stopped by stop() or when collected.")
+        .def_property_readonly("url", &PyView::url, "The page's address")
+        .def("state", &PyView::state, "What the page shows and may choose (a dict)")
+        .def("stats", &PyView::stats, "Samples, time per sample, SSIM, errors (a dict)")
+        .def("save", &PyView::save, "Save as the page's button does; returns the file names")
+        .def("stop", &PyView::stop, "Stop the server and its renders")
+        .def("_repr_html_", &PyView::html)
+        .def("__repr__", [](const PyView& v) { return "<weft.View " + v.html() + ">"; });
+    m.def(
+        "view",
+        [](const py::object& scene, int port, const std::string& bind, const py::object& out,
+           const std::vector<std::string>& models, const py::object& modelsDir, int spp,
+           int threads) {
+            view::ViewOptions o;
+            o.scenePath = pathOf(scene, "scene");
+            o.outDir = out.is_none() ? std::string("weft-view") : pathOf(out, "out");
+            o.models = models;
+            o.presetsDir = view::presetsDir(
+                modelsDir.is_none() ? std::string() : pathOf(modelsDir, "models_dir"),
+                "models_dir");
+            o.sppCap = spp;
+            o.threads = threads;
+            view::ServerOptions server;
+            server.host = bind;
+            server.port = port;
+            server.validate();
+            return std::make_unique<PyView>(o, server);
+        },
+        py::arg("scene"), py::kw_only(), py::arg("port") = 0, py::arg("bind") = "127.0.0.1",
+        py::arg("out") = py::none(), py::arg("models") = std::vector<std::string>{},
+        py::arg("models_dir") = py::none(), py::arg("spp") = 0, py::arg("threads") = 0,
+        "`weft view`: serve the live page for a scene file from this process and return a "
+        "View (its url; in a notebook it shows the page inline). Stops with View.stop().");
     m.def("render_merge", &renderMerge, py::arg("parts"),
           "`weft render merge`: the sample-weighted mean of the PART.exr files (PART.json "
           "beside each) that `weft render --shard K/N` wrote; returns (image, stats).");

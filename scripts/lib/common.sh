@@ -12,6 +12,7 @@ WEFT_PACKAGES=(
     cmake g++ make pkg-config
     libembree-dev libtbb-dev libopenexr-dev libstb-dev nlohmann-json3-dev libcli11-dev
     libgtest-dev libgmock-dev libbenchmark-dev pybind11-dev libeigen3-dev libhwy-dev
+    libcpp-httplib-dev
     python3-dev python3-numpy python3-pytest python3-pil
 )
 
@@ -35,6 +36,28 @@ weft_install_deps() {
     fi
     $sudo apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+# What the browser test of weft view needs (tests/browser/, docs/view.md):
+# Debian's chromium, Node.js with npm, and playwright-core from the npm
+# registry at the version of tests/browser/package-lock.json. Without them
+# the test is skipped, not failed: a warning says so.
+weft_install_browser_deps() {
+    local missing=()
+    [ -x /usr/bin/chromium ] || missing+=(chromium)
+    command -v node >/dev/null || missing+=(nodejs)
+    command -v npm >/dev/null || missing+=(npm)
+    if [ ${#missing[@]} -gt 0 ]; then
+        local saved=("${WEFT_PACKAGES[@]}")
+        WEFT_PACKAGES=("${missing[@]}")
+        weft_install_deps ||
+            echo "weft: warning: could not install ${missing[*]}: the browser test will be skipped" >&2
+        WEFT_PACKAGES=("${saved[@]}")
+    fi
+    if command -v npm >/dev/null && [ ! -d "$WEFT_ROOT/tests/browser/node_modules/playwright-core" ]; then
+        (cd "$WEFT_ROOT/tests/browser" && npm ci --no-audit --no-fund --loglevel=error) ||
+            echo "weft: warning: npm ci in tests/browser failed: the browser test will be skipped" >&2
+    fi
 }
 
 # weft_build DIR [cmake args...]: configure and build one build tree, every

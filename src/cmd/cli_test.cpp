@@ -61,12 +61,13 @@ TEST_F(CliTest, TopLevelHelp) {
     EXPECT_TRUE(contains(r.out, "--version")) << r.out;
 }
 
-// Issue 41: `weft view --help` printed the main help with status 0.
+// Issue 41: `weft view --help` (before weft view existed) printed the main help with status 0.
 TEST_F(CliTest, UnknownCommandIsNamedEvenWithHelp) {
-    for (const char* args : {"view --help", "view", "view --version", "view --bogus"}) {
+    for (const char* args : {"preview --help", "preview", "preview --version", "preview --bogus"}) {
         const RunResult r = run(args);
         EXPECT_EQ(r.status, 2) << args;
-        EXPECT_TRUE(contains(r.err, "unknown command 'view' for 'weft'")) << args << ": " << r.err;
+        EXPECT_TRUE(contains(r.err, "unknown command 'preview' for 'weft'"))
+            << args << ": " << r.err;
         EXPECT_TRUE(contains(r.err, "render, compare, scene")) << r.err;
         EXPECT_EQ(r.out, "") << args;
     }

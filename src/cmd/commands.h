@@ -109,6 +109,7 @@ void addCompareCommand(CLI::App& app);
 void addSceneCommand(CLI::App& app);
 void addMontageCommand(CLI::App& app);
 void addCurvesCommands(CLI::App& app);
+void addViewCommand(CLI::App& app);
 
 // A yarn of a family (core/family_box.h) from a flag's value: inline JSON
 // (starting with "{") or a JSON file; InputError naming the flag or file.

@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
     weft::cmd::addSceneCommand(app);
     weft::cmd::addMontageCommand(app);
     weft::cmd::addCurvesCommands(app);
+    weft::cmd::addViewCommand(app);
     try {
         try {
             app.parse(argc, argv);

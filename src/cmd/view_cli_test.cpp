@@ -5,8 +5,8 @@
 #include <httplib.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
-#include <regex>
 #include <thread>
 
 #include "cli_test_util.h"
@@ -56,10 +56,12 @@ TEST_F(ViewCliTest, ServesItsAddressAndStopsCleanlyOnASignal) {
         char c;
         while (::read(out[0], &c, 1) == 1 && c != '\n') line += c;
         ::close(out[0]);
-        std::smatch m;
-        ASSERT_TRUE(std::regex_search(line, m, std::regex("http://127\\.0\\.0\\.1:([0-9]+)/")))
-            << line;
-        httplib::Client client("127.0.0.1", std::stoi(m[1]));
+        const std::string prefix = "http://127.0.0.1:";
+        const size_t at = line.find(prefix);
+        ASSERT_NE(at, std::string::npos) << line;
+        const int port = std::atoi(line.c_str() + at + prefix.size());
+        ASSERT_GT(port, 0) << line;
+        httplib::Client client("127.0.0.1", port);
         client.set_read_timeout(30, 0);
         auto state = client.Get("/api/state");
         ASSERT_TRUE(state);

@@ -440,6 +440,10 @@ json ViewSession::applyEdit(const json& edit) {
                 // where the model takes one.
                 if (c->family) {
                     if (!y.contains("yarn")) y["yarn"] = c->centre->toJson();
+                    // Colour by appearance would need the appearance table of
+                    // every yarn a slider makes (seconds each): a family
+                    // model's yarn takes its fiber colour (C_TT) instead.
+                    y.erase("appearance");
                 } else {
                     y.erase("yarn");
                 }
@@ -462,7 +466,14 @@ json ViewSession::applyEdit(const json& edit) {
                 y.erase(std::string(k) == "colour" ? "appearance" : "colour");
                 y.erase("vertex_colours");
             }
-            if (e.contains("yarn")) y["yarn"] = e["yarn"];
+            if (e.contains("yarn")) {
+                // Checked against the model's box here, so that a slider
+                // beyond it is refused at once rather than by a failed build.
+                if (model != choices_.end() && model->family)
+                    model->family->check(YarnPoint::fromJson(e["yarn"], "edit", what + ".yarn"),
+                                         what + ".yarn");
+                y["yarn"] = e["yarn"];
+            }
         }
     }
     // The whole scene, as weft render would check it.

@@ -64,7 +64,7 @@ class ViewTest : public weft::testing::TempDirTest {
     ViewOptions options(const std::string& scene) {
         ViewOptions o;
         o.scenePath = scene;
-        o.models = {kFleece};
+        o.models = {kFleece, std::string(WEFT_SOURCE_DIR) + "/models/family.json"};
         o.outDir = path("out");
         o.threads = 2;
         o.renderWithoutClient = true;
@@ -162,7 +162,7 @@ TEST_F(ViewTest, EditsAreValidatedAndLeaveTheStateAsItWasWhenRefused) {
     const json before = session.state();
     EXPECT_EQ(before["lights"].size(), 2u);
     // The models the page may choose: the scene's and the one given, by id.
-    ASSERT_EQ(before["models"].size(), 2u);
+    ASSERT_EQ(before["models"].size(), 3u);
     EXPECT_EQ(before["models"][0]["id"], "fleece-colour-small");
     EXPECT_EQ(before["models"][0]["colour"], true);
     EXPECT_EQ(before["models"][1]["id"], "fleece-small");
@@ -228,6 +228,21 @@ TEST_F(ViewTest, EditsAreValidatedAndLeaveTheStateAsItWasWhenRefused) {
     EXPECT_EQ(session.state()["yarns"][0]["colour"], json());  // one colour at a time
     waitForSpp(session, 2, moved["generation"]);
     EXPECT_EQ(session.stats()["error"], json()) << session.stats().dump();
+    // A family model: its box's centre, no appearance, and a yarn outside
+    // its box refused at once.
+    session.applyEdit({{"yarns", {{{"index", 0}, {"model", "family"}}}}});
+    json family = session.state()["yarns"][0];
+    EXPECT_EQ(family["model"], "family");
+    EXPECT_EQ(family["appearance"], json());
+    EXPECT_EQ(family["yarn"]["fibers"], 400);
+    json yarn = family["yarn"];
+    yarn["fibers"] = 3000;
+    expectInputError(
+        [&] {
+            session.applyEdit({{"yarns", {{{"index", 0}, {"yarn", yarn}}}}});
+        },
+        {"edit.yarns[0].yarn", "fibers", "3000"});
+    EXPECT_EQ(session.state()["yarns"][0]["yarn"]["fibers"], 400);
     // A model without colour drops the yarn's colour.
     session.applyEdit({{"yarns", {{{"index", 0}, {"model", "fleece-small"}}}}});
     EXPECT_EQ(session.state()["yarns"][0]["colour"], json());

@@ -226,11 +226,19 @@ function buildYarns() {
     select.addEventListener('change', () => send({ yarns: [{ index, model: select.value }] }));
     div.append(el('label', { text: 'Model ' }, select));
     const model = state.models.find((m) => m.id === yarn.model);
-    if (model && model.colour) {
+    if (model && model.colour && !model.family) {
+      // A colour model: the colour the yarn should look (sRGB), beyond the
+      // model's reach moved to the nearest it shows.
       const colour = el('input', { type: 'color', 'data-role': 'appearance' });
       colour.value = yarn.appearance ? hex(yarn.appearance) : '#808080';
       colour.addEventListener('input', () => send({ yarns: [{ index, appearance: unhex(colour.value) }] }));
       div.append(el('label', { class: 'inline', text: 'Colour (as it looks) ' }, colour));
+    } else if (model && model.family) {
+      // A family model: the fibers' colour C_TT (each channel in [0, 1]).
+      const colour = el('input', { type: 'color', 'data-role': 'colour' });
+      colour.value = yarn.colour ? hex(yarn.colour) : '#808080';
+      colour.addEventListener('input', () => send({ yarns: [{ index, colour: unhex(colour.value) }] }));
+      div.append(el('label', { class: 'inline', text: 'Fiber colour (C_TT) ' }, colour));
     }
     if (model && model.family) {
       const point = yarn.yarn || model.centre;
@@ -244,6 +252,11 @@ function buildYarns() {
         input.addEventListener('input', () => {
           const v = Number(input.value);
           out.textContent = key === 'fibers' ? String(v) : v.toFixed(3);
+        });
+        // Each yarn of a family is a model to make (about a second): sent
+        // when the slider is let go, not at every step of a drag.
+        input.addEventListener('change', () => {
+          const v = Number(input.value);
           const next = Object.assign({}, yarn.yarn || model.centre);
           next[key] = key === 'c_r' ? [v, v, v] : v;
           yarn.yarn = next;

@@ -36,7 +36,7 @@ def test_view_serves_the_page_and_frames(cli, tmp_path, root):
         with pytest.raises(urllib.error.HTTPError) as e:
             urllib.request.urlopen(bad, timeout=30)
         assert e.value.code == 400
-        assert "edit.film.width = 3" in json.loads(e.value.read())["error"]
+        assert "edit: film.width = 3" in json.loads(e.value.read())["error"]
         assert v.state()["film"] == state["film"]
         # Save once an image of both samples exists.
         for _ in range(300):

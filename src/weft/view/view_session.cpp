@@ -11,6 +11,7 @@
 #include "weft/core/error.h"
 #include "weft/core/file.h"
 #include "weft/core/image_io.h"
+#include "weft/core/json_reader.h"
 #include "weft/eval/image_compare.h"
 #include "weft/render/renderer.h"
 #include "weft/render/scene.h"
@@ -144,51 +145,6 @@ json scaledLight(const json& light, double strength, const std::string& what) {
         throw InputError(what + ": a " + type + " light has no strength to change");
     }
     return out;
-}
-
-const json& member(const json& object, const char* key, const std::string& what) {
-    auto it = object.find(key);
-    if (it == object.end()) throw InputError(what + "." + key + " is missing");
-    return *it;
-}
-
-int64_t integerIn(const json& v, int64_t lo, int64_t hi, const std::string& what) {
-    if (!v.is_number_integer())
-        throw InputError(what + " must be an integer in [" + std::to_string(lo) + ", " +
-                         std::to_string(hi) + "]");
-    const int64_t x =
-        v.is_number_unsigned()
-            ? static_cast<int64_t>(std::min<uint64_t>(v.get<uint64_t>(), uint64_t{1} << 62))
-            : v.get<int64_t>();
-    if (x < lo || x > hi)
-        throw InputError(what + " = " + std::to_string(x) + " is out of range: allowed [" +
-                         std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    return x;
-}
-
-double numberIn(const json& v, double lo, double hi, const std::string& what) {
-    char range[96];
-    std::snprintf(range, sizeof range, "[%g, %g]", lo, hi);
-    if (!v.is_number()) throw InputError(what + " must be a number in " + range);
-    const double x = v.get<double>();
-    if (!std::isfinite(x) || x < lo || x > hi)
-        throw InputError(what + " = " + v.dump() + " is out of range: allowed " + range);
-    return x;
-}
-
-void checkKeys(const json& object, std::initializer_list<const char*> allowed,
-               const std::string& what) {
-    if (!object.is_object()) throw InputError(what + " must be a JSON object");
-    for (const auto& item : object.items()) {
-        const bool known = std::any_of(allowed.begin(), allowed.end(),
-                                       [&](const char* k) { return item.key() == k; });
-        if (!known) {
-            std::string list;
-            for (const char* k : allowed) list += (list.empty() ? "" : ", ") + std::string(k);
-            throw InputError(what + ": unknown key \"" + item.key().substr(0, 64) + "\": allowed " +
-                             list);
-        }
-    }
 }
 
 json srgbJson(const Rgb& linear) {
@@ -363,7 +319,6 @@ json ViewSession::state() const {
 json ViewSession::applyEdit(const json& edit) {
     const std::lock_guard editLock(editMutex_);
     std::vector<std::string> notes;
-    checkKeys(edit, {"camera", "film", "spp_cap", "exposure", "ab", "lights", "yarns"}, "edit");
     json next;
     std::vector<double> strengths;
     int cap;
@@ -377,62 +332,49 @@ json ViewSession::applyEdit(const json& edit) {
         exposure = exposure_;
         ab = ab_;
     }
-    if (edit.contains("camera")) {
-        const json& c = edit["camera"];
-        checkKeys(c, {"from", "to", "up", "fov_deg"}, "edit.camera");
-        for (const auto& item : c.items()) next["camera"][item.key()] = item.value();
+    JsonObjectReader r(edit, "edit");
+    r.allowKeys({"camera", "film", "spp_cap", "exposure", "ab", "lights", "yarns"});
+    if (r.has("camera")) {
+        const JsonObjectReader c = r.object("camera", {"from", "to", "up", "fov_deg"});
+        // Their values are the scene's to check (parseScene below).
+        for (const char* k : {"from", "to", "up", "fov_deg"})
+            if (c.has(k)) next["camera"][k] = c.value(k);
     }
-    if (edit.contains("film")) {
-        const json& f = edit["film"];
-        checkKeys(f, {"width", "height"}, "edit.film");
+    if (r.has("film")) {
+        const JsonObjectReader f = r.object("film", {"width", "height"});
         for (const char* k : {"width", "height"})
-            if (f.contains(k))
-                next["film"][k] =
-                    integerIn(f[k], kMinViewSide, kMaxViewSide, std::string("edit.film.") + k);
+            if (f.has(k)) next["film"][k] = f.integer(k, {kMinViewSide, kMaxViewSide});
     }
-    if (edit.contains("spp_cap"))
-        cap = static_cast<int>(integerIn(edit["spp_cap"], 1, kMaxViewSpp, "edit.spp_cap"));
-    if (edit.contains("exposure")) exposure = numberIn(edit["exposure"], -64, 64, "edit.exposure");
-    if (edit.contains("ab")) {
-        if (!edit["ab"].is_boolean()) throw InputError("edit.ab must be true or false");
-        ab = edit["ab"].get<bool>();
-    }
-    if (edit.contains("lights")) {
-        const json& list = edit["lights"];
-        if (!list.is_array()) throw InputError("edit.lights must be an array");
-        for (size_t k = 0; k < list.size(); ++k) {
-            const std::string what = "edit.lights[" + std::to_string(k) + "]";
-            checkKeys(list[k], {"index", "strength"}, what);
-            const auto i = static_cast<size_t>(integerIn(member(list[k], "index", what), 0,
-                                                         static_cast<int64_t>(strengths.size()) - 1,
-                                                         what + ".index"));
-            strengths[i] = numberIn(member(list[k], "strength", what), 0, 1000, what + ".strength");
+    if (r.has("spp_cap")) cap = static_cast<int>(r.integer("spp_cap", {1, kMaxViewSpp}));
+    if (r.has("exposure"))
+        exposure = r.number("exposure", NumberRange::closed(-64, 64).with("stops"));
+    if (r.has("ab")) ab = r.boolean("ab");
+    if (r.has("lights")) {
+        for (JsonObjectReader& l : r.objects("lights")) {
+            l.allowKeys({"index", "strength"});
+            const auto i = static_cast<size_t>(
+                l.integer("index", {0, static_cast<int64_t>(strengths.size()) - 1}));
+            strengths[i] = l.number("strength", NumberRange::closed(0, 1000));
         }
     }
     for (size_t i = 0; i < strengths.size(); ++i)
         next["lights"][i] =
-            scaledLight(baseLights_[i], strengths[i], "edit.lights[" + std::to_string(i) + "]");
-    if (edit.contains("yarns")) {
-        const json& list = edit["yarns"];
-        if (!list.is_array()) throw InputError("edit.yarns must be an array");
-        for (size_t k = 0; k < list.size(); ++k) {
-            const std::string what = "edit.yarns[" + std::to_string(k) + "]";
-            const json& e = list[k];
-            checkKeys(e, {"index", "model", "appearance", "colour", "yarn"}, what);
+            scaledLight(baseLights_[i], strengths[i], "edit: lights[" + std::to_string(i) + "]");
+    if (r.has("yarns")) {
+        for (JsonObjectReader& e : r.objects("yarns")) {
+            e.allowKeys({"index", "model", "appearance", "colour", "yarn"});
             const auto i = static_cast<size_t>(
-                integerIn(member(e, "index", what), 0,
-                          static_cast<int64_t>(next["yarns"].size()) - 1, what + ".index"));
+                e.integer("index", {0, static_cast<int64_t>(next["yarns"].size()) - 1}));
             json& y = next["yarns"][i];
-            if (e.contains("model")) {
-                if (!e["model"].is_string()) throw InputError(what + ".model must be a model id");
-                const std::string id = e["model"].get<std::string>();
+            if (e.has("model")) {
+                const std::string id = e.string("model");
                 auto c = std::find_if(choices_.begin(), choices_.end(),
                                       [&](const ModelChoice& m) { return m.id == id; });
                 if (c == choices_.end()) {
                     std::string ids;
                     for (const ModelChoice& m : choices_) ids += (ids.empty() ? "" : ", ") + m.id;
-                    throw InputError(what + ".model \"" + id.substr(0, 64) +
-                                     "\" is not one of the models weft view offers: " + ids);
+                    e.fail("model", "\"" + id.substr(0, 64) +
+                                        "\" is not one of the models weft view offers: " + ids);
                 }
                 y["model"] = c->path;
                 // What the new model takes: a family model a yarn (its centre
@@ -454,25 +396,27 @@ json ViewSession::applyEdit(const json& edit) {
                 std::find_if(choices_.begin(), choices_.end(),
                              [&](const ModelChoice& m) { return m.path == modelPath; });
             for (const char* k : {"appearance", "colour"}) {
-                if (!e.contains(k)) continue;
-                if (e[k].is_null()) {
+                if (!e.has(k)) continue;
+                if (e.isNull(k)) {
                     y.erase(k);
                     continue;
                 }
+                // Its form and range are the scene's to check (parseScene below).
                 y[k] = std::string(k) == "appearance" && model != choices_.end()
-                           ? appearanceInReach(e[k], *model, what + ".appearance", &notes)
-                           : e[k];
+                           ? appearanceInReach(e.value(k), *model, "edit: " + e.pathOf(k), &notes)
+                           : e.value(k);
                 // One colour at a time: the one just given.
                 y.erase(std::string(k) == "colour" ? "appearance" : "colour");
                 y.erase("vertex_colours");
             }
-            if (e.contains("yarn")) {
+            if (e.has("yarn")) {
                 // Checked against the model's box here, so that a slider
                 // beyond it is refused at once rather than by a failed build.
                 if (model != choices_.end() && model->family)
-                    model->family->check(YarnPoint::fromJson(e["yarn"], "edit", what + ".yarn"),
-                                         what + ".yarn");
-                y["yarn"] = e["yarn"];
+                    model->family->check(
+                        YarnPoint::fromJson(e.value("yarn"), "edit", e.pathOf("yarn")),
+                        "edit: " + e.pathOf("yarn"));
+                y["yarn"] = e.value("yarn");
             }
         }
     }

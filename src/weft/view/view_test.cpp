@@ -167,25 +167,25 @@ TEST_F(ViewTest, EditsAreValidatedAndLeaveTheStateAsItWasWhenRefused) {
     EXPECT_EQ(before["models"][0]["colour"], true);
     EXPECT_EQ(before["models"][1]["id"], "fleece-small");
     const std::vector<std::pair<json, std::vector<std::string>>> refused = {
-        {json::array(), {"edit must be a JSON object"}},
-        {{{"colour", 1}}, {"unknown key \"colour\"", "allowed camera"}},
-        {{{"film", {{"width", 5}}}}, {"edit.film.width = 5", "[16, 2048]"}},
-        {{{"film", {{"width", "wide"}}}}, {"edit.film.width must be an integer"}},
-        {{{"spp_cap", 0}}, {"edit.spp_cap = 0", "[1, 65536]"}},
-        {{{"exposure", 100}}, {"edit.exposure", "[-64, 64]"}},
-        {{{"ab", 1}}, {"edit.ab must be true or false"}},
-        {{{"lights", {{{"index", 2}, {"strength", 1}}}}}, {"edit.lights[0].index = 2", "[0, 1]"}},
+        {json::array(), {"edit: expected an object"}},
+        {{{"colour", 1}}, {"edit: unknown key \"colour\"", "allowed: camera"}},
+        {{{"film", {{"width", 5}}}}, {"edit: film.width = 5", "[16, 2048]"}},
+        {{{"film", {{"width", "wide"}}}}, {"edit: film.width: expected an integer in [16, 2048]"}},
+        {{{"spp_cap", 0}}, {"edit: spp_cap = 0", "[1, 65536]"}},
+        {{{"exposure", 100}}, {"edit: exposure = 100", "[-64, 64]"}},
+        {{{"ab", 1}}, {"edit: ab: expected true or false"}},
+        {{{"lights", {{{"index", 2}, {"strength", 1}}}}}, {"edit: lights[0].index = 2", "[0, 1]"}},
         {{{"lights", {{{"index", 0}, {"strength", -1}}}}},
-         {"edit.lights[0].strength", "[0, 1000]"}},
-        {{{"lights", {{{"index", 0}}}}}, {"edit.lights[0].strength is missing"}},
+         {"edit: lights[0].strength = -1", "[0, 1000]"}},
+        {{{"lights", {{{"index", 0}}}}}, {"edit: lights[0]: missing key \"strength\""}},
         {{{"yarns", {{{"index", 0}, {"model", "../../etc/passwd"}}}}},
-         {"edit.yarns[0].model \"../../etc/passwd\" is not one of the models", "fleece-small"}},
+         {"edit: yarns[0].model: \"../../etc/passwd\" is not one of the models", "fleece-small"}},
         {{{"yarns", {{{"index", 0}, {"model", kFleece}}}}}, {"is not one of the models"}},
         {{{"yarns", {{{"index", 0}, {"colour", {1, 2}}}}}}, {"yarns[0].colour"}},
         {{{"yarns", {{{"index", 0}, {"colour", {0.5, 0.5, 1.5}}}}}}, {"yarns[0].colour"}},
         {{{"camera", {{"from", {0, 0, 0}}}}}, {"camera"}},
         {{{"camera", {{"fov_deg", 180}}}}, {"fov_deg"}},
-        {{{"camera", {{"lens", 50}}}}, {"edit.camera: unknown key \"lens\""}},
+        {{{"camera", {{"lens", 50}}}}, {"edit: camera: unknown key \"lens\""}},
     };
     for (const auto& [edit, parts] : refused) {
         SCOPED_TRACE(edit.dump());
@@ -219,7 +219,7 @@ TEST_F(ViewTest, EditsAreValidatedAndLeaveTheStateAsItWasWhenRefused) {
         session.applyEdit({{"yarns", {{{"index", 0}, {"appearance", {0.5, 0.0, 0.5}}}}}});
     ASSERT_EQ(moved["notes"].size(), 1u) << moved.dump();
     EXPECT_NE(
-        moved["notes"][0].get<std::string>().find("edit.yarns[0].appearance: the nearest colour"),
+        moved["notes"][0].get<std::string>().find("edit: yarns[0].appearance: the nearest colour"),
         std::string::npos);
     const json appearance = session.state()["yarns"][0]["appearance"];
     EXPECT_EQ(appearance[0], 0.5);
@@ -241,7 +241,7 @@ TEST_F(ViewTest, EditsAreValidatedAndLeaveTheStateAsItWasWhenRefused) {
         [&] {
             session.applyEdit({{"yarns", {{{"index", 0}, {"yarn", yarn}}}}});
         },
-        {"edit.yarns[0].yarn", "fibers", "3000"});
+        {"edit: yarns[0].yarn", "fibers", "3000", "[200, 600]"});
     EXPECT_EQ(session.state()["yarns"][0]["yarn"]["fibers"], 400);
     // A model without colour drops the yarn's colour.
     session.applyEdit({{"yarns", {{{"index", 0}, {"model", "fleece-small"}}}}});
@@ -402,7 +402,7 @@ TEST_F(ViewTest, TheServerRefusesHostileRequestsAndKeepsServing) {
                              "application/json"),
                  400, "nest");
     expectStatus(client.Post("/api/edit", "{\"film\": {\"width\": 1e9}}", "application/json"), 400,
-                 "edit.film.width");
+                 "edit: film.width");
     expectStatus(client.Post("/api/edit", "\"\\ud800\"", "application/json"), 400, "");
     expectStatus(client.Post("/api/edit", std::string(100000, ' '), "application/json"), 413, "");
     expectStatus(client.Get("/api/frame?layer=../x"), 400, "not a layer");

@@ -3,6 +3,7 @@
 #include <limits>
 
 #include "weft/core/json_message.h"
+#include "weft/core/math.h"
 #include "weft/core/sampling.h"
 #include "weft/render/scene_reader.h"
 
@@ -33,6 +34,10 @@ LightType constantLightType() {
                 return std::shared_ptr<const LightDesc>(
                     std::make_shared<ConstantLightDesc>(readRadiance(r, "radiance")));
             }};
+}
+
+Rgb ConstantLight::power(double sceneRadius) const {
+    return radiance_ * (4.0 * kPi * kPi * sceneRadius * sceneRadius);
 }
 
 }  // namespace weft::render

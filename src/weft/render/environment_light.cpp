@@ -247,4 +247,8 @@ LightType skyLightType() {
             }};
 }
 
+Rgb EnvironmentLight::power(double sceneRadius) const {
+    return averageRadiance(*this) * (4.0 * kPi * kPi * sceneRadius * sceneRadius);
+}
+
 }  // namespace weft::render

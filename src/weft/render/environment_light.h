@@ -58,6 +58,7 @@ class EnvironmentLight final : public Light {
     double pdf(const Vec3& p, const Vec3& wi) const override;
     Rgb radiance(const Vec3& d) const override;
     double intersect(const Vec3&, const Vec3&, double) const override { return -1.0; }
+    Rgb power(double sceneRadius) const override;
 
     const Image& image() const { return image_; }
 

@@ -58,7 +58,17 @@ class Light {
     // intersection with the light's surface in (0, tMax), or a negative
     // value. Infinite lights return a negative value.
     virtual double intersect(const Vec3& org, const Vec3& dir, double tMax) const = 0;
+    // The power the light sends into a scene of radius `sceneRadius` (pbrt's
+    // Phi): pi A L for a surface of area A and radiance L; pi^2 4 R^2 times
+    // the average radiance over directions for an infinite light (what
+    // crosses a disc of radius R facing each direction). For the "power"
+    // light sampler (light_sampler.h).
+    virtual Rgb power(double sceneRadius) const = 0;
 };
+
+// The radiance of an infinite light averaged over the sphere of directions
+// (a quadrature of radiance(d), 256 x 128 cells in (phi, cos theta)).
+Rgb averageRadiance(const Light& infinite);
 
 // For light constructors: InputError "<light>: radiance (r, g, b) must be
 // finite and >= 0 in every channel" unless it is.

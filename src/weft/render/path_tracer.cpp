@@ -82,7 +82,7 @@ Rgb directLight(const Scene& scene, const ShadingPoint& bsdf, const TubeHit& hit
 Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, SampleStream& stream,
                  const PathTracerOptions& options, PathCounters& counters, FirstHit* first) {
     const auto& lights = scene.lights();
-    const double lightPick = lights.empty() ? 0.0 : 1.0 / static_cast<double>(lights.size());
+    const LightSampler& lightSampler = scene.lightSampler();
     const bool nee = options.nextEventEstimation && !lights.empty();
 
     Rgb radiance(0.0), throughput(1.0);
@@ -103,19 +103,20 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Sampl
 
         // Emission seen by this ray: a sphere light in front of the tube, or
         // every infinite light if it escapes.
-        auto addEmission = [&](const Light& l, const Rgb& le) {
+        // The MIS weight uses the probability with which NEE picks light i.
+        auto addEmission = [&](size_t i, const Rgb& le) {
             double weight = 1.0;
             if (nee && !countEmissionFully)
-                weight = powerHeuristic(lastPdf, lightPick * l.pdf(org, dir));
+                weight = powerHeuristic(lastPdf, lightSampler.pmf(i) * lights[i]->pdf(org, dir));
             radiance += throughput * le * weight;
         };
         if (light >= 0) {
-            addEmission(*lights[light], lights[light]->radiance(dir));
+            addEmission(static_cast<size_t>(light), lights[light]->radiance(dir));
             break;
         }
         if (!hitTube) {
-            for (const auto& l : lights)
-                if (l->isInfinite()) addEmission(*l, l->radiance(dir));
+            for (size_t i = 0; i < lights.size(); ++i)
+                if (lights[i]->isInfinite()) addEmission(i, lights[i]->radiance(dir));
             break;
         }
         if (depth >= options.maxDepth) {
@@ -132,10 +133,9 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Sampl
         }
 
         if (nee) {
-            const int pick = std::min(static_cast<int>(stream.get1D() * lights.size()),
-                                      static_cast<int>(lights.size()) - 1);
-            radiance +=
-                throughput * directLight(scene, bsdf, hit, pick, lightPick, stream, counters);
+            double pickPdf = 0;
+            const int pick = lightSampler.sample(stream.get1D(), &pickPdf);
+            radiance += throughput * directLight(scene, bsdf, hit, pick, pickPdf, stream, counters);
         }
 
         const double lobeU = stream.get1D();

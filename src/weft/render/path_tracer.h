@@ -1,8 +1,9 @@
 // weft/render/path_tracer.h — unidirectional path tracing for cloth (issue 7, docs/design.md 8).
 //
 // radiance() estimates the radiance arriving at `org` from direction -dir:
-//   - at every tube hit, next-event estimation: one light picked uniformly,
-//     one direction from its sample(), a shadow ray (blocked by tubes and by
+//   - at every tube hit, next-event estimation: one light picked by the
+//     scene's light sampler (light_sampler.h: uniform, by power or by given
+//     weights), one direction from its sample(), a shadow ray (blocked by tubes and by
 //     the other finite lights), weighted against BSDF sampling by the power
 //     heuristic (Veach 1997; pbrt-v4 PathIntegrator);
 //   - then one BSDF sample continues the path. The BSDF is prepared with the
@@ -10,8 +11,8 @@
 //     BCSDF picks R or TT by it, which keeps fiber-mode throughputs bounded
 //     over hundreds of events. Rays that escape see every infinite light,
 //     rays that hit a sphere light see it; both weighted by
-//     the power heuristic against the light's NEE density (uniform light
-//     pick times Light::pdf), or fully after a delta (T lobe) or camera
+//     the power heuristic against the light's NEE density (the sampler's
+//     pick probability times Light::pdf), or fully after a delta (T lobe) or camera
 //     vertex. With NEE off, emission is always counted fully (pure BSDF
 //     sampling: the same expectation, used by the consistency test);
 //   - the yarn BSDF's T lobe (a delta, wo = -wi) continues straight through

@@ -418,6 +418,7 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
     }
     accel_->commit();
     progress.finish();
+    buildLightSampler();  // the power of infinite lights needs the scene's size
     stats_.objects = static_cast<int64_t>(desc.objects.size());
     stats_.triangles = accel_->triangleCount();
     stats_.tubes = accel_->tubeCount();
@@ -448,6 +449,28 @@ void Scene::setLights(const SceneDesc& desc) {
     for (const auto& light : desc.lights) lights.push_back(light->create());
     if (lights.empty()) lights.push_back(std::make_unique<EnvironmentLight>(skyLight()));
     lights_ = std::move(lights);
+    lightSamplerDesc_ = desc.lightSampler;
+    buildLightSampler();
+}
+
+void Scene::buildLightSampler() {
+    switch (lightSamplerDesc_.kind) {
+        case LightSamplerKind::Uniform:
+            lightSampler_ = LightSampler(lights_.size());
+            break;
+        case LightSamplerKind::Weights:
+            lightSampler_ = LightSampler(lightSamplerDesc_.weights);
+            break;
+        case LightSamplerKind::Power: {
+            // The geometry's bounding sphere (before the geometry exists, or
+            // for an empty scene, radius 1: the constructor builds again).
+            const double r = accel_ ? accel_->boundingRadius() : 0.0;
+            std::vector<double> power;
+            for (const auto& l : lights_) power.push_back(l->power(r > 0 ? r : 1.0).average());
+            lightSampler_ = LightSampler(power);
+            break;
+        }
+    }
 }
 
 }  // namespace weft::render

@@ -126,6 +126,8 @@ class Scene {
     int height() const { return height_; }
     const TubeAccel& accel() const { return *accel_; }
     const std::vector<std::unique_ptr<Light>>& lights() const { return lights_; }
+    // Which light NEE samples, and with what probability (light_sampler.h).
+    const LightSampler& lightSampler() const { return lightSampler_; }
     const SceneBuildStats& stats() const { return stats_; }
 
     // BSDF of a hit's material (TubeHit::material), as its yarn's mode made
@@ -152,6 +154,9 @@ class Scene {
     int width_ = 0, height_ = 0;
     std::unique_ptr<TubeAccel> accel_;
     std::vector<std::unique_ptr<Light>> lights_;
+    LightSamplerDesc lightSamplerDesc_;
+    LightSampler lightSampler_;
+    void buildLightSampler();
     std::vector<std::unique_ptr<Bsdf>> bsdfs_;  // one per material
     std::vector<uint8_t> plyFrame_;             // per material: its mode draws plies
     std::vector<int> passIds_;                  // per accel geometry (passId)

@@ -143,7 +143,8 @@ YarnDesc readYarn(JsonObjectReader r, const std::string& baseDir) {
 SceneDesc parseScene(const json& j, const std::string& pathForErrors, const std::string& baseDir) {
     JsonObjectReader r(j, pathForErrors.empty() ? "scene" : pathForErrors, "",
                        JsonIntegers::WholeNumbers);
-    r.allowKeys({"camera", "film", "render", "lights", "yarns", "objects", "animation"});
+    r.allowKeys(
+        {"camera", "film", "render", "light_sampler", "lights", "yarns", "objects", "animation"});
     SceneDesc s;
     s.path = pathForErrors;
     s.baseDir = baseDir;
@@ -153,6 +154,7 @@ SceneDesc parseScene(const json& j, const std::string& pathForErrors, const std:
     if (r.has("lights"))
         for (JsonObjectReader& light : r.objects("lights"))
             s.lights.push_back(readLight(std::move(light), baseDir));
+    if (r.has("light_sampler")) s.lightSampler = LightSamplerDesc::read(r, s.lights.size());
     if (r.has("yarns"))
         for (JsonObjectReader& yarn : r.objects("yarns"))
             s.yarns.push_back(readYarn(std::move(yarn), baseDir));
@@ -214,6 +216,8 @@ json toJson(const SceneDesc& scene) {
     json lights = json::array();
     for (const auto& light : scene.lights) lights.push_back(render::toJson(*light));
     j["lights"] = std::move(lights);
+    // Written only when not uniform, so that a scene without one keeps its hash.
+    if (!scene.lightSampler.isDefault()) j["light_sampler"] = scene.lightSampler.toJson();
     json yarns = json::array();
     for (const YarnDesc& y : scene.yarns) {
         json yj = {{"curves", y.curves},

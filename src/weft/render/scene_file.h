@@ -5,6 +5,7 @@
 //     "camera": {"from": [x,y,z], "to": [x,y,z], "up": [0,1,0], "fov_deg": 30},
 //     "film":   {"width": 512, "height": 512},
 //     "render": {"spp": 64, "max_depth": 1000, "seed": 0, "sampler": "independent"},
+//     "light_sampler": "uniform",   // or "power", or {"weights": [one per light]}
 //     "lights": [ {"type": "sky", "scale": 1},
 //                 {"type": "envmap", "file": "sky.exr", "scale": 1.0, "rotate_deg": 0},
 //                 {"type": "sphere", "center": [x,y,z], "radius": r, "radiance": [r,g,b]},
@@ -37,6 +38,7 @@
 #include "weft/core/sample_stream.h"
 #include "weft/core/vec.h"
 #include "weft/render/light.h"
+#include "weft/render/light_sampler.h"
 #include "weft/render/scene_limits.h"
 #include "weft/render/scene_objects.h"
 
@@ -110,6 +112,7 @@ struct SceneDesc {
     FilmDesc film;
     RenderDesc render;
     std::vector<std::shared_ptr<const LightDesc>> lights;  // empty: the procedural sky
+    LightSamplerDesc lightSampler;  // "light_sampler": which light NEE samples (light_sampler.h)
     std::vector<YarnDesc> yarns;    // may be empty (an environment-only scene)
     std::vector<ObjectDesc> objects;  // floors, backdrops, meshes (scene_objects.h)
     AnimationDesc animation;          // "animation": {"frames": [first, last], "turntable_deg"}

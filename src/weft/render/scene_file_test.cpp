@@ -278,7 +278,7 @@ TEST(SceneFile, UnknownKeysAreNamedWithTheirPath) {
                       "fov_deg)"});
     expectInputError([] { parseJson(fullWith("/cameras", json::object())); },
                      {"scene.json: unknown key \"cameras\" (allowed: camera, film, render, "
-                      "lights, yarns, objects, animation)"});
+                      "light_sampler, lights, yarns, objects, animation)"});
     expectInputError([] { parseJson(fullWith("/film/depth", 8)); },
                      {"film: unknown key \"depth\" (allowed: width, height)"});
     expectInputError([] { parseJson(fullWith("/render/samples", 8)); },

@@ -116,4 +116,6 @@ LightType sphereLightType() {
             }};
 }
 
+Rgb SphereLight::power(double) const { return radiance_ * (kPi * 4.0 * kPi * radius_ * radius_); }
+
 }  // namespace weft::render

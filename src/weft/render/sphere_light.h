@@ -23,6 +23,7 @@ class SphereLight final : public Light {
     double pdf(const Vec3& p, const Vec3& wi) const override;
     Rgb radiance(const Vec3& d) const override;
     double intersect(const Vec3& org, const Vec3& dir, double tMax) const override;
+    Rgb power(double) const override;
 
     const Vec3& center() const { return center_; }
     double radius() const { return radius_; }

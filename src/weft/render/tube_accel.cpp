@@ -210,6 +210,14 @@ void TubeAccel::commit() {
     committed_ = true;
 }
 
+double TubeAccel::boundingRadius() const {
+    if (!committed_ || geometries_.empty()) return 0.0;
+    RTCBounds b;
+    rtcGetSceneBounds(scene_, &b);
+    const Vec3 extent(b.upper_x - b.lower_x, b.upper_y - b.lower_y, b.upper_z - b.lower_z);
+    return std::isfinite(length(extent)) ? 0.5 * length(extent) : 0.0;
+}
+
 bool TubeAccel::intersect(const Vec3& org, const Vec3& dir, double tMax, const TubeId& origin,
                           TubeHit* hit) const {
     OriginContext ctx = makeContext(origin, geometries_);

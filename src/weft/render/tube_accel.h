@@ -98,6 +98,9 @@ class TubeAccel {
     // Bytes Embree holds (geometry buffers + BVH), from its memory monitor.
     int64_t embreeBytes() const { return device_.allocatedBytes(); }
     int64_t embreePeakBytes() const { return device_.peakBytes(); }
+    // Radius of the sphere around the committed geometry's bounding box (0
+    // for an empty scene): the scene radius of Light::power.
+    double boundingRadius() const;
 
     // Per-geometry facts the intersection filter needs (public for the filter).
     struct GeometryInfo {

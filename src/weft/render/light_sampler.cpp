@@ -33,11 +33,9 @@ LightSamplerDesc LightSamplerDesc::read(const JsonObjectReader& scene, size_t li
     // A scene without lights has the procedural sky: one light.
     const size_t n = std::max<size_t>(lights, 1);
     d.kind = LightSamplerKind::Weights;
-    const nlohmann::json& list = w.value("weights");
-    if (!list.is_array() || list.size() != n)
-        w.fail("weights", "expected " + std::to_string(n) + " numbers, one per light of the scene" +
-                              (lights == 0 ? " (none given: the procedural sky)" : ""));
-    d.weights = w.numbers("weights", n, NumberRange::atLeast(0), "weights");
+    d.weights = w.numbers("weights", n, NumberRange::atLeast(0),
+                          lights == 0 ? "(one per light: none given, the procedural sky)"
+                                      : "(one per light of the scene)");
     double sum = 0;
     for (double x : d.weights) sum += x;
     if (!(sum > 0)) w.fail("weights", "at least one weight must be > 0");

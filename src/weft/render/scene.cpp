@@ -299,7 +299,7 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
     : accel_(std::make_unique<TubeAccel>()) {
     const auto start = std::chrono::steady_clock::now();
     setView(desc);
-    setLights(desc);
+    createLights(desc);  // their sampler once the geometry gives the scene's size
 
     // One material per distinct model file, colour and mode (SceneMaterials).
     const std::vector<const YarnMode*> modes = entryModes(desc, options.mode);
@@ -444,12 +444,16 @@ void Scene::setView(const SceneDesc& desc) {
     height_ = desc.film.height;
 }
 
-void Scene::setLights(const SceneDesc& desc) {
+void Scene::createLights(const SceneDesc& desc) {
     std::vector<std::unique_ptr<Light>> lights;
     for (const auto& light : desc.lights) lights.push_back(light->create());
     if (lights.empty()) lights.push_back(std::make_unique<EnvironmentLight>(skyLight()));
     lights_ = std::move(lights);
     lightSamplerDesc_ = desc.lightSampler;
+}
+
+void Scene::setLights(const SceneDesc& desc) {
+    createLights(desc);
     buildLightSampler();
 }
 
@@ -462,9 +466,8 @@ void Scene::buildLightSampler() {
             lightSampler_ = LightSampler(lightSamplerDesc_.weights);
             break;
         case LightSamplerKind::Power: {
-            // The geometry's bounding sphere (before the geometry exists, or
-            // for an empty scene, radius 1: the constructor builds again).
-            const double r = accel_ ? accel_->boundingRadius() : 0.0;
+            // The geometry's bounding sphere (radius 1 for an empty scene).
+            const double r = accel_->boundingRadius();
             std::vector<double> power;
             for (const auto& l : lights_) power.push_back(l->power(r > 0 ? r : 1.0).average());
             lightSampler_ = LightSampler(power);

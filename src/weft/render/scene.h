@@ -156,7 +156,8 @@ class Scene {
     std::vector<std::unique_ptr<Light>> lights_;
     LightSamplerDesc lightSamplerDesc_;
     LightSampler lightSampler_;
-    void buildLightSampler();
+    void createLights(const SceneDesc& desc);   // lights_ and the sampler's description
+    void buildLightSampler();                   // lightSampler_ of them and the geometry
     std::vector<std::unique_ptr<Bsdf>> bsdfs_;  // one per material
     std::vector<uint8_t> plyFrame_;             // per material: its mode draws plies
     std::vector<int> passIds_;                  // per accel geometry (passId)

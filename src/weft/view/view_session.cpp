@@ -278,6 +278,12 @@ void ViewSession::touch() {
     if (wake) workChanged_.notify_all();
 }
 
+const ModelChoice* ViewSession::choiceOf(const std::string& path) const {
+    for (const ModelChoice& c : choices_)
+        if (c.path == path) return &c;
+    return nullptr;
+}
+
 json ViewSession::state() const {
     std::lock_guard lock(mutex_);
     json lights = json::array();
@@ -285,10 +291,8 @@ json ViewSession::state() const {
         lights.push_back({{"type", baseLights_[i]["type"]}, {"strength", strengths_[i]}});
     json yarns = json::array();
     for (const json& y : scene_["yarns"]) {
-        std::string id;
-        for (const ModelChoice& c : choices_)
-            if (c.path == y["model"].get<std::string>()) id = c.id;
-        yarns.push_back({{"model", id},
+        const ModelChoice* model = choiceOf(y["model"].get<std::string>());
+        yarns.push_back({{"model", model ? model->id : std::string()},
                          {"colour", y.contains("colour") ? y["colour"] : json()},
                          {"appearance", y.contains("appearance") ? y["appearance"] : json()},
                          {"vertex_colours", y.contains("vertex_colours")},
@@ -391,10 +395,7 @@ json ViewSession::applyEdit(const json& edit) {
                 }
                 if (!c->colour) y.erase("colour"), y.erase("appearance");
             }
-            const std::string modelPath = y["model"].get<std::string>();
-            const auto model =
-                std::find_if(choices_.begin(), choices_.end(),
-                             [&](const ModelChoice& m) { return m.path == modelPath; });
+            const ModelChoice* model = choiceOf(y["model"].get<std::string>());
             for (const char* k : {"appearance", "colour"}) {
                 if (!e.has(k)) continue;
                 if (e.isNull(k)) {
@@ -402,7 +403,7 @@ json ViewSession::applyEdit(const json& edit) {
                     continue;
                 }
                 // Its form and range are the scene's to check (parseScene below).
-                y[k] = std::string(k) == "appearance" && model != choices_.end()
+                y[k] = std::string(k) == "appearance" && model
                            ? appearanceInReach(e.value(k), *model, "edit: " + e.pathOf(k), &notes)
                            : e.value(k);
                 // One colour at a time: the one just given.
@@ -412,7 +413,7 @@ json ViewSession::applyEdit(const json& edit) {
             if (e.has("yarn")) {
                 // Checked against the model's box here, so that a slider
                 // beyond it is refused at once rather than by a failed build.
-                if (model != choices_.end() && model->family)
+                if (model && model->family)
                     model->family->check(
                         YarnPoint::fromJson(e.value("yarn"), "edit", e.pathOf("yarn")),
                         "edit: " + e.pathOf("yarn"));

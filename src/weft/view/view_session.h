@@ -165,6 +165,8 @@ class ViewSession {
     struct LayerState;
     void run();
     bool workLeft() const;  // with mutex_ held
+    // The choice of a model file (as the scene JSON holds it), or none.
+    const ModelChoice* choiceOf(const std::string& path) const;
     void renderPass(LayerState& layer, const render::SceneDesc& desc, uint64_t generation,
                     const nlohmann::json& key);
     void updateSsim();  // with mutex_ held

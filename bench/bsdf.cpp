@@ -1,11 +1,10 @@
 // bench/bsdf — cost of one yarn BSDF query against the fiber BCSDF (Google Benchmark).
 //
-// ns per call, one thread, on 4096 fixed random direction pairs (wi in the
-// upper hemisphere, wo on the sphere) cycled through so that branches and
-// caches see a renderer-like mix: YarnBsdf eval / pdf / sample (with and
-// without the energy guard), the same on a prepared incident (Bsdf::prepare
-// once per wi outside the timing, then eval / evalPdf / sample(in, ...): the
-// per-wo cost that a path tracer pays at a shading point), prepare alone and
+// ns per call (per query for the batched networks), one thread, on 4096 fixed random direction
+// pairs (wi in the upper hemisphere, wo on the sphere) cycled through so that branches and caches
+// see a renderer-like mix: YarnBsdf eval / pdf / sample (with and without the energy guard), the
+// same on a prepared incident (Bsdf::prepare once per wi outside the timing, then eval / evalPdf /
+// sample(in, ...): the per-wo cost that a path tracer pays at a shading point), prepare alone and
 // one whole path vertex (prepare, NEE's evalPdf, sample) of each model, its parts (the T
 // and M networks through FixedMlp, SIMD kernel and scalar reference, the R
 // lobe), Mlp<float>::forward on a batch of one (what the fixed-size evaluator
@@ -276,6 +275,27 @@ void MNetwork(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations());
 }
 
+// A batch of state.range(0) queries per call (FixedMlp::forwardBatch, one
+// query per SIMD lane), from consecutive pairs; time per query.
+template <typename Net>
+void networkBatch(benchmark::State& state, const Net& net) {
+    const int count = static_cast<int>(state.range(0));
+    const int in = net.inputs(), out = net.outputs();
+    std::vector<float> x, y(static_cast<size_t>(count) * out);
+    for (size_t k = 0; k < kPairs; ++k)
+        x.insert(x.end(), floatPairs()[k].begin(), floatPairs()[k].begin() + in);
+    size_t first = 0;
+    for (auto _ : state) {
+        net.forwardBatch(x.data() + first * in, count, y.data());
+        benchmark::DoNotOptimize(y.data());
+        first = (first + count) % (kPairs - count);
+    }
+    state.SetItemsProcessed(state.iterations() * count);
+    state.counters["queries"] = count;  // the table divides the time per call by it
+}
+void MNetworkBatch(benchmark::State& state) { networkBatch(state, mNet()); }
+void TNetworkBatch(benchmark::State& state) { networkBatch(state, tNet()); }
+
 void TNetwork(benchmark::State& state) {
     const TransmissionMlp& net = tNet();
     const auto& x = floatPairs();
@@ -364,7 +384,9 @@ class TableReporter : public benchmark::ConsoleReporter {
             auto it = std::find_if(rows.begin(), rows.end(),
                                    [&](const Row& r) { return r.name == name; });
             if (it == rows.end()) it = rows.insert(rows.end(), Row{name, {}});
-            it->nanoseconds.push_back(run.GetAdjustedCPUTime() * toNs);
+            const auto queries = run.counters.find("queries");
+            const double perCall = queries == run.counters.end() ? 1.0 : queries->second.value;
+            it->nanoseconds.push_back(run.GetAdjustedCPUTime() * toNs / perCall);
         }
         ConsoleReporter::ReportRuns(runs);
     }
@@ -398,8 +420,12 @@ const Entry kEntries[] = {
     {"YarnMNetwork", "M network alone (evalM: Vec3 in, Rgb out, SIMD kernel)"},
     {"MNetwork/1", "M network alone, FixedMlp::forward on floats (SIMD kernel)"},
     {"MNetwork/0", "M network alone, FixedMlp::forwardScalar on floats (scalar reference)"},
+    {"MNetworkBatch/16",
+     "M network, FixedMlp::forwardBatch, 16 queries per call (per query; target <= 15 ns)"},
+    {"MNetworkBatch/256", "M network, FixedMlp::forwardBatch, 256 queries per call (per query)"},
     {"TNetwork/1", "T network alone, FixedMlp::forward on floats (SIMD kernel)"},
     {"TNetwork/0", "T network alone, FixedMlp::forwardScalar on floats (scalar reference)"},
+    {"TNetworkBatch/256", "T network, FixedMlp::forwardBatch, 256 queries per call (per query)"},
     {"YarnTNetwork", "T network alone (transmission: Vec3 in, SIMD kernel)"},
     {"YarnRLobe", "R lobe alone (eq. 8 with masking)"},
     {"MlpForwardBatchOfOne", "M network through Mlp<float>::forward, batch of 1"},
@@ -450,6 +476,8 @@ BENCHMARK(YarnMNetwork);
 BENCHMARK(MNetwork)->Arg(1)->Arg(0);
 BENCHMARK(YarnTNetwork);
 BENCHMARK(TNetwork)->Arg(1)->Arg(0);
+BENCHMARK(MNetworkBatch)->Arg(16)->Arg(256);
+BENCHMARK(TNetworkBatch)->Arg(256);
 BENCHMARK(YarnRLobe);
 BENCHMARK(MlpForwardBatchOfOne);
 BENCHMARK(YarnConstruct)->Arg(2)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);

@@ -78,9 +78,10 @@ EnergyGuard::EnergyGuard(const YarnEvaluator& model) {
         const Vec3 wi =
             sphericalDirection(polarAngle(static_cast<int>(node / kPhi)),
                                -kPi + kTwoPi * static_cast<double>(node % kPhi) / kPhi);
+        std::vector<Rgb> m(ruleM.directions.size());
+        model.evalMBatch(wi, ruleM.directions.data(), m.size(), m.data());
         Rgb energy;
-        for (size_t k = 0; k < ruleM.directions.size(); ++k)
-            energy += model.evalM(wi, ruleM.directions[k]) * ruleM.weights[k];
+        for (size_t k = 0; k < m.size(); ++k) energy += m[k] * ruleM.weights[k];
         energy = energy * model.calibration(wi).m;
         energyM_[node] = energy;
         const double pT = model.transmission(wi);

@@ -231,6 +231,56 @@ TEST(FixedMlp, SimdMatchesScalarOnRandomNetworks) {
     }
 }
 
+// forwardBatch runs lanes() queries per kernel call, one per lane; each
+// query's outputs must be forward()'s bits whatever the batch's size (partial
+// batches: lanes whose paths have ended are zero-filled) and whichever lane it
+// lands in, and so within forward()'s tolerance of the scalar reference; it
+// writes count x outputs() values and nothing after them.
+TEST(FixedMlp, BatchGivesForwardsBitsInEveryLane) {
+    for (const auto& widths : std::vector<std::vector<int>>{{6, 21, 21, 21, 3},
+                                                            {3, 7, 7, 1},
+                                                            {6, 21, 21, 3},
+                                                            {6, 64, 64, 3},
+                                                            {5, 17, 33, 49, 2},
+                                                            {1, 1},
+                                                            {64, 12, 4}}) {
+        for (const OutputFunction output :
+             {OutputFunction::Exp, OutputFunction::Sigmoid, OutputFunction::Identity}) {
+            const NetworkWeights weights = randomNetwork(widths, output, 7);
+            const int in = weights.inputs(), out = weights.outputs();
+            const auto xs = randomInputs(in, 200, 8);
+            std::vector<float> flat;
+            for (const auto& x : xs) flat.insert(flat.end(), x.begin(), x.end());
+            for (const FixedMlpKernel& kernel : fixedMlpKernels()) {
+                const WideMlp net(weights, "net", kernel);
+                const int lanes = net.lanes();
+                for (const int offset : {0, 1, lanes - 1}) {
+                    for (const int count : {1, lanes - 1, lanes, lanes + 1, 3 * lanes + 5, 150}) {
+                        if (count < 1) continue;
+                        std::vector<float> batch(count * out + 1, -7.0f);
+                        net.forwardBatch(flat.data() + offset * in, count, batch.data());
+                        ASSERT_EQ(batch.back(), -7.0f) << "forwardBatch wrote past its outputs";
+                        std::vector<float> one(out), scalar(out);
+                        for (int k = 0; k < count; ++k) {
+                            const float* x = flat.data() + (offset + k) * in;
+                            net.forward(x, one.data());
+                            net.forwardScalar(x, scalar.data());
+                            for (int o = 0; o < out; ++o) {
+                                ASSERT_EQ(batch[k * out + o], one[o])
+                                    << weights.widthsText() << " " << kernel.target << " query "
+                                    << k << " of " << count << " output " << o;
+                                EXPECT_LE(difference(batch[k * out + o], scalar[o], output),
+                                          tolerance(kernel))
+                                    << weights.widthsText() << " " << kernel.target;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 // Every kernel with FMA does the same operations per output in the same
 // order: AVX2 and AVX-512 give the same bits, so a render does not depend on
 // which of them the CPU has.

@@ -46,8 +46,10 @@ TabulatedYarnSampler::TabulatedYarnSampler(std::shared_ptr<const YarnEvaluator> 
     table_ = SamplingTable(
         frame_, 2, [&](const Vec3& wi, const std::vector<Vec3>& wo, std::vector<double>& values) {
             const YarnIncident in = model.incident(wi);
+            std::vector<YarnComponents> components(wo.size());
+            model.componentsBatch(wo.data(), wo.size(), in, components.data());
             for (size_t k = 0; k < wo.size(); ++k) {
-                const YarnComponents c = model.components(wo[k], in);
+                const YarnComponents& c = components[k];
                 values[2 * k] = std::max(0.0, c.m.average());
                 values[2 * k + 1] =
                     hasReflection_

@@ -58,6 +58,10 @@ Rgb YarnEvaluator::evalM(const Vec3& wi, const Vec3& wo) const {
     return evalScattering(mNet_, wi, wo);
 }
 
+void YarnEvaluator::evalMBatch(const Vec3& wi, const Vec3* wo, size_t count, Rgb* out) const {
+    evalScatteringBatch(mNet_, wi, wo, count, out);
+}
+
 SurfaceFiberAngles YarnEvaluator::surfaceAngles(const Vec3& wi) const {
     SurfaceFiberAngles s;
     s.local = frame().toLocal(wi);
@@ -89,11 +93,28 @@ YarnIncident YarnEvaluator::incident(const Vec3& wi) const {
 
 YarnComponents YarnEvaluator::components(const Vec3& wo, const YarnIncident& in,
                                          const FiberBcsdf::Angles& out) const {
+    return components(in, wo, out, evalM(in.wi, wo));
+}
+
+YarnComponents YarnEvaluator::components(const YarnIncident& in, const Vec3& wo,
+                                         const FiberBcsdf::Angles& out, const Rgb& m) const {
     YarnComponents c;
     c.pT = in.pT;
     if (hasReflection_) c.r = rLobe_.eval(in.wi, wo, in.fiber, out, in.pT) * in.rScale;
-    c.m = evalM(in.wi, wo) * in.mScale;
+    c.m = m * in.mScale;
     return c;
+}
+
+void YarnEvaluator::componentsBatch(const Vec3* wo, size_t count, const YarnIncident& in,
+                                    YarnComponents* out) const {
+    constexpr size_t kChunk = 64;
+    Rgb m[kChunk];
+    for (size_t first = 0; first < count; first += kChunk) {
+        const size_t n = std::min(kChunk, count - first);
+        evalMBatch(in.wi, wo + first, n, m);
+        for (size_t k = 0; k < n; ++k)
+            out[first + k] = components(in, wo[first + k], outAngles(wo[first + k]), m[k]);
+    }
 }
 
 Rgb YarnEvaluator::multipleScatteringScale(const Vec3& wi) const {

@@ -974,7 +974,8 @@ class PyView {
 py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const py::object& spp,
                    const py::object& seconds, const py::object& threads, const py::object& seed,
                    bool nee, const std::string& yarnSampling, const py::object& sampler,
-                   const py::object& baseDir, const py::object& shard, bool quiet) {
+                   const py::object& baseDir, const py::object& shard, bool quiet,
+                   const std::string& integrator) {
     // The integer arguments first (renderer.h gives their ranges).
     const std::optional<int> sppCount =
         spp.is_none() ? std::nullopt : std::optional<int>(intArg(spp, "spp", 1, 1 << 20));
@@ -1017,6 +1018,7 @@ py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const
                           ? desc.render.sampler
                           : render::parseSampler(sampler.cast<std::string>(), "sampler");
     options.nextEventEstimation = nee;
+    options.integrator = render::parsePathIntegrator(integrator, "integrator");
     options.quiet = quiet;
     options.shard = shardValue;
     options.validate();
@@ -1442,11 +1444,14 @@ PYBIND11_MODULE(weft, m) {
           py::arg("seed") = py::none(), py::arg("nee") = true,
           py::arg("yarn_sampling") = "tabulated", py::arg("sampler") = py::none(),
           py::arg("base_dir") = py::none(), py::arg("shard") = py::none(), py::arg("quiet") = true,
+          py::arg("integrator") = "auto",
           "`weft render`: a scene file or dict to an (H,W,3) float32 linear RGB image and the "
           "statistics dict; mode (\"neural\", \"fiber\" or \"dual\") draws every yarn so, "
           "over the yarns' own \"mode\" (None: each yarn's, neural where it names none); "
           "shard=(k, n) traces only shard k of n of the spp samples. quiet=False shows the "
-          "progress on sys.stderr (as Jupyter shows it). weft.save_image writes the image.");
+          "progress on sys.stderr (as Jupyter shows it); integrator (\"auto\", \"path\" or "
+          "\"batch\") as `weft render --integrator`, the same image. weft.save_image writes "
+          "the image.");
 
     m.def("curves_points", &pyCurvesPoints, py::arg("path"),
           "`weft curves points`: the control points of a curve file as an (n, 4) float64 array "

@@ -91,6 +91,12 @@ def test_tiny_render(cli, tmp_path, root):
     with pytest.raises(ValueError, match='sampler "halton" is not a sampler: allowed independent'):
         weft.render(scene, spp=1, sampler="halton")
 
+    # One path at a time or a tile's paths together: the same image bit for bit.
+    np.testing.assert_array_equal(weft.render(scene, spp=2, seed=1, integrator="path")[0], image)
+    np.testing.assert_array_equal(weft.render(scene, spp=2, seed=1, integrator="batch")[0], image)
+    with pytest.raises(ValueError, match='integrator "wavefront" is not an integrator: allowed auto'):
+        weft.render(scene, spp=1, integrator="wavefront")
+
 
 def test_sharded_gather_and_render_merge(cli, tmp_path, root):
     args = dict(preset="fleece", paths=3000, bins=[4, 8, 6, 12], seed=2)

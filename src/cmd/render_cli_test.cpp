@@ -133,6 +133,22 @@ TEST_F(RenderCliTest, SobolSampler) {
                     {"--sampler", "\"halton\"", "independent, sobol"});
 }
 
+// --integrator path|batch|auto: the same image bit for bit (render_test holds
+// the integrators to that in detail); a bad name is refused with the allowed ones.
+TEST_F(RenderCliTest, IntegratorsGiveTheSameImage) {
+    for (const char* integrator : {"auto", "path", "batch"})
+        ASSERT_EQ(run(std::string("render scene.json --spp 2 --quiet --integrator ") + integrator +
+                      " --out " + integrator + ".exr")
+                      .status,
+                  0)
+            << integrator;
+    const Image batch = readImage(path("batch.exr"));
+    EXPECT_EQ(readImage(path("path.exr")).pixels, batch.pixels);
+    EXPECT_EQ(readImage(path("auto.exr")).pixels, batch.pixels);
+    expectUserError(run("render scene.json --spp 1 --integrator wavefront --out x.exr"),
+                    {"--integrator", "\"wavefront\"", "auto, path, batch"});
+}
+
 // `weft render --shard K/N` and `weft render merge`: the merge of the parts is
 // the unsharded image up to float rounding, and bad sets of parts are refused
 // without writing anything.

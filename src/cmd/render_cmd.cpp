@@ -27,7 +27,7 @@ namespace weft::cmd {
 namespace {
 
 struct RenderCmdOptions {
-    std::string scene, mode, out, yarnSampling = "tabulated", shard, sampler;
+    std::string scene, mode, out, yarnSampling = "tabulated", shard, sampler, integrator = "auto";
     int spp = 0, threads = 0;
     double seconds = 0, checkpoint = 0;
     std::string exposure = "0", aovs, frames, frameShard;
@@ -146,6 +146,7 @@ void renderOne(const RenderCmdOptions& o, const RenderSetup& setup, const render
     options.sampler = desc.render.sampler;
     if (o.samplerOpt->count()) options.sampler = render::parseSampler(o.sampler);
     options.nextEventEstimation = !o.noNee;
+    options.integrator = render::parsePathIntegrator(o.integrator, "--integrator");
     options.quiet = o.quiet;
     if (o.shardOpt->count()) options.shard = Shard::parse(o.shard, "--shard");
     options.checkpointSeconds = o.checkpoint;
@@ -366,6 +367,12 @@ void addRenderCommand(CLI::App& app) {
                     "Write the image so far (EXR, PNG and statistics with \"partial\": true) "
                     "every SECONDS while rendering, in [1, 1e6] (docs/render.md, \"Keeping the "
                     "work\"); Ctrl-C or SIGTERM writes it without this flag too");
+    cmd->add_option("--integrator", o->integrator,
+                    "batch (paths of a tile advance together, the BSDF's networks run many "
+                    "queries at once), path (one path at a time, the reference) or auto "
+                    "(batch in neural mode, where it is faster); the same image bit for bit "
+                    "(docs/render.md, \"Batched shading\")")
+        ->capture_default_str();
     cmd->add_flag("--no-nee", o->noNee,
                   "Turn off next-event estimation (BSDF sampling only; for checking estimators)");
     cmd->add_flag("--quiet", o->quiet,

@@ -144,6 +144,25 @@ class Bsdf {
     virtual BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u,
                               Rng& rng) const = 0;
 
+    // Batches (issue 45): the calls above for `count` queries at once, each
+    // result bit for bit the single call's; every in[k] was (or is being)
+    // prepared by this BSDF, for any wi. A BSDF overrides them where many
+    // queries cost less together (the yarn BSDF's networks run a query per
+    // SIMD lane); a path tracer that advances many paths together calls them.
+    virtual void prepareBatch(const Vec3* wi, BsdfIncident* const* in, size_t count) const {
+        for (size_t k = 0; k < count; ++k) prepare(wi[k], *in[k]);
+    }
+    virtual void evalPdfBatch(const BsdfIncident* const* in, const Vec3* wo, size_t count,
+                              BsdfEval* out) const {
+        for (size_t k = 0; k < count; ++k) out[k] = evalPdf(*in[k], wo[k]);
+    }
+    virtual void sampleBatch(const BsdfIncident* const* in, const BsdfSampleInput* u,
+                             Rng* const* rng, size_t count, BsdfSample* out) const {
+        for (size_t k = 0; k < count; ++k) out[k] = sample(*in[k], u[k], *rng[k]);
+    }
+    // True where the batches above are faster than their single calls (the
+    // renderer then advances paths together by default).
+    virtual bool batchesFaster() const { return false; }
     // The same for one (wi, wo): prepare, then the call above.
     Rgb eval(const Vec3& wi, const Vec3& wo) const { return eval(prepared(wi), wo); }
     virtual double pdf(const Vec3& wi, const Vec3& wo) const { return pdf(prepared(wi), wo); }

@@ -50,115 +50,275 @@ int nearestFiniteLight(const Scene& scene, const Vec3& org, const Vec3& dir, dou
     return found;
 }
 
-// Next-event estimation from light `pick` (chosen with probability
-// `pickPdf`): one light sample, its shadow ray (blocked by tubes and the other
-// finite lights), weighted against BSDF sampling by the power heuristic.
-Rgb directLight(const Scene& scene, const ShadingPoint& bsdf, const TubeHit& hit, int pick,
-                double pickPdf, SampleStream& stream, PathCounters& counters) {
+// What next-event estimation needs from the BSDF: a light sample that
+// passed its shadow ray, waiting for the BSDF's evalPdf at `wi`.
+struct LightSampleAtHit {
+    bool pending = false;
+    Vec3 wi;  // world direction to the light
+    Rgb radiance;
+    double lightPdf = 0;  // the pick's probability times the light's density
+};
+
+// Next-event estimation's light part: one light picked by the scene's light
+// sampler, one direction from its sample(), its shadow ray (blocked by tubes
+// and by the other finite lights). The shadow ray comes before the BSDF, so
+// that an occluded sample costs no evaluation; the other order saved a ray
+// only where the BSDF is black, which the yarn's M lobe and the fiber's R
+// lobe almost never are. evalPdf draws no random numbers, so the image is
+// the same either way.
+LightSampleAtHit sampleLightAtHit(const Scene& scene, const TubeHit& hit, SampleStream& stream,
+                                  PathCounters& counters) {
     const auto& lights = scene.lights();
+    double pickPdf = 0;
+    const int pick = scene.lightSampler().sample(stream.get1D(), &pickPdf);
     const Light& l = *lights[pick];
     const LightSample ls = l.sample(hit.point, stream.get2D());
-    if (!ls.valid() || ls.radiance.isBlack()) return Rgb(0.0);
-    // The shadow ray (up to just before the light's surface) before the BSDF,
-    // so that an occluded sample costs no evaluation; the other order saved a
-    // ray only where the BSDF is black, which the yarn's M lobe and the
-    // fiber's R lobe almost never are. evalPdf draws no random numbers, so
-    // the image is the same either way.
+    if (!ls.valid() || ls.radiance.isBlack()) return {};
     const double tMax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1 - 1e-6);
     ++counters.rays;
-    if (scene.accel().occluded(hit.point, ls.wi, tMax, hit.id)) return Rgb(0.0);
+    if (scene.accel().occluded(hit.point, ls.wi, tMax, hit.id)) return {};
     for (size_t i = 0; i < lights.size(); ++i)
         if (static_cast<int>(i) != pick && !lights[i]->isInfinite() &&
             lights[i]->intersect(hit.point, ls.wi, tMax) > 0)
-            return Rgb(0.0);
-    const BsdfEval e = bsdf.evalPdf(ls.wi);
-    if (e.value.isBlack()) return Rgb(0.0);
-    const double lightPdf = pickPdf * ls.pdf;
-    return e.value * ls.radiance * (powerHeuristic(lightPdf, e.pdf) / lightPdf);
+            return {};
+    return {true, ls.wi, ls.radiance, pickPdf * ls.pdf};
+}
+
+// The light sample's contribution with the BSDF's value and density there,
+// weighted against BSDF sampling by the power heuristic.
+Rgb directLight(const LightSampleAtHit& light, const BsdfEval& e) {
+    if (!light.pending || e.value.isBlack()) return Rgb(0.0);
+    return e.value * light.radiance * (powerHeuristic(light.lightPdf, e.pdf) / light.lightPdf);
+}
+
+// One path between its scattering events: where its next ray starts, what
+// it carries, and how the last BSDF sample chose its direction.
+struct PathState {
+    Vec3 org, dir;
+    TubeId origin;
+    Rgb radiance{0.0}, throughput{1.0};
+    // Density with which the last BSDF sample chose `dir`; 0 after the camera or a delta lobe.
+    double lastPdf = 0;
+    bool countEmissionFully = true;
+};
+
+// Traces the path's next ray and adds the emission it sees: a sphere light
+// in front of the tube, or every infinite light if it escapes (the MIS
+// weight uses the probability with which NEE picks light i). True when the
+// ray hit a tube that scatters the path further (in *hit); false when the
+// path ends here (a light, the sky, or maxDepth events: counted truncated).
+bool traceToNextHit(const Scene& scene, PathState& p, int depth, bool nee,
+                    const PathTracerOptions& options, PathCounters& counters, TubeHit* hit) {
+    const auto& lights = scene.lights();
+    ++counters.rays;
+    const bool hitTube = scene.accel().intersect(p.org, p.dir, kInfinity, p.origin, hit);
+    double lightDistance = 0;
+    const int light =
+        nearestFiniteLight(scene, p.org, p.dir, hitTube ? hit->t : kInfinity, &lightDistance);
+    auto addEmission = [&](size_t i, const Rgb& le) {
+        double weight = 1.0;
+        if (nee && !p.countEmissionFully)
+            weight = powerHeuristic(p.lastPdf,
+                                    scene.lightSampler().pmf(i) * lights[i]->pdf(p.org, p.dir));
+        p.radiance += p.throughput * le * weight;
+    };
+    if (light >= 0) {
+        addEmission(static_cast<size_t>(light), lights[light]->radiance(p.dir));
+        return false;
+    }
+    if (!hitTube) {
+        for (size_t i = 0; i < lights.size(); ++i)
+            if (lights[i]->isInfinite()) addEmission(i, lights[i]->radiance(p.dir));
+        return false;
+    }
+    if (depth >= options.maxDepth) {
+        ++counters.truncated;
+        return false;
+    }
+    return true;
+}
+
+void recordFirstHit(const TubeHit& hit, const Vec3& dir, FirstHit* first) {
+    first->hit = true;
+    first->depth = hit.t;
+    first->normal = dot(hit.normal, dir) > 0 ? -hit.normal : hit.normal;
+    first->geometry = hit.id.geometry;
+}
+
+// The three numbers of the BSDF sample: lobe, then direction.
+BsdfSampleInput bsdfSampleInput(SampleStream& stream) {
+    const double lobeU = stream.get1D();
+    const std::array<double, 2> dirU = stream.get2D();
+    return {lobeU, dirU[0], dirU[1]};
+}
+
+// Continues the path with the BSDF sample `s` (wo in world space) drawn at
+// `hit`, then Russian roulette; false when the path ends.
+bool continuePath(PathState& p, const TubeHit& hit, const BsdfSample& s, int depth,
+                  SampleStream& stream, const PathTracerOptions& options, FirstHit* first) {
+    if (depth == 0 && first && s.valid()) first->albedo = s.weight;
+    if (!s.valid() || s.weight.isBlack()) return false;
+    p.throughput *= s.weight;
+    if (!p.throughput.isFinite()) return false;
+    p.lastPdf = s.pdf;
+    p.countEmissionFully = s.isDelta;
+    p.org = hit.point;
+    p.dir = s.wo;
+    p.origin = hit.id;
+    if (depth + 1 >= options.rouletteDepth) {
+        const double survive = std::min(1.0, p.throughput.maxComponent());
+        if (stream.get1D() >= survive) return false;
+        p.throughput = p.throughput / survive;
+    }
+    return true;
 }
 
 }  // namespace
 
 Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, SampleStream& stream,
                  const PathTracerOptions& options, PathCounters& counters, FirstHit* first) {
-    const auto& lights = scene.lights();
-    const LightSampler& lightSampler = scene.lightSampler();
-    const bool nee = options.nextEventEstimation && !lights.empty();
-
-    Rgb radiance(0.0), throughput(1.0);
-    Vec3 org = orgIn, dir = dirIn;
-    TubeId origin;
-    // Density with which the last BSDF sample chose `dir`; 0 after the camera or a delta lobe.
-    double lastPdf = 0;
-    bool countEmissionFully = true;
+    const bool nee = options.nextEventEstimation && !scene.lights().empty();
+    PathState p;
+    p.org = orgIn;
+    p.dir = dirIn;
     ++counters.paths;
-
     for (int depth = 0;; ++depth) {
         TubeHit hit;
-        ++counters.rays;
-        const bool hitTube = scene.accel().intersect(org, dir, kInfinity, origin, &hit);
-        double lightDistance = 0;
-        const int light =
-            nearestFiniteLight(scene, org, dir, hitTube ? hit.t : kInfinity, &lightDistance);
-
-        // Emission seen by this ray: a sphere light in front of the tube, or
-        // every infinite light if it escapes.
-        // The MIS weight uses the probability with which NEE picks light i.
-        auto addEmission = [&](size_t i, const Rgb& le) {
-            double weight = 1.0;
-            if (nee && !countEmissionFully)
-                weight = powerHeuristic(lastPdf, lightSampler.pmf(i) * lights[i]->pdf(org, dir));
-            radiance += throughput * le * weight;
-        };
-        if (light >= 0) {
-            addEmission(static_cast<size_t>(light), lights[light]->radiance(dir));
-            break;
-        }
-        if (!hitTube) {
-            for (size_t i = 0; i < lights.size(); ++i)
-                if (lights[i]->isInfinite()) addEmission(i, lights[i]->radiance(dir));
-            break;
-        }
-        if (depth >= options.maxDepth) {
-            ++counters.truncated;
-            break;
-        }
-
-        const ShadingPoint bsdf(scene, hit, -dir, throughput);
-        if (depth == 0 && first) {
-            first->hit = true;
-            first->depth = hit.t;
-            first->normal = dot(hit.normal, dir) > 0 ? -hit.normal : hit.normal;
-            first->geometry = hit.id.geometry;
-        }
-
+        if (!traceToNextHit(scene, p, depth, nee, options, counters, &hit)) break;
+        const ShadingPoint bsdf(scene, hit, -p.dir, p.throughput);
+        if (depth == 0 && first) recordFirstHit(hit, p.dir, first);
         if (nee) {
-            double pickPdf = 0;
-            const int pick = lightSampler.sample(stream.get1D(), &pickPdf);
-            radiance += throughput * directLight(scene, bsdf, hit, pick, pickPdf, stream, counters);
+            const LightSampleAtHit light = sampleLightAtHit(scene, hit, stream, counters);
+            if (light.pending)
+                p.radiance += p.throughput * directLight(light, bsdf.evalPdf(light.wi));
         }
-
-        const double lobeU = stream.get1D();
-        const std::array<double, 2> dirU = stream.get2D();
-        const BsdfSampleInput u = {lobeU, dirU[0], dirU[1]};
-        const BsdfSample s = bsdf.sample(u, stream.rng());
-        if (depth == 0 && first && s.valid()) first->albedo = s.weight;
-        if (!s.valid() || s.weight.isBlack()) break;
-        throughput *= s.weight;
-        if (!throughput.isFinite()) break;
-        lastPdf = s.pdf;
-        countEmissionFully = s.isDelta;
-        org = hit.point;
-        dir = s.wo;
-        origin = hit.id;
-
-        if (depth + 1 >= options.rouletteDepth) {
-            const double survive = std::min(1.0, throughput.maxComponent());
-            if (stream.get1D() >= survive) break;
-            throughput = throughput / survive;
-        }
+        const BsdfSample s = bsdf.sample(bsdfSampleInput(stream), stream.rng());
+        if (!continuePath(p, hit, s, depth, stream, options, first)) break;
     }
-    return radiance;
+    return p.radiance;
+}
+
+void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
+                       const PathTracerOptions& options, PathCounters& counters) {
+    const bool nee = options.nextEventEstimation && !scene.lights().empty();
+    // A path's state at its current scattering event.
+    struct Event {
+        TubeHit hit;
+        Frame frame;
+        BsdfIncident incident;
+        Vec3 wiLocal, woLocal;
+        LightSampleAtHit light;
+        BsdfEval eval;
+        BsdfSampleInput u;
+        BsdfSample sample;
+    };
+    const size_t n = queries.size();
+    std::vector<PathState> paths(n);
+    std::vector<Event> events(n);
+    std::vector<size_t> alive(n);
+    for (size_t k = 0; k < n; ++k) {
+        paths[k].org = queries[k].org;
+        paths[k].dir = queries[k].dir;
+        alive[k] = k;
+    }
+    counters.paths += n;
+    // The paths at an event, grouped by BSDF (first-seen order); scratch
+    // arrays for one group's batch call.
+    std::vector<std::pair<const Bsdf*, std::vector<size_t>>> groups;
+    std::vector<Vec3> vecs;
+    std::vector<BsdfIncident*> incidents;
+    std::vector<const BsdfIncident*> constIncidents;
+    std::vector<BsdfEval> evals;
+    std::vector<BsdfSampleInput> inputs;
+    std::vector<Rng*> rngs;
+    std::vector<BsdfSample> samples;
+    for (int depth = 0; !alive.empty(); ++depth) {
+        // Every path's next ray, and its BSDF.
+        for (auto& group : groups) group.second.clear();
+        size_t kept = 0;
+        for (const size_t k : alive) {
+            PathState& p = paths[k];
+            Event& e = events[k];
+            if (!traceToNextHit(scene, p, depth, nee, options, counters, &e.hit)) continue;
+            e.frame = scene.shadingFrame(e.hit);
+            e.wiLocal = e.frame.toLocal(-p.dir);
+            e.incident = BsdfIncident();
+            e.incident.setImportance(p.throughput);
+            if (depth == 0 && queries[k].first) recordFirstHit(e.hit, p.dir, queries[k].first);
+            const Bsdf* bsdf = &scene.bsdf(e.hit.material);
+            auto group = std::find_if(groups.begin(), groups.end(),
+                                      [&](const auto& g) { return g.first == bsdf; });
+            if (group == groups.end()) group = groups.insert(groups.end(), {bsdf, {}});
+            group->second.push_back(k);
+            alive[kept++] = k;
+        }
+        alive.resize(kept);
+        // Each group's calls in one batch; vecs, incidents, ... hold its members' arguments.
+        auto forEachGroup = [&](auto&& call) {
+            for (const auto& [bsdf, members] : groups)
+                if (!members.empty()) call(*bsdf, members);
+        };
+        forEachGroup([&](const Bsdf& bsdf, const std::vector<size_t>& members) {
+            vecs.clear();
+            incidents.clear();
+            for (const size_t k : members) {
+                vecs.push_back(events[k].wiLocal);
+                incidents.push_back(&events[k].incident);
+            }
+            bsdf.prepareBatch(vecs.data(), incidents.data(), members.size());
+        });
+        if (nee) {
+            for (const size_t k : alive) {
+                Event& e = events[k];
+                e.light = sampleLightAtHit(scene, e.hit, *queries[k].stream, counters);
+                if (e.light.pending) e.woLocal = e.frame.toLocal(e.light.wi);
+            }
+            forEachGroup([&](const Bsdf& bsdf, const std::vector<size_t>& members) {
+                vecs.clear();
+                constIncidents.clear();
+                std::vector<size_t> pending;
+                for (const size_t k : members) {
+                    if (!events[k].light.pending) continue;
+                    pending.push_back(k);
+                    vecs.push_back(events[k].woLocal);
+                    constIncidents.push_back(&events[k].incident);
+                }
+                evals.resize(pending.size());
+                bsdf.evalPdfBatch(constIncidents.data(), vecs.data(), pending.size(), evals.data());
+                for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].eval = evals[j];
+            });
+            for (const size_t k : alive) {
+                const Event& e = events[k];
+                if (e.light.pending)
+                    paths[k].radiance += paths[k].throughput * directLight(e.light, e.eval);
+            }
+        }
+        for (const size_t k : alive) events[k].u = bsdfSampleInput(*queries[k].stream);
+        forEachGroup([&](const Bsdf& bsdf, const std::vector<size_t>& members) {
+            constIncidents.clear();
+            inputs.clear();
+            rngs.clear();
+            for (const size_t k : members) {
+                constIncidents.push_back(&events[k].incident);
+                inputs.push_back(events[k].u);
+                rngs.push_back(&queries[k].stream->rng());
+            }
+            samples.resize(members.size());
+            bsdf.sampleBatch(constIncidents.data(), inputs.data(), rngs.data(), members.size(),
+                             samples.data());
+            for (size_t j = 0; j < members.size(); ++j) events[members[j]].sample = samples[j];
+        });
+        kept = 0;
+        for (const size_t k : alive) {
+            Event& e = events[k];
+            e.sample.wo = normalize(e.frame.fromLocal(e.sample.wo));
+            if (continuePath(paths[k], e.hit, e.sample, depth, *queries[k].stream, options,
+                             queries[k].first))
+                alive[kept++] = k;
+        }
+        alive.resize(kept);
+    }
+    for (size_t k = 0; k < n; ++k) queries[k].radiance = paths[k].radiance;
 }
 
 }  // namespace weft::render

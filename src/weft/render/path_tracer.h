@@ -37,6 +37,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 
 #include "weft/core/rgb.h"
 #include "weft/core/rng.h"
@@ -74,5 +75,25 @@ struct FirstHit {
 Rgb pathRadiance(const Scene& scene, const Vec3& org, const Vec3& dir, SampleStream& stream,
                  const PathTracerOptions& options, PathCounters& counters,
                  FirstHit* first = nullptr);
+
+// One path of a batch: its camera ray and sample stream in (and `first`, as
+// for pathRadiance), its radiance out.
+struct PathQuery {
+    Vec3 org, dir;
+    SampleStream* stream = nullptr;
+    FirstHit* first = nullptr;
+    Rgb radiance;
+};
+
+// pathRadiance for many paths at once (issue 45): the paths advance one
+// scattering event at a time together, and each event's BSDF calls are made
+// in one batch per BSDF (Bsdf::prepareBatch, evalPdfBatch, sampleBatch: the
+// yarn BSDF's networks then run a query per SIMD lane). Each path draws the
+// same numbers from its stream in the same order as pathRadiance, and the
+// batches give the single calls' bits, so every query's radiance and first
+// hit, and the counters' totals, are bit for bit pathRadiance's
+// (render_test holds them to it).
+void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
+                       const PathTracerOptions& options, PathCounters& counters);
 
 }  // namespace weft::render

@@ -523,6 +523,88 @@ TEST_F(RenderTest, OneSceneMixesDrawingModesPerYarn) {
     }
 }
 
+// The batched integrator (pathRadianceBatch: paths of a tile advance
+// together, each event's BSDF calls batched per material) must give the
+// per-path integrator's image, passes and counts bit for bit: each path draws
+// the same numbers in the same order and the batches give the single calls'
+// bits. One scene with three materials (dual scattering, and two neural models), so
+// that groups, the default single-call batches and the yarn's batched
+// networks all run; tiles of 768 paths (three batches) and partial tiles;
+// both samplers, several seeds, a small max_depth (truncated paths), NEE off,
+// and 1 or 2 threads.
+TEST_F(RenderTest, BatchedPathsAreThePerPathRendersBitForBit) {
+    writeFileAtomic(path("a.txt"), "-0.3 -0.5 0\n-0.3 0.5 0\n");
+    writeFileAtomic(path("b.txt"), "0 -0.5 0.05\n0.02 0 0\n0 0.5 0.05\n");
+    writeFileAtomic(path("c.txt"), "0.3 -0.5 0\n0.3 0.5 0\n");
+    const std::string gabardine = std::string(WEFT_SOURCE_DIR) + "/tests/data/gabardine-small.json";
+    const auto yarn = [&](const std::string& curves, const std::string& model,
+                          const std::string& mode) {
+        return R"({"curves": ")" + curves +
+               R"(", "radius": 0.08, "plies": 3, "ply_twist": 0.3, "model": ")" + model +
+               R"(", "mode": ")" + mode + "\"}";
+    };
+    const Scene s(parseSceneText(R"({
+        "camera": {"from": [0, 0, 2], "to": [0, 0, 0], "fov_deg": 22},
+        "film": {"width": 24, "height": 16},
+        "lights": [{"type": "sky"},
+                   {"type": "sphere", "center": [0.5, 0.5, 0.6], "radius": 0.1,
+                    "radiance": [20, 18, 15]}],
+        "yarns": [)" + yarn("a.txt", kFleece, "dual") +
+                                     ", " + yarn("b.txt", kFleece, "neural") + ", " +
+                                     yarn("c.txt", gabardine, "neural") + "]}",
+                                 path("scene.json"), dir_.string()));
+    ASSERT_EQ(s.stats().materials, 3);
+    ASSERT_TRUE(s.batchesFaster());
+    struct Case {
+        SamplerKind sampler;
+        uint64_t seed;
+        int maxDepth;
+        bool nee;
+    };
+    for (const Case c :
+         {Case{SamplerKind::Independent, 1, 1000, true}, Case{SamplerKind::Sobol, 2, 1000, true},
+          Case{SamplerKind::Independent, 3, 2, true},
+          Case{SamplerKind::Independent, 4, 1000, false}}) {
+        // Under the sanitizers the first two cases.
+        if (weft::testing::sampleScale() < 1 && c.seed > 2) continue;
+        SCOPED_TRACE("seed " + std::to_string(c.seed));
+        RenderOptions options;
+        options.spp = static_cast<int>(std::max<int64_t>(2, scaled(3)));
+        options.seed = c.seed;
+        options.sampler = c.sampler;
+        options.maxDepth = c.maxDepth;
+        options.nextEventEstimation = c.nee;
+        options.quiet = true;
+        options.aovs = kAovAlbedo | kAovNormal | kAovDepth | kAovYarnId;
+        options.threads = 1;
+        options.integrator = PathIntegrator::PerPath;
+        const RenderResult want = render(s, options);
+        for (const int threads : {1, 2}) {
+            options.threads = threads;
+            options.integrator = PathIntegrator::Batched;
+            const RenderResult got = render(s, options);
+            EXPECT_EQ(got.image.pixels, want.image.pixels) << threads << " threads";
+            ASSERT_EQ(got.aovs.size(), want.aovs.size());
+            for (size_t a = 0; a < got.aovs.size(); ++a)
+                EXPECT_EQ(got.aovs[a].second.pixels, want.aovs[a].second.pixels)
+                    << got.aovs[a].first;
+            EXPECT_EQ(got.stats.rays, want.stats.rays);
+            EXPECT_EQ(got.stats.truncatedPaths, want.stats.truncatedPaths);
+        }
+        if (c.maxDepth == 2) {
+            EXPECT_GT(want.stats.truncatedPaths, 0);
+        }
+    }
+    // Auto batches where a BSDF batches faster (neural), not in fiber mode.
+    RenderOptions options;
+    options.spp = 1;
+    options.quiet = true;
+    options.integrator = PathIntegrator::Auto;
+    EXPECT_EQ(render(s, options).image.pixels,
+              (options.integrator = PathIntegrator::Batched, render(s, options).image.pixels));
+    EXPECT_FALSE(Scene(scene(kFleece, R"([{"type": "sky"}])"), inMode("fiber")).batchesFaster());
+}
+
 TEST_F(RenderTest, FiberGeometryBeyondTheLimitIsRefusedBeforeItIsBuilt) {
     // 100 m of yarn of radius 0.1 mm: about 2e12 fiber segments.
     writeFileAtomic(path("long.txt"), "0 0 0\n100 0 0\n");

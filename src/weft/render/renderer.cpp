@@ -85,6 +85,25 @@ const char* aovName(Aov aov) {
     return "?";
 }
 
+const char* pathIntegratorName(PathIntegrator integrator) {
+    switch (integrator) {
+        case PathIntegrator::Auto:
+            return "auto";
+        case PathIntegrator::PerPath:
+            return "path";
+        case PathIntegrator::Batched:
+            return "batch";
+    }
+    return "?";
+}
+
+PathIntegrator parsePathIntegrator(const std::string& name, const std::string& what) {
+    for (const PathIntegrator integrator :
+         {PathIntegrator::Auto, PathIntegrator::PerPath, PathIntegrator::Batched})
+        if (name == pathIntegratorName(integrator)) return integrator;
+    throw InputError(what + " \"" + name + "\" is not an integrator: allowed auto, path, batch");
+}
+
 unsigned parseAovs(const std::string& list) {
     unsigned mask = 0;
     size_t start = 0;
@@ -146,6 +165,8 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     std::vector<double> passSum(withAovs ? static_cast<size_t>(width) * height * 7 : 0, 0.0);
     std::vector<int> passId(withAovs ? static_cast<size_t>(width) * height : 0, 0);
 
+    const bool batched = options.integrator == PathIntegrator::Batched ||
+                         (options.integrator == PathIntegrator::Auto && scene.batchesFaster());
     PathTracerOptions tracer;
     tracer.maxDepth = options.maxDepth;
     tracer.nextEventEstimation = options.nextEventEstimation;
@@ -178,6 +199,45 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                 [&](const tbb::blocked_range<int>& r) {
                     PathCounters counters;
                     uint64_t dropped = 0;
+                    // The batched integrator's paths: up to kBatchPaths
+                    // (pixel, sample) pairs of a tile, in the per-path order.
+                    std::vector<Rng> rngs;
+                    std::vector<SampleStream> streams;
+                    std::vector<PathQuery> queries;
+                    std::vector<FirstHit> firstHits;
+                    std::vector<std::pair<uint64_t, int64_t>> pixelSamples;
+                    // One sample's result into the sums, in sample order per pixel.
+                    auto accumulate = [&](uint64_t pixel, int64_t s, const Rgb& L,
+                                          const FirstHit& hit) {
+                        if (withAovs) {
+                            double* p = &passSum[7 * pixel];
+                            for (int c = 0; c < 3; ++c)
+                                p[c] += hit.albedo[c], p[3 + c] += hit.normal[c];
+                            p[6] += hit.hit ? hit.depth : 0.0;
+                            if (s == 0) passId[pixel] = scene.passId(hit.geometry);
+                        }
+                        if (!L.isFinite()) {
+                            ++dropped;
+                            return;
+                        }
+                        double* acc = &sum[3 * pixel];
+                        acc[0] += L.r, acc[1] += L.g, acc[2] += L.b;
+                    };
+                    // The camera ray of (pixel, s), from the sample's own stream.
+                    auto cameraRay = [&](int x, int y, SampleStream& stream, Vec3* org, Vec3* dir) {
+                        // y first: the order in which the renderer drew them
+                        // before the stream (same images).
+                        const std::array<double, 2> film = stream.get2D();
+                        camera.ray(x + film[1], y + film[0], org, dir);
+                    };
+                    auto runBatch = [&] {
+                        pathRadianceBatch(scene, queries, tracer, counters);
+                        for (size_t k = 0; k < queries.size(); ++k)
+                            accumulate(pixelSamples[k].first, pixelSamples[k].second,
+                                       queries[k].radiance, firstHits[k]);
+                        rngs.clear(), streams.clear(), queries.clear(), firstHits.clear(),
+                            pixelSamples.clear();
+                    };
                     for (int tile = r.begin(); tile < r.end(); ++tile) {
                         if (stopNow()) break;
                         const int x0 = (tile % tilesX) * kTile, y0 = (tile / tilesX) * kTile;
@@ -186,34 +246,48 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                         for (int y = y0; y < y1; ++y) {
                             for (int x = x0; x < x1; ++x) {
                                 const uint64_t pixel = static_cast<uint64_t>(y) * width + x;
-                                double* acc = &sum[3 * pixel];
                                 for (int64_t s = from; s < to; ++s) {
+                                    const uint64_t pixelKey =
+                                        mixBits(options.seed ^ mixBits(pixel));
+                                    if (batched) {
+                                        // Streams refer to their Rng: reserved storage.
+                                        if (rngs.empty()) {
+                                            rngs.reserve(kBatchPaths);
+                                            streams.reserve(kBatchPaths);
+                                        }
+                                        rngs.push_back(sampleRng(pixel, s, options.seed));
+                                        streams.emplace_back(options.sampler, rngs.back(), pixelKey,
+                                                             static_cast<uint32_t>(s));
+                                        PathQuery q;
+                                        cameraRay(x, y, streams.back(), &q.org, &q.dir);
+                                        q.stream = &streams.back();
+                                        queries.push_back(q);
+                                        firstHits.emplace_back();
+                                        pixelSamples.emplace_back(pixel, s);
+                                        if (queries.size() == kBatchPaths) {
+                                            for (size_t k = 0; k < queries.size(); ++k)
+                                                queries[k].first =
+                                                    withAovs ? &firstHits[k] : nullptr;
+                                            runBatch();
+                                        }
+                                        continue;
+                                    }
                                     Rng rng = sampleRng(pixel, s, options.seed);
-                                    Vec3 org, dir;
-                                    SampleStream stream(options.sampler, rng,
-                                                        mixBits(options.seed ^ mixBits(pixel)),
+                                    SampleStream stream(options.sampler, rng, pixelKey,
                                                         static_cast<uint32_t>(s));
-                                    // y first: the order in which the renderer drew
-                                    // them before the stream (same images).
-                                    const std::array<double, 2> film = stream.get2D();
-                                    camera.ray(x + film[1], y + film[0], &org, &dir);
+                                    Vec3 org, dir;
+                                    cameraRay(x, y, stream, &org, &dir);
                                     FirstHit hit;
                                     const Rgb L = pathRadiance(scene, org, dir, stream, tracer,
                                                                counters, withAovs ? &hit : nullptr);
-                                    if (withAovs) {
-                                        double* p = &passSum[7 * pixel];
-                                        for (int c = 0; c < 3; ++c)
-                                            p[c] += hit.albedo[c], p[3 + c] += hit.normal[c];
-                                        p[6] += hit.hit ? hit.depth : 0.0;
-                                        if (s == 0) passId[pixel] = scene.passId(hit.geometry);
-                                    }
-                                    if (!L.isFinite()) {
-                                        ++dropped;
-                                        continue;
-                                    }
-                                    acc[0] += L.r, acc[1] += L.g, acc[2] += L.b;
+                                    accumulate(pixel, s, L, hit);
                                 }
                             }
+                        }
+                        if (!queries.empty()) {
+                            for (size_t k = 0; k < queries.size(); ++k)
+                                queries[k].first = withAovs ? &firstHits[k] : nullptr;
+                            runBatch();
                         }
                         tileSamples[static_cast<size_t>(tile)] = to - first;
                         progress.add(static_cast<uint64_t>(x1 - x0) * (y1 - y0) * (to - from));

@@ -60,6 +60,19 @@ const char* aovName(Aov aov);  // "albedo", "normal", "depth", "yarn_id"
 // "albedo,normal" -> a mask; InputError naming --aov and the allowed names otherwise.
 unsigned parseAovs(const std::string& list);
 
+// How the renderer advances its paths: one at a time (pathRadiance, the
+// reference), or up to kBatchPaths of a tile together, one scattering event
+// at a time, with each event's BSDF calls batched (pathRadianceBatch: the
+// same image bit for bit; docs/render.md "Batched shading"). Auto: batched
+// where a material's BSDF batches faster (Scene::batchesFaster: neural
+// mode), one at a time otherwise (fiber and dual mode, where batching
+// measured slower).
+enum class PathIntegrator { Auto, PerPath, Batched };
+inline constexpr size_t kBatchPaths = 256;
+const char* pathIntegratorName(PathIntegrator integrator);  // "auto", "path", "batch"
+// "auto", "path" or "batch"; InputError naming `what` and the allowed values otherwise.
+PathIntegrator parsePathIntegrator(const std::string& name, const std::string& what);
+
 struct RenderOptions {
     int spp = 0;         // > 0: this many samples per pixel
     double seconds = 0;  // > 0 (and spp == 0): progressive passes for this long
@@ -68,6 +81,7 @@ struct RenderOptions {
     SamplerKind sampler = SamplerKind::Independent;  // core/sample_stream.h
     int maxDepth = 1000;  // path_tracer.h: fewer cuts near-white fiber paths
     bool nextEventEstimation = true;
+    PathIntegrator integrator = PathIntegrator::Auto;
     bool quiet = false;  // no progress output
     // A part of an spp render for `weft render merge`: only this shard's samples.
     std::optional<Shard> shard;

@@ -134,6 +134,13 @@ class Scene {
     // it: the YarnBsdf (neural), DualScatteringBsdf (dual) or FiberBcsdf
     // (fiber) of its model.
     const Bsdf& bsdf(int material) const { return *bsdfs_[material]; }
+    // Whether any material's BSDF batches faster (Bsdf::batchesFaster: the
+    // neural mode's yarn BSDF).
+    bool batchesFaster() const {
+        for (const auto& b : bsdfs_)
+            if (b->batchesFaster()) return true;
+        return false;
+    }
     // What a geometry of the accel draws, for the yarn_id pass: yarn entry i
     // as i + 1, object j as -(j + 1); 0 for none (kNoTube).
     int passId(uint32_t geometry) const {

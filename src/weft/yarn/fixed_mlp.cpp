@@ -140,12 +140,17 @@ void denseLayer(const FixedMlpLayer& layer, const float* HWY_RESTRICT params,
     }
 }
 
-void forward(const FixedMlpLayer* layers, int layerCount, const float* params, const float* x,
-             float* a, float* b, float* z) {
+using Layer = void (*)(const FixedMlpLayer&, const float*, const float*, float*);
+
+// The layers in turn, the hidden values alternating between a and b, the
+// last layer's into z.
+template <Layer kLayer>
+void runLayers(const FixedMlpLayer* layers, int layerCount, const float* params, const float* x,
+               float* a, float* b, float* z) {
     const float* input = x;
     for (int l = 0; l < layerCount; ++l) {
         float* output = l + 1 == layerCount ? z : (l % 2 == 0 ? a : b);
-        denseLayer(layers[l], params, input, output);
+        kLayer(layers[l], params, input, output);
         input = output;
     }
 }
@@ -238,16 +243,6 @@ void batchLayer(const FixedMlpLayer& layer, const float* HWY_RESTRICT params,
     }
 }
 
-void forwardBatch(const FixedMlpLayer* layers, int layerCount, const float* params, const float* x,
-                  float* a, float* b, float* z) {
-    const float* input = x;
-    for (int l = 0; l < layerCount; ++l) {
-        float* output = l + 1 == layerCount ? z : (l % 2 == 0 ? a : b);
-        batchLayer(layers[l], params, input, output);
-        input = output;
-    }
-}
-
 // The output function in place on z[0, count), count a multiple of the
 // vector width; elementwise, so a value's result does not depend on its
 // neighbours (forward and forwardBatch agree). Highway's Exp (1 ulp) in place
@@ -277,8 +272,8 @@ void applyOutput(OutputFunction function, float* HWY_RESTRICT z, int count) {
 
 FixedMlpKernel selectKernel() {
     FixedMlpKernel kernel;
-    kernel.forward = &forward;
-    kernel.forwardBatch = &forwardBatch;
+    kernel.forward = &runLayers<denseLayer>;
+    kernel.forwardBatch = &runLayers<batchLayer>;
     kernel.applyOutput = &applyOutput;
     kernel.lanes = static_cast<int>(hn::Lanes(Tag()));
     kernel.fusedMultiplyAdd = HWY_NATIVE_FMA != 0;

@@ -282,23 +282,41 @@ inline Rgb evalScattering(const ScatteringMlp& net, const Vec3& wi, const Vec3& 
     return {y[0], y[1], y[2]};
 }
 
-// out[k] = evalScattering(net, wi, wo[k]) for k < count, bit for bit
-// (FixedMlp::forwardBatch).
-inline void evalScatteringBatch(const ScatteringMlp& net, const Vec3& wi, const Vec3* wo,
-                                size_t count, Rgb* out) {
+// out[k] = evalScattering(net, wi[k wiStep], wo[k]) for k < count, bit for
+// bit (FixedMlp::forwardBatch); wiStep 0: one wi for every wo.
+inline void evalScatteringBatch(const ScatteringMlp& net, const Vec3* wi, size_t wiStep,
+                                const Vec3* wo, size_t count, Rgb* out) {
     constexpr size_t kChunk = 64;
     float x[6 * kChunk], y[3 * kChunk];
     for (size_t first = 0; first < count; first += kChunk) {
         const size_t n = std::min(kChunk, count - first);
         for (size_t k = 0; k < n; ++k) {
-            const Vec3& o = wo[first + k];
-            const float q[6] = {static_cast<float>(wi.x), static_cast<float>(wi.y),
-                                static_cast<float>(wi.z), static_cast<float>(o.x),
-                                static_cast<float>(o.y),  static_cast<float>(o.z)};
+            const Vec3 &i = wi[(first + k) * wiStep], &o = wo[first + k];
+            const float q[6] = {static_cast<float>(i.x), static_cast<float>(i.y),
+                                static_cast<float>(i.z), static_cast<float>(o.x),
+                                static_cast<float>(o.y), static_cast<float>(o.z)};
             std::copy(q, q + 6, x + 6 * k);
         }
         net.forwardBatch(x, static_cast<int>(n), y);
         for (size_t k = 0; k < n; ++k) out[first + k] = {y[3 * k], y[3 * k + 1], y[3 * k + 2]};
+    }
+}
+
+// out[k] = evalTransmission(net, wi[k]) for k < count, bit for bit.
+inline void evalTransmissionBatch(const TransmissionMlp& net, const Vec3* wi, size_t count,
+                                  double* out) {
+    constexpr size_t kChunk = 64;
+    float x[3 * kChunk], y[kChunk];
+    for (size_t first = 0; first < count; first += kChunk) {
+        const size_t n = std::min(kChunk, count - first);
+        for (size_t k = 0; k < n; ++k) {
+            const Vec3& i = wi[first + k];
+            x[3 * k] = static_cast<float>(i.x);
+            x[3 * k + 1] = static_cast<float>(i.y);
+            x[3 * k + 2] = static_cast<float>(i.z);
+        }
+        net.forwardBatch(x, static_cast<int>(n), y);
+        for (size_t k = 0; k < n; ++k) out[first + k] = y[k];
     }
 }
 

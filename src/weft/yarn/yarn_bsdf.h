@@ -76,6 +76,15 @@ class YarnBsdf final : public Bsdf {
     double pdf(const BsdfIncident& in, const Vec3& wo) const override;
     double pdf(const Vec3& wi, const Vec3& wo) const override;
     BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const override;
+    // The batches (core/bsdf.h), bit for bit the single calls: the T network
+    // (prepare) and the M network (evalPdf, sample) run one query per SIMD
+    // lane (FixedMlp::forwardBatch), the rest per query.
+    void prepareBatch(const Vec3* wi, BsdfIncident* const* in, size_t count) const override;
+    void evalPdfBatch(const BsdfIncident* const* in, const Vec3* wo, size_t count,
+                      BsdfEval* out) const override;
+    void sampleBatch(const BsdfIncident* const* in, const BsdfSampleInput* u, Rng* const* rng,
+                     size_t count, BsdfSample* out) const override;
+    bool batchesFaster() const override { return true; }
 
     // The networks, the energy guard's and the sampler's tables.
     size_t memoryBytes() const override;
@@ -100,8 +109,12 @@ class YarnBsdf final : public Bsdf {
 
     // The incident state of wi: the model's part, then the sampler's.
     YarnIncident incident(const Vec3& wi) const;
-    // eval and pdf at wo (mirrored with the incident): the one place where both are computed.
-    void evalAndPdf(const YarnIncident& in, const Vec3& wo, Rgb* value, double* density) const;
+    // The same with P(T) given: pT = transmission(wi).
+    YarnIncident incident(const Vec3& wi, double pT) const;
+    // eval and pdf at wo (mirrored with the incident): the one place where
+    // both are computed. `m`: S_M at (in.wi, wo) when a batch computed it.
+    void evalAndPdf(const YarnIncident& in, const Vec3& wo, Rgb* value, double* density,
+                    const Rgb* m = nullptr) const;
 
     // Immutable once built, so copies of the BSDF share them (the tabulated
     // sampler keeps the evaluator too).

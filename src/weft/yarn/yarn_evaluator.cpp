@@ -59,7 +59,18 @@ Rgb YarnEvaluator::evalM(const Vec3& wi, const Vec3& wo) const {
 }
 
 void YarnEvaluator::evalMBatch(const Vec3& wi, const Vec3* wo, size_t count, Rgb* out) const {
-    evalScatteringBatch(mNet_, wi, wo, count, out);
+    evalScatteringBatch(mNet_, &wi, 0, wo, count, out);
+}
+
+void YarnEvaluator::evalMBatch(const Vec3* wi, const Vec3* wo, size_t count, Rgb* out) const {
+    evalScatteringBatch(mNet_, wi, 1, wo, count, out);
+}
+
+void YarnEvaluator::transmissionBatch(const Vec3* wi, size_t count, double* out) const {
+    if (hasTransmission_)
+        evalTransmissionBatch(tNet_, wi, count, out);
+    else
+        std::fill(out, out + count, 0.0);
 }
 
 SurfaceFiberAngles YarnEvaluator::surfaceAngles(const Vec3& wi) const {

@@ -69,6 +69,10 @@ class YarnEvaluator {
     // out[k] = evalM(wi, wo[k]) for k < count, bit for bit, through the
     // batched network (FixedMlp::forwardBatch: 3-4 times the throughput).
     void evalMBatch(const Vec3& wi, const Vec3* wo, size_t count, Rgb* out) const;
+    // The same with one wi per query: out[k] = evalM(wi[k], wo[k]).
+    void evalMBatch(const Vec3* wi, const Vec3* wo, size_t count, Rgb* out) const;
+    // out[k] = transmission(wi[k]) for k < count, bit for bit.
+    void transmissionBatch(const Vec3* wi, size_t count, double* out) const;
     // wi's angles in the surface fiber frame.
     SurfaceFiberAngles surfaceAngles(const Vec3& wi) const;
     // wo's fiber angles in the surface fiber frame, which S_R and q_R share;
@@ -92,6 +96,9 @@ class YarnEvaluator {
     // through evalMBatch.
     void componentsBatch(const Vec3* wo, size_t count, const YarnIncident& in,
                          YarnComponents* out) const;
+    // components() with S_M given: m = evalM(in.wi, wo), from a batch.
+    YarnComponents components(const YarnIncident& in, const Vec3& wo, const FiberBcsdf::Angles& out,
+                              const Rgb& m) const;
 
     // The energy guard's factor on S_M at wi (1 without the guard); a wi
     // below the surface counts as its mirror image.
@@ -101,9 +108,6 @@ class YarnEvaluator {
     size_t memoryBytes() const;
 
   private:
-    // components() with S_M given (the network's value at (in.wi, wo)).
-    YarnComponents components(const YarnIncident& in, const Vec3& wo, const FiberBcsdf::Angles& out,
-                              const Rgb& m) const;
     TransmissionMlp tNet_;
     ScatteringMlp mNet_;
     RLobe rLobe_;

@@ -232,6 +232,7 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
     std::vector<BsdfSampleInput> inputs;
     std::vector<Rng*> rngs;
     std::vector<BsdfSample> samples;
+    std::vector<size_t> pending;
     for (int depth = 0; !alive.empty(); ++depth) {
         // Every path's next ray, and its BSDF.
         for (auto& group : groups) group.second.clear();
@@ -276,7 +277,7 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
             forEachGroup([&](const Bsdf& bsdf, const std::vector<size_t>& members) {
                 vecs.clear();
                 constIncidents.clear();
-                std::vector<size_t> pending;
+                pending.clear();
                 for (const size_t k : members) {
                     if (!events[k].light.pending) continue;
                     pending.push_back(k);

@@ -220,6 +220,40 @@ void YarnPrepared(benchmark::State& state) {
     preparedCalls(state, state.range(1) != 0 ? guardedBsdf() : fittedBsdf(), state.range(0));
 }
 
+// The batches of core/bsdf.h on 256 prepared pairs per call (argument 0:
+// evalPdfBatch, 1: sampleBatch, 2: prepareBatch), as the batched path
+// tracer calls them; time per query.
+void YarnBatch(benchmark::State& state) {
+    constexpr size_t kBatch = 256;
+    const YarnBsdf& bsdf = guardedBsdf();
+    const std::vector<BsdfIncident>& prepared = preparedIncidents(bsdf);
+    const Pairs& p = pairs();
+    std::vector<BsdfIncident> scratch(kBatch);
+    std::vector<const BsdfIncident*> in(kBatch);
+    std::vector<BsdfIncident*> out(kBatch);
+    std::vector<Rng> rngs(kBatch, Rng(3, 4));
+    std::vector<Rng*> rng(kBatch);
+    for (size_t k = 0; k < kBatch; ++k) rng[k] = &rngs[k], out[k] = &scratch[k];
+    std::vector<BsdfEval> evals(kBatch);
+    std::vector<BsdfSample> samples(kBatch);
+    size_t first = 0;
+    for (auto _ : state) {
+        for (size_t k = 0; k < kBatch; ++k) in[k] = &prepared[first + k];
+        if (state.range(0) == 0)
+            bsdf.evalPdfBatch(in.data(), &p.wo[first], kBatch, evals.data());
+        else if (state.range(0) == 1)
+            bsdf.sampleBatch(in.data(), &p.u[first], rng.data(), kBatch, samples.data());
+        else
+            bsdf.prepareBatch(&p.wi[first], out.data(), kBatch);
+        benchmark::DoNotOptimize(evals.data());
+        benchmark::DoNotOptimize(samples.data());
+        benchmark::DoNotOptimize(scratch.data());
+        first = (first + kBatch) % (kPairs - kBatch);
+    }
+    state.SetItemsProcessed(state.iterations() * kBatch);
+    state.counters["queries"] = kBatch;  // the table divides the time per call by it
+}
+
 // Bsdf::prepare alone (what depends on wi: P(T), the calibration, the guard,
 // the sampling table's rows and nodes).
 void Prepare(benchmark::State& state, const Bsdf& bsdf) {
@@ -413,6 +447,10 @@ const Entry kEntries[] = {
     {"YarnPrepared/0/0", "the same eval, fitted sampling (paper eq. 9-11)"},
     {"YarnPrepared/1/0", "the same evalPdf, fitted sampling"},
     {"YarnPrepared/2/0", "the same sample, fitted sampling"},
+    {"YarnBatch/0",
+     "YarnBsdf::evalPdfBatch, 256 prepared queries per call (per query; target <= 1.0)"},
+    {"YarnBatch/1", "YarnBsdf::sampleBatch, 256 per call (per query; target <= 1.5)"},
+    {"YarnBatch/2", "YarnBsdf::prepareBatch, 256 per call (per query)"},
     {"FiberPrepare", "FiberBcsdf::prepare alone"},
     {"YarnPrepare", "YarnBsdf::prepare alone: T network, calibration, guard, table rows and nodes"},
     {"FiberVertex", "one path vertex, fiber: prepare, evalPdf (NEE), sample"},
@@ -468,6 +506,7 @@ BENCHMARK(YarnEval)->Arg(1)->Arg(0);
 BENCHMARK(YarnPdf);
 BENCHMARK(YarnSample)->Arg(1)->Arg(0);
 BENCHMARK(YarnPrepared)->ArgsProduct({{0, 1, 2}, {1, 0}});
+BENCHMARK(YarnBatch)->Arg(0)->Arg(1)->Arg(2);
 BENCHMARK(FiberPrepare);
 BENCHMARK(YarnPrepare);
 BENCHMARK(FiberVertex);

@@ -243,8 +243,7 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
             if (!traceToNextHit(scene, p, depth, nee, options, counters, &e.hit)) continue;
             e.frame = scene.shadingFrame(e.hit);
             e.wiLocal = e.frame.toLocal(-p.dir);
-            e.incident = BsdfIncident();
-            e.incident.setImportance(p.throughput);
+            e.incident.setImportance(p.throughput);  // prepareBatch sets the rest
             if (depth == 0 && queries[k].first) recordFirstHit(e.hit, p.dir, queries[k].first);
             const Bsdf* bsdf = &scene.bsdf(e.hit.material);
             auto group = std::find_if(groups.begin(), groups.end(),

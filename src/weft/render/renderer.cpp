@@ -231,6 +231,9 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                         camera.ray(x + film[1], y + film[0], org, dir);
                     };
                     auto runBatch = [&] {
+                        // firstHits is complete now: its addresses are stable.
+                        for (size_t k = 0; k < queries.size(); ++k)
+                            queries[k].first = withAovs ? &firstHits[k] : nullptr;
                         pathRadianceBatch(scene, queries, tracer, counters);
                         for (size_t k = 0; k < queries.size(); ++k)
                             accumulate(pixelSamples[k].first, pixelSamples[k].second,
@@ -264,12 +267,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                                         queries.push_back(q);
                                         firstHits.emplace_back();
                                         pixelSamples.emplace_back(pixel, s);
-                                        if (queries.size() == kBatchPaths) {
-                                            for (size_t k = 0; k < queries.size(); ++k)
-                                                queries[k].first =
-                                                    withAovs ? &firstHits[k] : nullptr;
-                                            runBatch();
-                                        }
+                                        if (queries.size() == kBatchPaths) runBatch();
                                         continue;
                                     }
                                     Rng rng = sampleRng(pixel, s, options.seed);
@@ -284,11 +282,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                                 }
                             }
                         }
-                        if (!queries.empty()) {
-                            for (size_t k = 0; k < queries.size(); ++k)
-                                queries[k].first = withAovs ? &firstHits[k] : nullptr;
-                            runBatch();
-                        }
+                        if (!queries.empty()) runBatch();
                         tileSamples[static_cast<size_t>(tile)] = to - first;
                         progress.add(static_cast<uint64_t>(x1 - x0) * (y1 - y0) * (to - from));
                     }

@@ -172,8 +172,8 @@ class FixedMlp {
     // queries per call, each lane through forward()'s operations in its
     // order, so every output has forward()'s bits (for any count, and
     // whichever lane a query falls in); a partial last call computes on
-    // zero-filled lanes and writes only the count queries' outputs. 4-5
-    // times the single query's throughput for the M network (bench/bsdf).
+    // zero-filled lanes and writes only the count queries' outputs. About
+    // 3.5 times the single query's throughput for the M network (bench/bsdf).
     void forwardBatch(const float* x, int count, float* y) const {
         if (layerCount_ == 0) return;
         const int lanes = kernel_.lanes, in = inputs(), out = outputs();

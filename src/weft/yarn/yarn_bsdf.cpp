@@ -11,6 +11,21 @@ namespace {
 // wo in the incident's upper-hemisphere convention.
 Vec3 upperSide(const YarnIncident& in, const Vec3& wo) { return in.mirrored ? mirrored(wo) : wo; }
 
+// S_T = P(T|wi) delta(wo + wi), chosen with probability P_T.
+BsdfSample transmissionSample(const BsdfIncident& in) {
+    const YarnIncident& yarn = in.get<YarnIncident>();
+    BsdfSample s;
+    s.wo = -in.wi();
+    s.weight = Rgb(yarn.pT / yarn.pickT);
+    s.pdf = 0;
+    s.lobe = YarnBsdf::kLobeT;
+    s.isDelta = true;
+    return s;
+}
+
+// The batches gather the networks' inputs in chunks of this many on the stack.
+constexpr size_t kBatchChunk = 64;
+
 }  // namespace
 
 YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
@@ -108,22 +123,6 @@ YarnLobeProbabilities YarnBsdf::lobeProbabilities(const Vec3& wi) const {
     return sampler_->lobeProbabilities(incident(wi));
 }
 
-namespace {
-
-// S_T = P(T|wi) delta(wo + wi), chosen with probability P_T.
-BsdfSample transmissionSample(const BsdfIncident& in) {
-    const YarnIncident& yarn = in.get<YarnIncident>();
-    BsdfSample s;
-    s.wo = -in.wi();
-    s.weight = Rgb(yarn.pT / yarn.pickT);
-    s.pdf = 0;
-    s.lobe = YarnBsdf::kLobeT;
-    s.isDelta = true;
-    return s;
-}
-
-}  // namespace
-
 BsdfSample YarnBsdf::sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const {
     const YarnIncident& yarn = in.get<YarnIncident>();
     if (u[0] < yarn.pickT) return transmissionSample(in);
@@ -131,11 +130,6 @@ BsdfSample YarnBsdf::sample(const BsdfIncident& in, const BsdfSampleInput& u, Rn
     BsdfEval e;
     evalAndPdf(yarn, d.wo, &e.value, &e.pdf);
     return BsdfSample::fromEval(yarn.mirrored ? mirrored(d.wo) : d.wo, e, d.lobe);
-}
-
-// The batches: the networks' inputs gathered in chunks on the stack.
-namespace {
-constexpr size_t kBatchChunk = 64;
 }
 
 void YarnBsdf::prepareBatch(const Vec3* wi, BsdfIncident* const* in, size_t count) const {

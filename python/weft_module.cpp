@@ -19,6 +19,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -975,7 +976,9 @@ py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const
                    const py::object& seconds, const py::object& threads, const py::object& seed,
                    bool nee, const std::string& yarnSampling, const py::object& sampler,
                    const py::object& baseDir, const py::object& shard, bool quiet,
-                   const std::string& integrator) {
+                   const std::string& integrator, const py::object& progressCallback) {
+    if (!progressCallback.is_none() && !PyCallable_Check(progressCallback.ptr()))
+        throw InputError("progress: expected a callable progress(fraction, image) or None");
     // The integer arguments first (renderer.h gives their ranges).
     const std::optional<int> sppCount =
         spp.is_none() ? std::nullopt : std::optional<int>(intArg(spp, "spp", 1, 1 << 20));
@@ -1021,6 +1024,30 @@ py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const
     options.integrator = render::parsePathIntegrator(integrator, "integrator");
     options.quiet = quiet;
     options.shard = shardValue;
+    // progress(fraction, image) about once a second between passes, from this
+    // thread (a render engine's progress bar and live image); a False return
+    // stops the render, which returns its partial image (stats["partial"]).
+    std::atomic<bool> stopAsked{false};
+    std::optional<py::error_already_set> callbackError;
+    if (!progressCallback.is_none()) {
+        options.checkpointSeconds = 1;
+        options.checkpoint = [&](const render::RenderResult& partial) {
+            const render::RenderStats& st = partial.stats;
+            const double fraction =
+                st.sppRequested > 0
+                    ? static_cast<double>(st.spp) / static_cast<double>(st.sppRequested)
+                    : std::min(1.0, st.seconds / std::max(options.seconds, 1e-9));
+            py::gil_scoped_acquire gil;
+            try {
+                const py::object answer = progressCallback(fraction, imageArray(partial.image));
+                if (py::isinstance<py::bool_>(answer) && !answer.cast<bool>()) stopAsked = true;
+            } catch (py::error_already_set& e) {
+                callbackError = std::move(e);
+                stopAsked = true;
+            }
+        };
+        options.stopRequested = [&] { return stopAsked.load(); };
+    }
     options.validate();
     std::optional<render::RenderResult> result;
     std::string hash;
@@ -1031,6 +1058,7 @@ py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const
         const render::Scene scene(desc, sceneOptions);
         result = render::render(scene, options);
     }
+    if (callbackError) throw std::move(*callbackError);
     // The overlap warnings of `weft render`, as Python warnings (filterable).
     for (const std::string& w :
          render::yarnOverlapWarnings(desc.path, result->stats.scene.yarnOverlap))
@@ -1444,14 +1472,15 @@ PYBIND11_MODULE(weft, m) {
           py::arg("seed") = py::none(), py::arg("nee") = true,
           py::arg("yarn_sampling") = "tabulated", py::arg("sampler") = py::none(),
           py::arg("base_dir") = py::none(), py::arg("shard") = py::none(), py::arg("quiet") = true,
-          py::arg("integrator") = "auto",
+          py::arg("integrator") = "auto", py::arg("progress") = py::none(),
           "`weft render`: a scene file or dict to an (H,W,3) float32 linear RGB image and the "
           "statistics dict; mode (\"neural\", \"fiber\" or \"dual\") draws every yarn so, "
           "over the yarns' own \"mode\" (None: each yarn's, neural where it names none); "
           "shard=(k, n) traces only shard k of n of the spp samples. quiet=False shows the "
           "progress on sys.stderr (as Jupyter shows it); integrator (\"auto\", \"path\" or "
-          "\"batch\") as `weft render --integrator`, the same image. weft.save_image writes "
-          "the image.");
+          "\"batch\") as `weft render --integrator`, the same image. progress(fraction, image) "
+          "is called about once a second with the image so far; returning False stops the "
+          "render early (stats[\"partial\"]). weft.save_image writes the image.");
 
     m.def("curves_points", &pyCurvesPoints, py::arg("path"),
           "`weft curves points`: the control points of a curve file as an (n, 4) float64 array "

@@ -98,6 +98,37 @@ def test_tiny_render(cli, tmp_path, root):
         weft.render(scene, spp=1, integrator="wavefront")
 
 
+def test_render_progress_shows_the_image_and_stops(cli, tmp_path, root):
+    cli("scene", "closeup", "--model", root / "models" / "fleece.json", "--width", 24,
+        "--height", 16, "--out", tmp_path / "closeup")
+    scene = tmp_path / "closeup" / "scene.json"
+    calls = []
+
+    def stop_at_once(fraction, image):
+        calls.append((fraction, image.shape, float(image.mean())))
+        return False
+
+    # A budget that would take minutes: the first call (after about a second) stops it.
+    image, stats = weft.render(scene, spp=1 << 20, progress=stop_at_once)
+    assert len(calls) == 1 and 0 < calls[0][0] < 1 and calls[0][1] == (16, 24, 3)
+    assert calls[0][2] > 0 and stats["partial"] and 0 < stats["spp"] < 1 << 20
+    assert image.shape == (16, 24, 3) and np.all(np.isfinite(image)) and image.mean() > 0
+
+    # A callback that lets it run changes nothing: passes do not change the image.
+    seen = []
+    watched, wstats = weft.render(scene, spp=64, seed=3, progress=lambda f, im: seen.append(f))
+    np.testing.assert_array_equal(watched, weft.render(scene, spp=64, seed=3)[0])
+    assert not wstats["partial"] and all(0 < f <= 1 for f in seen)
+
+    def fail(fraction, image):
+        raise RuntimeError("the callback's own error")
+
+    with pytest.raises(RuntimeError, match="the callback's own error"):
+        weft.render(scene, spp=1 << 20, progress=fail)
+    with pytest.raises(ValueError, match="progress: expected a callable"):
+        weft.render(scene, spp=1, progress=3)
+
+
 def test_sharded_gather_and_render_merge(cli, tmp_path, root):
     args = dict(preset="fleece", paths=3000, bins=[4, 8, 6, 12], seed=2)
     whole = weft.gather(**args)

@@ -60,6 +60,17 @@ weft_install_browser_deps() {
     fi
 }
 
+# Debian's Blender, for the add-on's test (blender/, docs/blender.md) and
+# scripts/blender-addon. Without it the test is skipped, not failed.
+weft_install_blender() {
+    command -v blender >/dev/null && return 0
+    local saved=("${WEFT_PACKAGES[@]}")
+    WEFT_PACKAGES=(blender)
+    weft_install_deps ||
+        echo "weft: warning: could not install blender: the Blender add-on test will be skipped" >&2
+    WEFT_PACKAGES=("${saved[@]}")
+}
+
 # weft_build DIR [cmake args...]: configure and build one build tree, every
 # target (library, weft, tests, benches, Python module) unless WEFT_TARGET
 # names the one to build (scripts/demo builds only `weft`).

@@ -678,12 +678,16 @@ TEST_F(RenderTest, AStoppedRenderIsTheWholeRenderOfWhatEachTileReached) {
     const RenderResult stopped = render(s, options);
     EXPECT_TRUE(stopped.stats.partial);
     EXPECT_EQ(stopped.stats.spp, 1);
-    EXPECT_EQ(stopped.stats.sppMax, 64);
+    // The second pass is as many samples as the first one's time says fit in
+    // a pass: all 63 on an idle machine, fewer on a busy one.
+    EXPECT_GT(stopped.stats.sppMax, 1);
+    EXPECT_LE(stopped.stats.sppMax, 64);
     EXPECT_EQ(stopped.stats.sppRequested, 64);
     options.stopRequested = nullptr;
+    options.spp = static_cast<int>(stopped.stats.sppMax);
     const RenderResult whole = render(s, options);
     EXPECT_FALSE(whole.stats.partial);
-    EXPECT_EQ(whole.stats.spp, 64);
+    EXPECT_EQ(whole.stats.spp, stopped.stats.sppMax);
     options.spp = 1;
     const RenderResult first = render(s, options);
     for (int y = 0; y < 24; ++y)

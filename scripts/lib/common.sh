@@ -12,7 +12,7 @@ WEFT_PACKAGES=(
     cmake g++ make pkg-config
     libembree-dev libtbb-dev libopenexr-dev libstb-dev nlohmann-json3-dev libcli11-dev
     libgtest-dev libgmock-dev libbenchmark-dev pybind11-dev libeigen3-dev libhwy-dev
-    libcpp-httplib-dev
+    libcpp-httplib-dev libpugixml-dev
     python3-dev python3-numpy python3-pytest python3-pil
 )
 

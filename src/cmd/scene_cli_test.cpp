@@ -282,6 +282,61 @@ TEST_F(SceneCliTest, FamilyYarnScenes) {
     EXPECT_FALSE(std::filesystem::exists(path("d")));
 }
 
+// Issue 46: a Mitsuba 3 scene in, rendered, and out again (docs/mitsuba.md).
+TEST_F(SceneCliTest, MitsubaSceneImportsRendersAndExports) {
+    writeFileAtomic(path("ply.txt"), "-1 0 0 0.3\n1 0 0 0.3\n");
+    writeFileAtomic(path("paper.xml"), R"(<scene version="3.0.0">
+  <default name="spp" value="2"/>
+  <integrator type="path"><integer name="max_depth" value="-1"/></integrator>
+  <sensor type="perspective">
+    <float name="fov" value="30"/>
+    <transform name="to_world"><lookat origin="0, 0, 8" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
+  </sensor>
+  <shape type="sphere"><point name="center" value="3, 4, 5"/><float name="radius" value="0.5"/>
+    <emitter type="area"><rgb name="radiance" value="20, 20, 20"/></emitter></shape>
+  <shape type="linearcurve"><string name="filename" value="ply.txt"/>
+    <bsdf type="diffuse" id="ply"/></shape>
+</scene>)");
+    RunResult r =
+        run("scene import paper.xml --model " + kFleece + " --define spp=1 --out imported");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out).at("yarns"), 1);
+    // The Gaussian pixel filter Mitsuba would use is said, not skipped.
+    EXPECT_NE(r.err.find("weft: note: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("box"), std::string::npos) << r.err;
+    r = run("render imported/scene.json --quiet --out img.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("img.json"))).at("spp"), 1);
+
+    r = run("scene export imported/scene.json --mitsuba mitsuba --fibers");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(std::filesystem::exists(path("mitsuba/scene.xml")));
+    EXPECT_TRUE(std::filesystem::exists(path("mitsuba/weft-models.json")));
+    r = run("scene export imported/scene.json --mitsuba mitsuba");
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = run("scene import mitsuba/scene.xml --out again");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(readFile(path("again/curves/ply.txt")), readFile(path("imported/curves/ply.txt")));
+
+    expectUserError(run("scene import missing.xml --out o"), {"missing.xml"});
+    expectUserError(run("scene import paper.xml --out o"), {"bsdf \"ply\"", "--model"});
+    expectUserError(run("scene import paper.xml --model " + kFleece + " --define spp --out o"),
+                    {"--define spp", "NAME=VALUE"});
+    expectUserError(run("scene import --out o"), {"weft scene import SCENE.xml"});
+    expectUserError(run("scene export imported/scene.json"), {"--mitsuba"});
+    expectUserError(run("scene knit --model " + kFleece + " --fibers --out o"),
+                    {"--fibers", "import or export"});
+    // Never over an input; nor over a folder holding something else.
+    expectUserError(run("scene export imported/scene.json --mitsuba imported"), {"--mitsuba"});
+    std::filesystem::create_directory(path("busy"));
+    writeFileAtomic(path("busy/notes.txt"), "keep");
+    expectUserError(run("scene import paper.xml --model " + kFleece + " --out busy"),
+                    {"busy", "notes.txt"});
+    EXPECT_EQ(readFile(path("busy/notes.txt")), "keep");
+}
+
 TEST_F(SceneCliTest, BadInputIsNamed) {
     const std::string m = " --model " + kFleece;
     expectUserError(run("scene twill" + m + " --out o"), {"twill", "closeup, weave, knit"});

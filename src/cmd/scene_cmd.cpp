@@ -11,6 +11,8 @@
 #include "weft/core/file.h"
 #include "weft/core/text_parse.h"
 #include "weft/eval/scene_gen.h"
+#include "weft/render/mitsuba.h"
+#include "weft/render/scene_file.h"
 
 namespace weft::cmd {
 
@@ -29,9 +31,80 @@ struct SceneCmdOptions {
     CLI::Option* dyeLengthOpt = nullptr;
     double dyeLength = 0;
     bool quiet = false;
+    // import / export (Mitsuba 3, docs/mitsuba.md)
+    std::string models, mitsuba;
+    std::vector<std::string> defines;  // NAME=VALUE
+    bool fibers = false;
 };
 
+void printNotes(const std::vector<std::string>& notes) {
+    for (const std::string& n : notes) std::fprintf(stderr, "weft: note: %s\n", n.c_str());
+}
+
+// weft scene import SCENE.xml --out DIR [--model M | --models MAP.json] [--define N=V]
+void runImport(const SceneCmdOptions& o) {
+    if (o.curves.empty())
+        throw InputError(
+            "weft scene import needs the Mitsuba scene: weft scene import SCENE.xml "
+            "--out DIR [--model MODEL.json | --models MAP.json]");
+    if (o.out.empty()) throw InputError("weft scene import needs --out DIR");
+    render::MitsubaImportOptions options;
+    options.model = o.scene.model;
+    options.mapping = o.models;
+    for (const std::string& d : o.defines) {
+        const size_t eq = d.find('=');
+        if (eq == 0 || eq == std::string::npos)
+            throw InputError("--define " + d + ": expected NAME=VALUE");
+        options.defines.push_back({d.substr(0, eq), d.substr(eq + 1)});
+    }
+    checkOutputsSpareInputs(
+        {{"SCENE", o.curves}, {"--model", o.scene.model}, {"--models", o.models}}, {}, {},
+        {{"--out", o.out}});
+    const render::MitsubaImport imported = render::importMitsubaScene(o.curves, options);
+    std::vector<std::pair<std::string, std::string>> files = imported.files;
+    files.push_back({"scene.json", imported.scene.dump(2) + "\n"});
+    render::writeSceneFolder(files, o.out);
+    printNotes(imported.notes);
+    std::printf("%s\n", nlohmann::json({{"scene", o.out + "/scene.json"},
+                                        {"yarns", imported.scene["yarns"].size()},
+                                        {"lights", imported.scene["lights"].size()},
+                                        {"notes", imported.notes.size()}})
+                            .dump()
+                            .c_str());
+}
+
+// weft scene export SCENE.json --mitsuba DIR [--fibers]
+void runExport(const SceneCmdOptions& o) {
+    if (o.curves.empty() || o.mitsuba.empty())
+        throw InputError(
+            "weft scene export needs the scene and the folder: weft scene export "
+            "SCENE.json --mitsuba DIR [--fibers]");
+    const render::SceneDesc scene = render::loadScene(o.curves);
+    checkOutputsSpareInputs(render::sceneInputs(scene, o.curves), {}, {},
+                            {{"--mitsuba", o.mitsuba}});
+    const render::MitsubaExport exported = render::exportMitsubaScene(scene, o.fibers);
+    render::writeSceneFolder(exported.files, o.mitsuba);
+    printNotes(exported.notes);
+    std::printf("%s\n", nlohmann::json({{"scene", o.mitsuba + "/scene.xml"},
+                                        {"files", exported.files.size()},
+                                        {"notes", exported.notes.size()}})
+                            .dump()
+                            .c_str());
+}
+
 void runScene(SceneCmdOptions o) {
+    if (o.kind == "import") return runImport(o);
+    if (o.kind == "export") return runExport(o);
+    if (o.kind != "closeup" && o.kind != "weave" && o.kind != "knit" && o.kind != "curves")
+        throw InputError("unknown scene kind \"" + o.kind +
+                         "\": allowed closeup, weave, knit, curves, import, export");
+    for (const auto& [flag, given] : {std::pair<const char*, bool>{"--models", !o.models.empty()},
+                                      {"--define", !o.defines.empty()},
+                                      {"--mitsuba", !o.mitsuba.empty()},
+                                      {"--fibers", o.fibers}})
+        if (given) throw InputError(std::string(flag) + " applies to weft scene import or export");
+    if (o.scene.model.empty()) throw InputError("--model is required");
+    if (o.out.empty()) throw InputError("--out is required");
     const eval::SceneKind kind = eval::parseSceneKind(o.kind);
     if (kind == eval::SceneKind::Closeup && o.sizeOpt->count())
         throw InputError("--size applies to weave and knit only (a close-up is one yarn)");
@@ -84,15 +157,28 @@ void addSceneCommand(CLI::App& app) {
         "Write a generated scene (docs/scenes.md) for `weft render`: DIR/scene.json and "
         "DIR/yarns.txt (DIR/yarns-1.txt, yarns-2.txt with two colours). closeup: one 3-ply "
         "yarn across the frame; weave: an N x N plain weave; knit: N courses of N "
-        "stockinette loops; curves FILE: your own curve file framed whole (yarns.bcc).");
-    cmd->add_option("kind", o->kind, "closeup, weave, knit or curves")->required();
+        "stockinette loops; curves FILE: your own curve file framed whole (yarns.bcc). "
+        "import SCENE.xml: a Mitsuba 3 scene as a weft scene folder; export SCENE.json "
+        "--mitsuba DIR: a weft scene as a Mitsuba 3 scene (docs/mitsuba.md).");
+    cmd->add_option("kind", o->kind, "closeup, weave, knit, curves, import or export")->required();
     cmd->add_option("file", o->curves,
-                    "curves: the curve file (.bcc, .txt, .obj; docs/curves.md), drawn whole");
+                    "curves: the curve file (.bcc, .txt, .obj; docs/curves.md), drawn whole; "
+                    "import: the Mitsuba SCENE.xml; export: the weft SCENE.json");
     cmd->add_option("--view", o->view,
                     "curves: where the camera looks from: three-quarter (35 degrees right of the "
                     "front, 30 above), front (from +z) or top (from +y)")
         ->capture_default_str();
-    cmd->add_option("--model", s.model, "MODEL.json written by `weft fit` (must load)")->required();
+    cmd->add_option("--model", s.model,
+                    "MODEL.json written by `weft fit` (must load); import: the model of every "
+                    "curve shape the --models file does not map");
+    cmd->add_option("--models", o->models,
+                    "import: MAP.json, bsdf id -> yarn keys (model, plies, ply_twist, colour, "
+                    "...; docs/mitsuba.md); default: weft-models.json beside the XML");
+    cmd->add_option("--define", o->defines,
+                    "import: NAME=VALUE for $NAME in the XML, over its <default> (repeatable)");
+    cmd->add_option("--mitsuba", o->mitsuba, "export: the output folder of the Mitsuba 3 scene");
+    cmd->add_flag("--fibers", o->fibers,
+                  "export: the explicit fibers of fiber mode as the curves, not the yarns");
     o->sizeOpt = cmd->add_option("--size", s.size,
                                  "weave: N warp and N weft yarns; knit: N courses of N loops; "
                                  "[1, 100]")
@@ -141,8 +227,7 @@ void addSceneCommand(CLI::App& app) {
     cmd->add_flag("--quiet", o->quiet, "No warning when the generated yarns overlap");
     cmd->add_option("--out", o->out,
                     "Output directory (replaced only if it holds nothing but an earlier "
-                    "scene)")
-        ->required();
+                    "scene)");
     cmd->callback([o] { runScene(*o); });
 }
 

@@ -352,15 +352,11 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
         const PlyParams& fibers = materials.model(y).ply;
         const std::vector<Curve>& curves = curveSets[y].curves;
         for (size_t c = 0; c < curves.size(); ++c) {
-            const double radius = largestRadius(curves[c], yarn);
-            const double step = sampleStep(radius > 0 ? radius : 1.0, yarn.plies, yarn.plyTwist,
-                                           mode.drawsPlies() ? nullptr : &fibers);
             // Again with the segments made so far: the spline may bulge.
             checkGeometrySize(static_cast<double>(planned),
                               estimatedSegments(curves[c], yarn, mode, fibers), desc, y, mode);
-            const FramedCurve centre =
-                frameCurve(curves[c], yarn.scale, yarn.radius, step, yarn.curves, c);
-            const std::vector<FramedCurve> plies = plyCurves(centre, yarn.plies, yarn.plyTwist);
+            const std::vector<FramedCurve> plies =
+                yarnPlyCurves(curves[c], yarn, mode.drawsPlies() ? nullptr : &fibers, c);
             for (size_t j = 0; j < plies.size(); ++j) {
                 // Refuse before allocating: a fiber-mode scene costs fibers x samples segments.
                 const int64_t tubes = mode.drawsPlies() ? 1 : fibers.fibers;
@@ -380,10 +376,8 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
                 if (mode.drawsPlies()) {
                     id = accel_->addGeometry({toTube(plies[j])}, first, std::move(along));
                 } else {
-                    // Seeded by where the ply is, not by the render seed.
-                    const uint64_t seed = mixBits(mixBits(mixBits(y + 1) ^ (c + 1)) ^ (j + 1));
-                    id = accel_->addGeometry(fiberTubes(plies[j], fibers, seed), first,
-                                             std::move(along));
+                    id = accel_->addGeometry(fiberTubes(plies[j], fibers, fiberSeed(y, c, j)),
+                                             first, std::move(along));
                 }
                 if (id != kNoTube) passIds_.push_back(static_cast<int>(y) + 1);
             }
@@ -474,6 +468,19 @@ void Scene::buildLightSampler() {
             break;
         }
     }
+}
+
+std::vector<FramedCurve> yarnPlyCurves(const Curve& curve, const YarnDesc& yarn,
+                                       const PlyParams* fibers, size_t curveIndex) {
+    const double radius = largestRadius(curve, yarn);
+    const double step = sampleStep(radius > 0 ? radius : 1.0, yarn.plies, yarn.plyTwist, fibers);
+    const FramedCurve centre =
+        frameCurve(curve, yarn.scale, yarn.radius, step, yarn.curves, curveIndex);
+    return plyCurves(centre, yarn.plies, yarn.plyTwist);
+}
+
+uint64_t fiberSeed(size_t y, size_t c, size_t j) {
+    return mixBits(mixBits(mixBits(y + 1) ^ (c + 1)) ^ (j + 1));
 }
 
 }  // namespace weft::render

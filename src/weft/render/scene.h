@@ -33,6 +33,7 @@
 #include "weft/render/light.h"
 #include "weft/render/scene_file.h"
 #include "weft/render/tube_accel.h"
+#include "weft/render/yarn_geometry.h"
 #include "weft/render/yarn_mode.h"
 #include "weft/yarn/yarn_bsdf.h"
 
@@ -170,5 +171,17 @@ class Scene {
     std::vector<int> passIds_;                  // per accel geometry (passId)
     SceneBuildStats stats_;
 };
+
+// The plies of curve `curveIndex` of a yarn entry, framed at the sampling
+// step its drawing mode needs (sampleStep: fibers == nullptr for neural and
+// dual mode, the model's ply block for fiber mode): what the scene builds
+// and what `weft scene export --fibers` writes. InputError as frameCurve.
+std::vector<FramedCurve> yarnPlyCurves(const Curve& curve, const YarnDesc& yarn,
+                                       const PlyParams* fibers, size_t curveIndex);
+
+// The seed of the fibers of ply j of curve c of yarn entry y: where the ply
+// is, not the render's seed (a fiber render's geometry is the same at every
+// seed).
+uint64_t fiberSeed(size_t y, size_t c, size_t j);
 
 }  // namespace weft::render

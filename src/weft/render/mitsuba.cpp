@@ -247,22 +247,39 @@ struct Plugin {
     std::vector<Ref> refs;
 };
 
-std::string childWhere(const std::string& parent, const pugi::xml_node& child,
-                       const pugi::xml_node& parentNode) {
-    int index = 0, count = 0;
-    for (const pugi::xml_node& n : parentNode.children(child.name())) {
-        ++count;
-        if (n == child) index = count;
+// The paths of a node's element children, for messages: "scene/shape[2]"
+// (an index where the tag repeats), "scene/sensor/float[name=fov]" (a
+// property by its name). of() is called once per element child, in order;
+// the counts take one pass, so a scene of many shapes costs no more.
+class ChildPaths {
+  public:
+    ChildPaths(std::string parent, const pugi::xml_node& node) : parent_(std::move(parent)) {
+        for (const pugi::xml_node& c : node.children())
+            if (c.type() == pugi::node_element) ++total_[c.name()];
     }
-    std::string name = child.name();
-    if (const pugi::xml_attribute a = child.attribute("name"); a && !kPluginTags.count(name))
-        return parent + "/" + name + "[name=" + printable(a.value()) + "]";
-    int total = 0;
-    for (const pugi::xml_node& n : parentNode.children(child.name())) (void)n, ++total;
-    return parent + "/" + name + (total > 1 ? "[" + std::to_string(index) + "]" : "");
-}
+    std::string of(const pugi::xml_node& child) {
+        const std::string name = child.name();
+        const int index = ++seen_[name];
+        if (const pugi::xml_attribute a = child.attribute("name"); a && !kPluginTags.count(name))
+            return parent_ + "/" + name + "[name=" + printable(a.value()) + "]";
+        return parent_ + "/" + name + (total_[name] > 1 ? "[" + std::to_string(index) + "]" : "");
+    }
 
-Plugin readPlugin(const XmlFile& file, const pugi::xml_node& node, const std::string& where) {
+  private:
+    std::string parent_;
+    std::map<std::string, int> total_, seen_;
+};
+
+// Mitsuba scenes nest plugins a few deep (scene/shape/bsdf/bsdf/texture);
+// deeper is refused before the recursion could exhaust the stack.
+constexpr int kMaxPluginDepth = 8;
+
+Plugin readPlugin(const XmlFile& file, const pugi::xml_node& node, const std::string& where,
+                  int depth = 1) {
+    if (depth > kMaxPluginDepth)
+        file.fail(node, where,
+                  "plugins nested deeper than " + std::to_string(kMaxPluginDepth) +
+                      " (a Mitsuba scene nests a few)");
     Plugin p;
     p.tag = node.name();
     p.node = node;
@@ -270,6 +287,7 @@ Plugin readPlugin(const XmlFile& file, const pugi::xml_node& node, const std::st
     file.allowAttributes(node, where, {"type", "id", "name", "version"});
     p.type = file.attribute(node, where, "type");
     p.id = file.optionalAttribute(node, where, "id").value_or("");
+    ChildPaths paths(where, node);
     for (const pugi::xml_node& child : node.children()) {
         if (child.type() != pugi::node_element) {
             if (child.type() == pugi::node_pcdata && !trim(child.value()).empty())
@@ -278,14 +296,14 @@ Plugin readPlugin(const XmlFile& file, const pugi::xml_node& node, const std::st
             continue;
         }
         const std::string tag = child.name();
-        const std::string w = childWhere(where, child, node);
+        const std::string w = paths.of(child);
         if (kPropertyTags.count(tag)) {
             const std::string name = file.attribute(child, w, "name");
             for (const Plugin::Property& q : p.properties)
                 if (q.name == name) file.fail(child, w, "property \"" + name + "\" given twice");
             p.properties.push_back({tag, name, w, child});
         } else if (kPluginTags.count(tag)) {
-            p.children.push_back(readPlugin(file, child, w));
+            p.children.push_back(readPlugin(file, child, w, depth + 1));
         } else if (tag == "ref") {
             file.allowAttributes(child, w, {"id", "name"});
             p.refs.push_back({file.attribute(child, w, "id"), w, child});
@@ -374,10 +392,11 @@ class Properties {
         const Plugin::Property* p = find(name, "transform");
         if (!p) return std::nullopt;
         Affine m;
+        ChildPaths paths(p->where, p->node);
         for (const pugi::xml_node& step : p->node.children()) {
             if (step.type() != pugi::node_element) continue;
             const std::string tag = step.name();
-            const std::string w = childWhere(p->where, step, p->node);
+            const std::string w = paths.of(step);
             Affine s;
             if (tag == "lookat") {
                 file_.allowAttributes(step, w, {"origin", "target", "up"});
@@ -816,6 +835,8 @@ void readMeshShape(Importer& im, Plugin& p, json& objects) {
         bsdf = &c;
     }
     const std::string source = im.resolve(*name);
+    if (lowercaseExtension(source) != ".obj")
+        im.file.fail(p.node, p.where, "an obj shape's filename must end in .obj, not " + *name);
     std::string file;
     if (toWorld.isIdentity()) {
         file = im.copy(source, "meshes");
@@ -939,8 +960,9 @@ MitsubaImport importMitsubaText(std::string text, const std::string& xmlPath,
                          "\": weft reads Mitsuba 3 scenes (version 3.x.y, or 2.x.y)");
 
     // Defaults first (-D over them), then every plugin in order.
+    ChildPaths defaultPaths("scene", root);
     for (const pugi::xml_node& d : root.children("default")) {
-        const std::string w = childWhere("scene", d, root);
+        const std::string w = defaultPaths.of(d);
         im.file.allowAttributes(d, w, {"name", "value"});
         im.file.defines.emplace(im.file.attribute(d, w, "name"), d.attribute("value").value());
     }
@@ -957,6 +979,7 @@ MitsubaImport importMitsubaText(std::string text, const std::string& xmlPath,
     json scene = {{"render", {{"max_depth", kUnlimitedDepth}}}};
     json lights = json::array(), yarns = json::array(), objects = json::array();
     bool sawSensor = false, sawIntegrator = false;
+    ChildPaths scenePaths("scene", root);
     for (const pugi::xml_node& child : root.children()) {
         if (child.type() != pugi::node_element) {
             if (child.type() == pugi::node_pcdata && !trim(child.value()).empty())
@@ -964,7 +987,7 @@ MitsubaImport importMitsubaText(std::string text, const std::string& xmlPath,
             continue;
         }
         const std::string tag = child.name();
-        const std::string w = childWhere("scene", child, root);
+        const std::string w = scenePaths.of(child);
         if (tag == "default") continue;
         if (!kPluginTags.count(tag))
             im.file.fail(child, w,

@@ -327,6 +327,10 @@ TEST_F(MitsubaTest, WhatIsOutsideTheSubsetIsRefusedWithItsLineAndPath) {
     refuses(R"(<scene version="3.0.0"><sensor type="perspective"><float name="fov" value="30"/>
 <transform name="to_world"><scale x="-1"/></transform></sensor></scene>)",
             {"mirrors the image"});
+    std::string deep;
+    for (int i = 0; i < 20; ++i) deep += "<bsdf type=\"twosided\">";
+    for (int i = 0; i < 20; ++i) deep += "</bsdf>";
+    refuses("<scene version=\"3.0.0\">" + sensor + deep + "</scene>", {"nested deeper than 8"});
     refuses("<scene version=\"3.0.0\">" + sensor + "<texture type=\"bitmap\"/></scene>",
             {"scene/texture", "not read by weft"});
     refuses(

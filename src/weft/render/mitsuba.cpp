@@ -18,6 +18,7 @@
 #include "weft/core/image_io.h"
 #include "weft/core/math.h"
 #include "weft/core/text_parse.h"
+#include "weft/render/catmull_rom.h"
 #include "weft/render/environment_light.h"
 #include "weft/render/scene.h"
 #include "weft/render/scene_objects.h"
@@ -126,6 +127,40 @@ std::string objText(const Triangles& t) {
                 std::to_string(f[2] + 1) + "\n";
     return text;
 }
+
+// The files of an output folder as they are made: each under a fresh name
+// FOLDER/STEM.EXT (odd characters of the stem as _, -2, -3, ... on a clash),
+// an input file copied once however often it is named.
+class FolderFiles {
+  public:
+    explicit FolderFiles(std::vector<std::pair<std::string, std::string>>* files) : files_(files) {}
+
+    std::string add(const std::string& folder, std::string stem, const std::string& ext,
+                    std::string bytes) {
+        for (char& c : stem)
+            if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+        if (stem.empty()) stem = "file";
+        std::string name = folder + "/" + stem + ext;
+        for (int k = 2; used_.count(name); ++k)
+            name = folder + "/" + stem + "-" + std::to_string(k) + ext;
+        used_.insert(name);
+        files_->push_back({name, std::move(bytes)});
+        return name;
+    }
+    std::string copy(const std::string& source, const std::string& folder) {
+        const auto it = copied_.find(source);
+        if (it != copied_.end()) return it->second;
+        const std::string name = add(folder, fs::path(source).stem().string(),
+                                     lowercaseExtension(source), readFile(source));
+        copied_[source] = name;
+        return name;
+    }
+
+  private:
+    std::vector<std::pair<std::string, std::string>>* files_;
+    std::set<std::string> used_;
+    std::map<std::string, std::string> copied_;  // source path -> name in the folder
+};
 
 // ---------------------------------------------------------------------------
 // Reading the XML.
@@ -498,34 +533,12 @@ struct Importer {
     MitsubaImport out;
     std::map<std::string, Plugin> bsdfs;  // top-level <bsdf id=...>
     json mapping;                         // bsdf id -> yarn keys
-    std::string mappingPath;
     std::string defaultModel;
-    std::set<std::string> names;                // files written (lower case)
-    std::map<std::string, std::string> copied;  // source path -> name in the folder
+    FolderFiles files{&out.files};
 
     std::string resolve(const std::string& name) const {
         const fs::path p(name);
         return p.is_absolute() ? p.string() : (xmlDir / p).lexically_normal().string();
-    }
-    std::string freshName(const std::string& folder, std::string stem, const std::string& ext) {
-        for (char& c : stem)
-            if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
-        if (stem.empty()) stem = "file";
-        std::string name = folder + "/" + stem + ext;
-        for (int k = 2; names.count(name); ++k)
-            name = folder + "/" + stem + "-" + std::to_string(k) + ext;
-        names.insert(name);
-        return name;
-    }
-    // A file copied into the folder once, by its resolved path.
-    std::string copy(const std::string& source, const std::string& folder) {
-        const auto it = copied.find(source);
-        if (it != copied.end()) return it->second;
-        const fs::path p(source);
-        const std::string name = freshName(folder, p.stem().string(), lowercaseExtension(source));
-        out.files.push_back({name, readFile(source)});
-        copied[source] = name;
-        return name;
     }
     void note(const Plugin& p, const std::string& what) {
         out.notes.push_back(file.path() + ":" + std::to_string(file.lineOf(p.node)) + ": " +
@@ -684,7 +697,7 @@ json readEmitter(Importer& im, Plugin& p) {
         if (ext != ".exr" && ext != ".hdr")
             im.file.fail(p.node, p.where, "envmap " + *name + ": weft reads .exr and .hdr maps");
         light = {{"type", "envmap"},
-                 {"file", im.copy(source, "textures")},
+                 {"file", im.files.copy(source, "textures")},
                  {"scale", scale},
                  {"rotate_deg", angle}};
     } else {
@@ -775,8 +788,8 @@ void readCurveShape(Importer& im, Plugin& p, json& yarns) {
     if (p.type == "bsplinecurve")
         im.note(p, "bsplinecurve: drawn as " + std::to_string(kSplineSteps) +
                        " straight pieces per span");
-    const std::string curves = im.freshName("curves", fs::path(*name).stem().string(), ".txt");
-    im.out.files.push_back({curves, formatCurveText(set, curves)});
+    const std::string curves = im.files.add("curves", fs::path(*name).stem().string(), ".txt",
+                                            formatCurveText(set, source));
     json entry = yarnKeys(im, p, bsdfId);
     entry["curves"] = curves;
     yarns.push_back(entry);
@@ -839,13 +852,12 @@ void readMeshShape(Importer& im, Plugin& p, json& objects) {
         im.file.fail(p.node, p.where, "an obj shape's filename must end in .obj, not " + *name);
     std::string file;
     if (toWorld.isIdentity()) {
-        file = im.copy(source, "meshes");
+        file = im.files.copy(source, "meshes");
     } else {
         // The triangles moved into the world, as an OBJ of their own.
         Triangles t = parseObjTriangles(readFile(source), source);
         for (Vec3& v : t.vertices) v = toWorld.point(v);
-        file = im.freshName("meshes", fs::path(*name).stem().string(), ".obj");
-        im.out.files.push_back({file, objText(t)});
+        file = im.files.add("meshes", fs::path(*name).stem().string(), ".obj", objText(t));
     }
     objects.push_back(
         {{"type", "mesh"}, {"file", file}, {"material", surfaceMaterial(im, p, bsdf)}});
@@ -1038,9 +1050,9 @@ MitsubaImport importMitsubaText(std::string text, const std::string& xmlPath,
     if (!objects.empty()) scene["objects"] = objects;
     // Yarn models become files of the folder.
     for (json& y : scene["yarns"]) {
-        y["model"] = im.copy(y["model"].get<std::string>(), "models");
+        y["model"] = im.files.copy(y["model"].get<std::string>(), "models");
         if (y.contains("vertex_colours"))
-            y["vertex_colours"] = im.copy(y["vertex_colours"].get<std::string>(), "curves");
+            y["vertex_colours"] = im.files.copy(y["vertex_colours"].get<std::string>(), "curves");
     }
     // What weft will read: a scene that does not validate is a bug here.
     parseScene(scene, xmlPath, "/");
@@ -1071,32 +1083,19 @@ std::string xmlEscape(const std::string& s) {
 }
 
 // A Catmull-Rom curve as the polyline through its spans (kSplineSteps per
-// span, the end neighbours reflected as yarn_geometry.h does).
+// span), the spans weft draws (catmull_rom.h), radii linear in each span.
 Curve catmullRomPolyline(const Curve& c) {
     Curve out;
-    const size_t n = c.points.size();
-    auto point = [&](ptrdiff_t i) -> Vec3 {
-        if (c.closed) return c.points[static_cast<size_t>((i + static_cast<ptrdiff_t>(n)) % n)];
-        if (i < 0) return c.points[0] * 2.0 - c.points[1];
-        if (i >= static_cast<ptrdiff_t>(n)) return c.points[n - 1] * 2.0 - c.points[n - 2];
-        return c.points[static_cast<size_t>(i)];
-    };
-    auto radius = [&](ptrdiff_t i) {
-        const ptrdiff_t m = static_cast<ptrdiff_t>(n);
-        return c.radii[static_cast<size_t>(c.closed ? (i + m) % m
-                                                    : std::clamp<ptrdiff_t>(i, 0, m - 1))];
-    };
-    const size_t spans = c.closed ? n : n - 1;
-    for (size_t s = 0; s < spans; ++s)
+    const size_t n = c.points.size(), spans = c.closed ? n : n - 1;
+    for (size_t i = 0; i < spans; ++i) {
+        const CatmullRomSpan span = catmullRomSpan(c.points, c.closed, i);
         for (int k = 0; k < kSplineSteps; ++k) {
-            const double t = static_cast<double>(k) / kSplineSteps, t2 = t * t, t3 = t2 * t;
-            const ptrdiff_t i = static_cast<ptrdiff_t>(s);
-            const Vec3 p = (point(i - 1) * (-t3 + 2 * t2 - t) + point(i) * (3 * t3 - 5 * t2 + 2) +
-                            point(i + 1) * (-3 * t3 + 4 * t2 + t) + point(i + 2) * (t3 - t2)) *
-                           0.5;
-            out.points.push_back(p);
-            if (!c.radii.empty()) out.radii.push_back(radius(i) + (radius(i + 1) - radius(i)) * t);
+            const double t = static_cast<double>(k) / kSplineSteps;
+            out.points.push_back(span.position(t));
+            if (!c.radii.empty())
+                out.radii.push_back(c.radii[i] + (c.radii[(i + 1) % n] - c.radii[i]) * t);
         }
+    }
     if (!c.closed) {
         out.points.push_back(c.points.back());
         if (!c.radii.empty()) out.radii.push_back(c.radii.back());
@@ -1105,42 +1104,17 @@ Curve catmullRomPolyline(const Curve& c) {
     return out;
 }
 
-// A fresh name FOLDER/STEM.EXT in the folder, STEM from `path` (its
-// extension unless `ext` is given).
-std::string relativeName(const std::string& folder, const std::string& path,
-                         std::set<std::string>* used, std::string ext = "") {
-    std::string stem = fs::path(path).stem().string();
-    for (char& c : stem)
-        if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
-    if (stem.empty()) stem = "file";
-    if (ext.empty()) ext = lowercaseExtension(path);
-    std::string name = folder + "/" + stem + ext;
-    for (int k = 2; used->count(name); ++k)
-        name = folder + "/" + stem + "-" + std::to_string(k) + ext;
-    used->insert(name);
-    return name;
-}
-
 }  // namespace
 
 MitsubaExport exportMitsubaScene(const SceneDesc& scene, bool fibers) {
     MitsubaExport ex;
-    std::set<std::string> used;
-    std::map<std::string, std::string> copied;
-    auto copy = [&](const std::string& path, const std::string& folder) {
-        const auto it = copied.find(path);
-        if (it != copied.end()) return it->second;
-        const std::string name = relativeName(folder, path, &used);
-        ex.files.push_back({name, readFile(path)});
-        copied[path] = name;
-        return name;
-    };
+    FolderFiles files(&ex.files);
     const std::string source = scene.path.empty() ? std::string("scene") : scene.path;
     std::ostringstream x;
     x << "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n"
       << "<!-- Written by weft (weft scene export --mitsuba) from "
       << xmlEscape(fs::path(source).filename().string())
-      << ". The yarns' bsdfs are placeholders: weft-models.json gives the weft model of each "
+      << ". Each yarn's bsdf stands in for a weft model: weft-models.json names it "
          "(docs/mitsuba.md). -->\n"
       << "<scene version=\"3.0.0\">\n";
     const int maxDepth = scene.render.maxDepth >= kUnlimitedDepth ? -1 : scene.render.maxDepth + 1;
@@ -1196,10 +1170,9 @@ MitsubaExport exportMitsubaScene(const SceneDesc& scene, bool fibers) {
             std::string file;
             double scale = l.value("scale", 1.0), rotate = l.value("rotate_deg", 0.0);
             if (type == "envmap") {
-                file = copy(l["file"].get<std::string>(), "textures");
+                file = files.copy(l["file"].get<std::string>(), "textures");
             } else {  // the procedural sky, as the image weft samples it from
-                file = relativeName("textures", "sky.exr", &used);
-                ex.files.push_back({file, encodeExr(skyImage(1024, 512), file)});
+                file = files.add("textures", "sky", ".exr", encodeExr(skyImage(1024, 512), "sky"));
                 ex.notes.push_back("lights[" + std::to_string(i) +
                                    "]: the procedural sky written as a 1024 x 512 envmap");
             }
@@ -1220,9 +1193,9 @@ MitsubaExport exportMitsubaScene(const SceneDesc& scene, bool fibers) {
         const std::string id = "yarn" + std::to_string(y);
         json entry = toJson(scene).at("yarns").at(y);
         for (const char* key : {"curves", "scale", "radius"}) entry.erase(key);
-        entry["model"] = copy(yarn.model, "models");
+        entry["model"] = files.copy(yarn.model, "models");
         if (!yarn.vertexColours.empty())
-            entry["vertex_colours"] = copy(yarn.vertexColours, "curves");
+            entry["vertex_colours"] = files.copy(yarn.vertexColours, "curves");
         models[id] = entry;
         CurveSet set = readCurves(yarn.curves);
         CurveSet drawn;
@@ -1272,8 +1245,8 @@ MitsubaExport exportMitsubaScene(const SceneDesc& scene, bool fibers) {
             }
         }
         const std::string file =
-            relativeName(fibers ? "fibers" : "curves", yarn.curves, &used, ".txt");
-        ex.files.push_back({file, formatCurveText(drawn, file)});
+            files.add(fibers ? "fibers" : "curves", fs::path(yarn.curves).stem().string(), ".txt",
+                      formatCurveText(drawn, yarn.curves));
         x << "    <bsdf type=\"diffuse\" id=\"" << id << "\">\n"
           << "        <!-- weft: " << xmlEscape(entry["model"].get<std::string>())
           << (fibers ? ", its fibers" : "") << " (weft-models.json) -->\n"
@@ -1287,9 +1260,10 @@ MitsubaExport exportMitsubaScene(const SceneDesc& scene, bool fibers) {
             "models, whose import draws each fiber as a yarn");
     for (size_t i = 0; i < scene.objects.size(); ++i) {
         const ObjectDesc& o = scene.objects[i];
-        const std::string file = relativeName(
-            "meshes", o.type == ObjectDesc::Type::Mesh ? o.file : "rectangle.obj", &used);
-        ex.files.push_back({file, objText(objectTriangles(o))});
+        const std::string file = files.add(
+            "meshes",
+            o.type == ObjectDesc::Type::Mesh ? fs::path(o.file).stem().string() : "rectangle",
+            ".obj", objText(objectTriangles(o)));
         x << "    <shape type=\"obj\">\n        <string name=\"filename\" value=\""
           << xmlEscape(file) << "\"/>\n";
         const SurfaceMaterialDesc& m = o.material;

@@ -15,7 +15,7 @@
 // exportMitsubaScene writes a weft scene as that subset: scene.xml, the yarn
 // curves as linearcurve files (or, with fibers, the explicit fibers of fiber
 // mode), the meshes, environment images, and weft-models.json mapping each
-// yarn's placeholder bsdf back to its weft model, so that import(export(s))
+// yarn's stand-in bsdf back to its weft model, so that import(export(s))
 // draws what s draws, and import -> export -> import is the identity.
 #pragma once
 

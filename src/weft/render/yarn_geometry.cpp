@@ -10,6 +10,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/math.h"
+#include "weft/render/catmull_rom.h"
 
 namespace weft::render {
 
@@ -24,30 +25,6 @@ std::string formatDouble(double v) {
     os << v;
     return os.str();
 }
-
-// One uniform Catmull-Rom span from p1 to p2 (tension 0.5) in power form:
-//   p(t) = c0 + c1 t + c2 t^2 + c3 t^3
-//        = 0.5 (2 p1 + (p2 - p0) t + (2 p0 - 5 p1 + 4 p2 - p3) t^2
-//               + (-p0 + 3 p1 - 3 p2 + p3) t^3).
-struct CatmullRomSpan {
-    Vec3 c0, c1, c2, c3;
-
-    CatmullRomSpan(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3)
-        : c0(p1),
-          c1(0.5 * (p2 - p0)),
-          c2(p0 - 2.5 * p1 + 2.0 * p2 - 0.5 * p3),
-          c3(0.5 * (3.0 * (p1 - p2) + p3 - p0)) {}
-
-    Vec3 position(double t) const { return c0 + t * (c1 + t * (c2 + t * c3)); }
-    Vec3 derivative(double t) const { return c1 + t * (2.0 * c2 + t * (3.0 * c3)); }
-
-    // p'(t) is a quadratic Bezier curve with control points p'(0), p'(0) + c2
-    // and p'(1); it lies in their convex hull, so the largest of their lengths
-    // bounds the speed, and (1/m) times it the arc length of every 1/m piece.
-    double speedBound() const {
-        return std::max({length(c1), length(c1 + c2), length(derivative(1.0))});
-    }
-};
 
 // Unit tangent at a sample from the segments to its neighbours (dPrev = x -
 // prev, dNext = next - x, either may be zero): the derivative of the parabola
@@ -269,17 +246,7 @@ FramedCurve frameCurve(const Curve& curve, double scale, std::optional<double> r
     const size_t spans = closed ? n : n - 1;
     // Catmull-Rom neighbours: wrap around a closed curve; reflect the end
     // points of an open one (P_-1 = 2 P_0 - P_1), see the header.
-    const auto neighbour = [&](ptrdiff_t j) -> Vec3 {
-        const auto sn = static_cast<ptrdiff_t>(n);
-        if (closed) return p[static_cast<size_t>(((j % sn) + sn) % sn)];
-        if (j < 0) return 2.0 * p[0] - p[1];
-        if (j >= sn) return 2.0 * p[n - 1] - p[n - 2];
-        return p[static_cast<size_t>(j)];
-    };
-    const auto spanAt = [&](size_t i) {
-        const auto j = static_cast<ptrdiff_t>(i);
-        return CatmullRomSpan(neighbour(j - 1), neighbour(j), neighbour(j + 1), neighbour(j + 2));
-    };
+    const auto spanAt = [&](size_t i) { return catmullRomSpan(p, closed, i); };
 
     // Pieces per span, counted before anything large is allocated.
     std::vector<int64_t> pieces(spans);

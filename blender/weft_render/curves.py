@@ -37,10 +37,6 @@ def radius_weights(t, interpolation):
     raise ValueError(f"unknown radius interpolation {interpolation!r}")
 
 
-def _lerp(a, b, t):
-    return tuple(x + (y - x) * t for x, y in zip(a, b))
-
-
 def _cubic_bezier(p0, p1, p2, p3, t):
     s = 1.0 - t
     return tuple(s * s * s * a + 3 * s * s * t * b + 3 * s * t * t * c + t * t * t * d

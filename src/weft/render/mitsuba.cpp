@@ -1188,10 +1188,11 @@ MitsubaExport exportMitsubaScene(const SceneDesc& scene, bool fibers) {
     }
 
     json models = json::object();
+    const json sceneJson = toJson(scene);  // each yarn entry's keys, written once
     for (size_t y = 0; y < scene.yarns.size(); ++y) {
         const YarnDesc& yarn = scene.yarns[y];
         const std::string id = "yarn" + std::to_string(y);
-        json entry = toJson(scene).at("yarns").at(y);
+        json entry = sceneJson.at("yarns").at(y);
         for (const char* key : {"curves", "scale", "radius"}) entry.erase(key);
         entry["model"] = files.copy(yarn.model, "models");
         if (!yarn.vertexColours.empty())

@@ -976,7 +976,8 @@ py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const
                    const py::object& seconds, const py::object& threads, const py::object& seed,
                    bool nee, const std::string& yarnSampling, const py::object& sampler,
                    const py::object& baseDir, const py::object& shard, bool quiet,
-                   const std::string& integrator, const py::object& progressCallback) {
+                   const std::string& integrator, const py::object& progressCallback,
+                   double progressSeconds) {
     if (!progressCallback.is_none() && !PyCallable_Check(progressCallback.ptr()))
         throw InputError("progress: expected a callable progress(fraction, image) or None");
     // The integer arguments first (renderer.h gives their ranges).
@@ -1024,13 +1025,16 @@ py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const
     options.integrator = render::parsePathIntegrator(integrator, "integrator");
     options.quiet = quiet;
     options.shard = shardValue;
-    // progress(fraction, image) about once a second between passes, from this
+    // progress(fraction, image) every progress_seconds (between passes), from this
     // thread (a render engine's progress bar and live image); a False return
     // stops the render, which returns its partial image (stats["partial"]).
     std::atomic<bool> stopAsked{false};
     std::optional<py::error_already_set> callbackError;
     if (!progressCallback.is_none()) {
-        options.checkpointSeconds = 1;
+        if (!(progressSeconds >= 0.1 && progressSeconds <= 1e6))
+            throw InputError("progress_seconds = " + formatNumber(progressSeconds) +
+                             " is out of range: allowed [0.1, 1e6]");
+        options.checkpointSeconds = progressSeconds;
         options.checkpoint = [&](const render::RenderResult& partial) {
             const render::RenderStats& st = partial.stats;
             const double fraction =
@@ -1473,14 +1477,16 @@ PYBIND11_MODULE(weft, m) {
           py::arg("yarn_sampling") = "tabulated", py::arg("sampler") = py::none(),
           py::arg("base_dir") = py::none(), py::arg("shard") = py::none(), py::arg("quiet") = true,
           py::arg("integrator") = "auto", py::arg("progress") = py::none(),
+          py::arg("progress_seconds") = 1.0,
           "`weft render`: a scene file or dict to an (H,W,3) float32 linear RGB image and the "
           "statistics dict; mode (\"neural\", \"fiber\" or \"dual\") draws every yarn so, "
           "over the yarns' own \"mode\" (None: each yarn's, neural where it names none); "
           "shard=(k, n) traces only shard k of n of the spp samples. quiet=False shows the "
           "progress on sys.stderr (as Jupyter shows it); integrator (\"auto\", \"path\" or "
           "\"batch\") as `weft render --integrator`, the same image. progress(fraction, image) "
-          "is called about once a second with the image so far; returning False stops the "
-          "render early (stats[\"partial\"]). weft.save_image writes the image.");
+          "is called every progress_seconds (default 1, at least 0.1; between passes) with the "
+          "image so far; returning False stops the render early (stats[\"partial\"]). "
+          "weft.save_image writes the image.");
 
     m.def("curves_points", &pyCurvesPoints, py::arg("path"),
           "`weft curves points`: the control points of a curve file as an (n, 4) float64 array "

@@ -6,7 +6,7 @@
 Independent truths: `weft render` of the exported scene (the engine must give
 its image), Blender's own evaluation of the curves (the centre and radius of
 its bevelled tube), and Cycles (the camera, the environment map's orientation
-and the power of a point light).
+and the power of point lights with and without a radius and of a sun).
 """
 
 import json
@@ -34,6 +34,7 @@ import weft  # noqa: E402
 import weft_render  # noqa: E402
 from weft_render import curves as curve_maths  # noqa: E402
 from weft_render import export  # noqa: E402
+from weft_render import preview  # noqa: E402
 
 weft_render.register()
 
@@ -322,6 +323,62 @@ class Errors(unittest.TestCase):
         self.assertIn("(object 'Yarn.1')", exported.explain(caught.exception))
 
 
+class ViewportPreview(unittest.TestCase):
+    """The viewport preview without a screen: its camera from the view and
+    projection matrices, and its background renders."""
+
+    def test_viewport_camera_is_the_camera_of_the_same_view(self):
+        # Blender's own projection of a camera object (calc_matrix_camera)
+        # against export.camera_entry, which reads the lens and the sensor.
+        for width, height, fit in ((40, 30, "AUTO"), (24, 36, "VERTICAL"), (36, 24, "HORIZONTAL")):
+            with self.subTest(width=width, height=height, fit=fit):
+                scene = new_scene(width, height)
+                cam = add_camera((0.3, -1.0, 0.4), (2.0, 3.0, 1.5), lens=28)
+                cam.data.sensor_fit = fit
+                cam.data.sensor_height = 20
+                depsgraph = bpy.context.evaluated_depsgraph_get()
+                projection = cam.calc_matrix_camera(depsgraph, x=width, y=height)
+                ours = preview.viewport_camera(cam.matrix_world.inverted(), projection)
+                want = export.camera_entry(scene, cam)
+                self.assertAlmostEqual(ours["fov_deg"], want["fov_deg"], places=4)  # float32 matrices
+                for key in ("from", "to", "up"):
+                    np.testing.assert_allclose(ours[key], want[key], atol=1e-5)
+        cam.data.type = "ORTHO"
+        ortho = cam.calc_matrix_camera(bpy.context.evaluated_depsgraph_get(), x=40, y=30)
+        with self.assertRaisesRegex(export.ExportError, "orthographic"):
+            preview.viewport_camera(cam.matrix_world.inverted(), ortho)
+        self.assertEqual(preview.preview_film(801, 600, 4), {"width": 200, "height": 150})
+        self.assertEqual(preview.preview_film(3, 2, 16), {"width": 1, "height": 1})
+
+    def test_preview_session_renders_restarts_and_reports_errors(self):
+        scene = knit_like(new_scene(48, 32))
+        scene.weft.spp = 4
+        folder = WORK / "preview"
+        view = (export.camera_entry(scene, scene.camera), {"width": 24, "height": 16}, 8)
+        exported = export.export_scene(bpy.context.evaluated_depsgraph_get(), folder, view=view)
+        self.assertEqual(exported.scene["film"], {"width": 24, "height": 16})
+        self.assertEqual(exported.scene["render"]["spp"], 8)
+        session = preview.PreviewSession(weft, progress_seconds=0.1)
+        # A long render first, stopped by the restart: only the second one's image remains.
+        long = dict(exported.scene, render=dict(exported.scene["render"], spp=1 << 20))
+        session.start(long, folder)
+        session.start(exported.scene, folder)
+        session.wait(120)
+        image, spp, done, error = session.snapshot()
+        self.assertTrue(done and error is None and spp == 8)
+        # The preview is weft.render of the same scene, to the bit.
+        want, _ = weft.render(exported.scene, base_dir=str(folder))
+        np.testing.assert_array_equal(image, want)
+        self.assertGreater(float(image.mean()), 0.0)
+        # A scene weft refuses: the error, not a crash.
+        bad = dict(exported.scene, yarns=[dict(exported.scene["yarns"][0], model="missing.json")])
+        session.start(bad, folder)
+        session.wait(60)
+        image, spp, done, error = session.snapshot()
+        self.assertTrue(done and image is None and "missing.json" in error)
+        session.stop()
+
+
 def cycles_render(scene, path, samples):
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
@@ -388,37 +445,54 @@ class CyclesAgrees(unittest.TestCase):
                 turned, _ = weft.render(exported.scene, spp=4, base_dir=str(folder / "turned"))
                 self.assertGreater(relative_difference(turned, cycles), 0.1)
 
-    def test_point_light_power_on_a_diffuse_floor(self):
-        scene = new_scene(32, 32)
-        scene.world.color = (0.0, 0.0, 0.0)
-        add_camera((0.0, -2.0, 2.0), (0.0, 0.0, 0.0), lens=35)
-        bpy.ops.mesh.primitive_plane_add(size=4.0)
-        floor = bpy.context.view_layer.objects.active
-        material = bpy.data.materials.new("Floor")
-        material.use_nodes = True
-        nodes = material.node_tree.nodes
-        nodes.clear()
-        diffuse = nodes.new("ShaderNodeBsdfDiffuse")
-        diffuse.inputs["Color"].default_value = (0.6, 0.5, 0.4, 1.0)
-        out = nodes.new("ShaderNodeOutputMaterial")
-        material.node_tree.links.new(diffuse.outputs["BSDF"], out.inputs["Surface"])
-        floor.data.materials.append(material)
-        light = link(bpy.data.objects.new("Lamp", bpy.data.lights.new("Lamp", "POINT")))
-        light.data.energy = 200.0
-        light.data.shadow_soft_size = 0.15
-        light.data.color = (1.0, 0.9, 0.8)
-        light.location = (0.2, -1.2, 2.6)  # out of the picture: Cycles' camera rays miss lamps
-        scene.weft.spp = 64
-        cycles = cycles_render(scene, WORK / "lamp" / "cycles.exr", 64)
-        ours = render_engine(scene, WORK / "lamp" / "weft.exr")
-        self.assertLess(ours.max(), 50.0)  # the lamp itself is not in the picture
-        ratio = ours.reshape(-1, 3).mean(axis=0) / cycles.reshape(-1, 3).mean(axis=0)
-        np.testing.assert_allclose(ratio, 1.0, atol=0.03)
-        # Where the light falls: 4 x 4 pixel blocks (each weft pixel is noisier
-        # than Cycles', which samples a point light's disc and filters).
-        def blocks(image):
-            return image.reshape(8, 4, 8, 4, 3).mean(axis=(1, 3))
-        self.assertLess(relative_difference(blocks(ours), blocks(cycles)), 0.06)
+    def test_lights_on_a_diffuse_floor(self):
+        """A point light with a radius (a weft sphere), one of radius 0 (a weft
+        point) and a sun (a weft directional light) against Cycles."""
+        for kind, radius in (("POINT", 0.15), ("POINT", 0.0), ("SUN", 0.0)):
+            with self.subTest(kind=kind, radius=radius):
+                scene = new_scene(32, 32)
+                scene.world.color = (0.0, 0.0, 0.0)
+                add_camera((0.0, -2.0, 2.0), (0.0, 0.0, 0.0), lens=35)
+                bpy.ops.mesh.primitive_plane_add(size=4.0)
+                floor = bpy.context.view_layer.objects.active
+                material = bpy.data.materials.new("Floor")
+                material.use_nodes = True
+                nodes = material.node_tree.nodes
+                nodes.clear()
+                diffuse = nodes.new("ShaderNodeBsdfDiffuse")
+                diffuse.inputs["Color"].default_value = (0.6, 0.5, 0.4, 1.0)
+                out = nodes.new("ShaderNodeOutputMaterial")
+                material.node_tree.links.new(diffuse.outputs["BSDF"], out.inputs["Surface"])
+                floor.data.materials.append(material)
+                data = bpy.data.lights.new("Lamp", kind)
+                light = link(bpy.data.objects.new("Lamp", data))
+                data.color = (1.0, 0.9, 0.8)
+                if kind == "POINT":
+                    data.energy = 200.0
+                    data.shadow_soft_size = radius
+                    # Out of the picture: Cycles' camera rays miss lamps.
+                    light.location = (0.2, -1.2, 2.6)
+                else:
+                    data.energy = 3.0
+                    data.angle = 0.0
+                    light.rotation_euler = (0.5, 0.3, 0.2)  # slanted: the cosine matters
+                scene.weft.spp = 64
+                folder = WORK / f"lamp-{kind.lower()}-{radius}"
+                cycles = cycles_render(scene, folder / "cycles.exr", 64)
+                ours = render_engine(scene, folder / "weft.exr")
+                exported = export.export_scene(bpy.context.evaluated_depsgraph_get(),
+                                               folder / "export")
+                want = {("POINT", True): "sphere", ("POINT", False): "point",
+                        ("SUN", False): "directional"}[(kind, radius > 0)]
+                self.assertEqual([l["type"] for l in exported.scene["lights"]], ["constant", want])
+                self.assertLess(ours.max(), 50.0)  # the lamp itself is not in the picture
+                ratio = ours.reshape(-1, 3).mean(axis=0) / cycles.reshape(-1, 3).mean(axis=0)
+                np.testing.assert_allclose(ratio, 1.0, atol=0.03)
+                # Where the light falls: 4 x 4 pixel blocks (each weft pixel is
+                # noisier than Cycles', which samples a point light's disc and filters).
+                def blocks(image):
+                    return image.reshape(8, 4, 8, 4, 3).mean(axis=(1, 3))
+                self.assertLess(relative_difference(blocks(ours), blocks(cycles)), 0.06)
 
 
 if __name__ == "__main__":

@@ -12,8 +12,9 @@ What maps how:
 - Meshes are `objects` of type mesh (an `.obj` file) with a diffuse or
   conductor material read from the Principled BSDF.
 - The camera is weft's pinhole camera; point lights with a radius are sphere
-  lights of the same power; the world is a constant light, an envmap, or
-  weft's procedural sky.
+  lights of the same power, point lights of radius 0 point lights, suns
+  directional lights of their strength; the world is a constant light, an
+  envmap, or weft's procedural sky.
 Blender is +z up, weft +y up: a Blender point (x, y, z) is weft's (x, z, -y),
 a rotation, so nothing is mirrored.
 """
@@ -26,6 +27,7 @@ import re
 import shutil
 
 import bpy
+import mathutils
 
 from . import curves as curve_maths
 
@@ -309,16 +311,30 @@ def _mesh_entry(writer, obj, matrix, owner):
 
 def _light_entry(writer, light, matrix, owner):
     data = light.data
+    colour = [float(c) for c in data.color]
     if data.type == "POINT" and data.shadow_soft_size > 0:
         r = data.shadow_soft_size * curve_maths.mean_scale([list(x) for x in matrix.to_3x3()])
         # A point light of power P watts is, in Cycles, a sphere of radiance
         # P / (4 pi^2 r^2) (intensity P / 4 pi over the disc pi r^2 it shows).
-        radiance = [float(c) * data.energy / (4 * math.pi ** 2 * r * r) for c in data.color]
+        radiance = [c * data.energy / (4 * math.pi ** 2 * r * r) for c in colour]
         return {"type": "sphere", "center": to_weft(matrix.translation), "radius": r,
                 "radiance": radiance}
-    what = "a point light of radius 0" if data.type == "POINT" else f"a {data.type.lower()} light"
-    writer.warnings.append(f"light '{owner}' is {what}, which weft does not have yet: "
-                           "left out (docs/blender.md); use a point light with a radius")
+    if data.type == "POINT":
+        # Radius 0: a point of intensity P / 4 pi W/sr, the limit of the sphere above.
+        return {"type": "point", "position": to_weft(matrix.translation),
+                "intensity": [c * data.energy / (4 * math.pi) for c in colour]}
+    if data.type == "SUN":
+        # Strength is the irradiance (W/m^2) on a surface facing the sun; the
+        # light travels along the object's -z axis.
+        if data.angle > math.radians(1.0):
+            writer.warnings.append(
+                f"light '{owner}': a sun of angle {math.degrees(data.angle):.2f} degrees is "
+                "drawn as a sun of angle 0 (weft's directional light has no disc)")
+        direction = matrix.to_3x3() @ mathutils.Vector((0.0, 0.0, -1.0))
+        return {"type": "directional", "direction": to_weft(direction.normalized()),
+                "irradiance": [c * data.energy for c in colour]}
+    writer.warnings.append(f"light '{owner}' is a {data.type.lower()} light, which weft does "
+                           "not have yet: left out (docs/blender.md)")
     return None
 
 
@@ -459,20 +475,27 @@ class Exported:
         return re.sub(r"yarns\[(\d+)\]", name, str(message))
 
 
-def export_scene(depsgraph, folder):
-    """Writes the scene folder; returns an Exported. ExportError names what is wrong."""
+def export_scene(depsgraph, folder, view=None):
+    """Writes the scene folder; returns an Exported. ExportError names what is wrong.
+    view: (camera entry, film entry, spp) in place of the scene camera's, its
+    resolution and samples (the viewport preview, preview.py)."""
     scene = depsgraph.scene
     folder = pathlib.Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     writer = _Writer(folder)
     settings = scene.weft
-    if scene.camera is None:
-        raise ExportError(f"scene '{scene.name}' has no camera")
-    w, h = film_size(scene)
+    if view is not None:
+        camera, film, spp = view
+    else:
+        if scene.camera is None:
+            raise ExportError(f"scene '{scene.name}' has no camera")
+        w, h = film_size(scene)
+        camera = camera_entry(scene, scene.camera.evaluated_get(depsgraph))
+        film, spp = {"width": w, "height": h}, settings.spp
     doc = {
-        "camera": camera_entry(scene, scene.camera.evaluated_get(depsgraph)),
-        "film": {"width": w, "height": h},
-        "render": {"spp": settings.spp, "max_depth": settings.max_depth, "seed": settings.seed,
+        "camera": camera,
+        "film": film,
+        "render": {"spp": spp, "max_depth": settings.max_depth, "seed": settings.seed,
                    "sampler": settings.sampler},
     }
     lights, yarns, objects = _world_lights(writer, scene), [], []

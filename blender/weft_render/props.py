@@ -32,6 +32,12 @@ class WeftSceneSettings(bpy.types.PropertyGroup):
                                 "the world's colour or environment texture"),
                                ("SKY", "weft Sky", "weft's procedural sky (docs/scene-format.md)")])
     sky_scale: FloatProperty(name="Sky Strength", default=1.0, min=0.0)
+    preview_spp: IntProperty(name="Viewport Samples",
+                             description="samples per pixel of the viewport preview",
+                             default=16, min=1, max=4096)
+    preview_scale: IntProperty(name="Viewport Pixel Size",
+                               description="the viewport preview renders one pixel per this many "
+                               "screen pixels", default=4, min=1, max=16)
     light_sampler: EnumProperty(name="Light Sampler", default="uniform",
                                 items=[("uniform", "Uniform", "every light alike"),
                                        ("power", "Power", "by each light's power")])

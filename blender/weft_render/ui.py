@@ -32,6 +32,8 @@ class RENDER_PT_weft(WeftPanel, bpy.types.Panel):
         if s.world == "SKY":
             col.prop(s, "sky_scale")
         col.prop(s, "light_sampler")
+        col.prop(s, "preview_spp")
+        col.prop(s, "preview_scale")
         col.operator("weft.export_scene", icon="EXPORT")
 
 

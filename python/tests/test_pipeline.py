@@ -127,6 +127,13 @@ def test_render_progress_shows_the_image_and_stops(cli, tmp_path, root):
         weft.render(scene, spp=1 << 20, progress=fail)
     with pytest.raises(ValueError, match="progress: expected a callable"):
         weft.render(scene, spp=1, progress=3)
+    with pytest.raises(ValueError, match=r"progress_seconds = 0.05 is out of range: allowed \[0.1"):
+        weft.render(scene, spp=1, progress=lambda f, im: True, progress_seconds=0.05)
+    # A shorter interval calls back more often (a viewport's cadence).
+    ticks = []
+    weft.render(scene, spp=1 << 20, progress=lambda f, im: ticks.append(f) or len(ticks) < 3,
+                progress_seconds=0.1)
+    assert len(ticks) == 3
 
 
 def test_sharded_gather_and_render_merge(cli, tmp_path, root):

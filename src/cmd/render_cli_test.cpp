@@ -546,8 +546,8 @@ TEST_F(RenderCliTest, BadInputIsNamed) {
     expectUserError(run("render scene.json --spp 1 --threads -2 --out a.exr"), {"--threads"});
     writeScene("bad.json", R"(, "plys": 3)");
     expectUserError(run("render bad.json --spp 1 --out a.exr"), {"bad.json", "plys"});
-    expectUserError(run("render scene.json --spp 1 --checkpoint 0.5 --out a.exr"),
-                    {"--checkpoint", "[1, 1e6]"});
+    expectUserError(run("render scene.json --spp 1 --checkpoint 0.05 --out a.exr"),
+                    {"--checkpoint", "[0.1, 1e6]"});
     writeFileAtomic(path("yarn.txt"), "0 0 0\n1 nan 0\n");
     expectUserError(run("render scene.json --spp 1 --out a.exr"), {"yarn.txt", "2"});
     EXPECT_FALSE(std::filesystem::exists(path("a.exr")));

@@ -11,7 +11,8 @@
 // the files it depends on (for the scene's inputs and hash) and its factory:
 // a new light type is one file (its Light, its LightDesc and its LightType)
 // and one line in light_types.cpp. The types: constant (constant_light.h),
-// envmap and sky (environment_light.h), sphere (sphere_light.h).
+// envmap and sky (environment_light.h), sphere (sphere_light.h), point and
+// directional (delta_lights.h).
 #pragma once
 
 #include <array>
@@ -46,6 +47,11 @@ class Light {
     // Infinite lights (constant, envmap, sky) are seen by rays that escape the
     // scene; finite ones (spheres) by rays that hit them.
     virtual bool isInfinite() const = 0;
+    // A point or a single direction (delta_lights.h): reached only by
+    // next-event estimation, never by a ray. Its sample()'s pdf is 1 (a
+    // probability, not a density), its pdf() 0, and the path tracer weights
+    // its samples by 1, not by MIS; radiance() is its intensity or irradiance.
+    virtual bool isDelta() const { return false; }
     // A direction towards the light from point p, with u uniform in [0, 1)^2.
     virtual LightSample sample(const Vec3& p, const std::array<double, 2>& u) const = 0;
     // Solid-angle density with which sample(p, .) returns wi (0 if it never does).

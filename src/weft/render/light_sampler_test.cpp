@@ -15,6 +15,7 @@
 #include "weft/core/test_util.h"
 #include "weft/render/constant_light.h"
 #include "weft/render/environment_light.h"
+#include "weft/render/scene.h"
 #include "weft/render/scene_file.h"
 #include "weft/render/sphere_light.h"
 
@@ -118,6 +119,24 @@ TEST(LightSampler, SceneFilesNameItAndItRoundTrips) {
     expectInputError([&] { parse(R"({"weights": [1, 1], "x": 1})"); }, {"unknown key \"x\""});
     // No lights: the procedural sky is the one light.
     EXPECT_EQ(parse(R"({"weights": [1]})", 0).lightSampler.weights.size(), 1u);
+}
+
+// A point or directional light is reached only by light samples: a weight of
+// 0 would drop it from the image, so the scene refuses it.
+TEST(LightSampler, DeltaLightsNeedAWeight) {
+    const auto scene = [](const std::string& weights) {
+        return parseSceneText(R"({"camera": {"from": [0, 0, 1], "to": [0, 0, 0]}, "lights": [
+            {"type": "constant", "radiance": [1, 1, 1]},
+            {"type": "point", "position": [0, 1, 0], "intensity": [1, 1, 1]}],
+            "light_sampler": {"weights": )" +
+                                  weights + "}}",
+                              "scene.json", "/nonexistent");
+    };
+    expectInputError([&] { Scene s(scene("[1, 0]")); },
+                     {"light_sampler.weights[1] = 0", "lights[1]", "point or directional"});
+    const Scene ok(scene("[1, 3]"));
+    EXPECT_NEAR(ok.lightSampler().pmf(1), 0.75, 1e-15);
+    EXPECT_TRUE(ok.lights()[1]->isDelta());
 }
 
 }  // namespace

@@ -1,7 +1,3 @@
-#include "weft/render/constant_light.h"
-#include "weft/render/environment_light.h"
-#include "weft/render/sphere_light.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,6 +16,10 @@
 #include "weft/core/math.h"
 #include "weft/core/rng.h"
 #include "weft/core/test_util.h"
+#include "weft/render/constant_light.h"
+#include "weft/render/delta_lights.h"
+#include "weft/render/environment_light.h"
+#include "weft/render/sphere_light.h"
 
 namespace weft::render {
 namespace {
@@ -698,6 +698,79 @@ TEST(SphereLight, RejectsBadParameters) {
             SphereLight({0, 0, 0}, 1, Rgb(-1, 0, 0));
         },
         {"sphere light", "radiance"});
+}
+
+// ---------------------------------------------------------------------------
+// Point and directional lights: the inverse-square law and a fixed direction,
+// written out here from their definitions (delta_lights.h).
+
+TEST(PointLight, SamplesFollowTheInverseSquareLaw) {
+    const PointLight light({1, 2, 3}, Rgb(4, 8, 12));
+    EXPECT_TRUE(light.isDelta());
+    EXPECT_FALSE(light.isInfinite());
+    Rng rng(3, 1);
+    for (const Vec3& p : {Vec3(1, 2, 1), Vec3(-2, 0, 7), Vec3(1.5, 2, 3)}) {
+        const LightSample s = light.sample(p, {rng.uniform(), rng.uniform()});
+        const Vec3 d = Vec3(1, 2, 3) - p;
+        const double r2 = d.x * d.x + d.y * d.y + d.z * d.z;
+        ASSERT_TRUE(s.valid());
+        EXPECT_EQ(s.pdf, 1.0);
+        EXPECT_NEAR(s.distance, std::sqrt(r2), 1e-12);
+        EXPECT_NEAR(dot(s.wi, d / std::sqrt(r2)), 1.0, 1e-12);
+        EXPECT_NEAR(s.radiance.g, 8.0 / r2, 1e-12 * 8.0 / r2);
+        EXPECT_NEAR(s.radiance.b / s.radiance.r, 3.0, 1e-12);
+        // No ray finds it.
+        EXPECT_EQ(light.pdf(p, s.wi), 0.0);
+        EXPECT_LT(light.intersect(p, s.wi, kInf), 0.0);
+    }
+    EXPECT_FALSE(light.sample({1, 2, 3}, {0.5, 0.5}).valid());  // at the light itself
+    // Phi = 4 pi I.
+    EXPECT_NEAR(light.power(1).g, 4 * kPi * 8, 1e-12);
+}
+
+TEST(DirectionalLight, SamplesComeFromTheOppositeOfItsDirection) {
+    const DirectionalLight light({2, -4, 4}, Rgb(1, 2, 3));
+    EXPECT_TRUE(light.isDelta());
+    EXPECT_TRUE(light.isInfinite());
+    for (const Vec3& p : {Vec3(0, 0, 0), Vec3(1e3, -5, 2)}) {
+        const LightSample s = light.sample(p, {0.25, 0.75});
+        ASSERT_TRUE(s.valid());
+        EXPECT_EQ(s.pdf, 1.0);
+        EXPECT_TRUE(std::isinf(s.distance));
+        EXPECT_NEAR(s.wi.x, -1.0 / 3, 1e-15);
+        EXPECT_NEAR(s.wi.y, 2.0 / 3, 1e-15);
+        EXPECT_NEAR(s.wi.z, -2.0 / 3, 1e-15);
+        EXPECT_EQ(s.radiance, Rgb(1, 2, 3));
+        EXPECT_EQ(light.pdf(p, s.wi), 0.0);
+    }
+    // Directions of any magnitude normalize.
+    EXPECT_NEAR(DirectionalLight({0, 0, 1e-300}, Rgb(1)).sample({}, {0, 0}).wi.z, -1, 1e-15);
+    EXPECT_NEAR(DirectionalLight({1e300, 0, 0}, Rgb(1)).sample({}, {0, 0}).wi.x, -1, 1e-15);
+    // Phi = pi R^2 E.
+    EXPECT_NEAR(light.power(2).b, kPi * 4 * 3, 1e-12);
+}
+
+TEST(DeltaLights, RejectBadParameters) {
+    for (double bad : {kNaN, kInf}) {
+        expectInputError([&] { PointLight({bad, 0, 0}, Rgb(1)); }, {"point light", "position"});
+        expectInputError([&] { PointLight({0, 0, 0}, Rgb(bad)); }, {"point light", "radiance"});
+        expectInputError(
+            [&] {
+                DirectionalLight({0, bad, 1}, Rgb(1));
+            },
+            {"directional light", "direction"});
+        expectInputError(
+            [&] {
+                DirectionalLight({0, 0, 1}, Rgb(1, 1, bad));
+            },
+            {"directional light"});
+    }
+    expectInputError(
+        [] {
+            DirectionalLight({0, 0, 0}, Rgb(1));
+        },
+        {"directional light", "direction", "not 0"});
+    expectInputError([] { PointLight({0, 0, 0}, Rgb(0, -1, 0)); }, {"point light"});
 }
 
 // ---------------------------------------------------------------------------

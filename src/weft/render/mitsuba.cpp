@@ -700,11 +700,40 @@ json readEmitter(Importer& im, Plugin& p) {
                  {"file", im.files.copy(source, "textures")},
                  {"scale", scale},
                  {"rotate_deg", angle}};
+    } else if (p.type == "point") {
+        // Mitsuba: intensity (W/sr, default 1) at `position` or at to_world's origin.
+        const Rgb intensity = props.colour("intensity").value_or(Rgb(1));
+        const auto position = props.vector("position");
+        const auto toWorld = props.transform("to_world");
+        props.finish({"intensity", "position", "to_world"});
+        if (position && toWorld)
+            im.file.fail(p.node, p.where, "a point emitter takes position or to_world, not both");
+        const Vec3 at = position ? *position : toWorld.value_or(Affine{}).point({0, 0, 0});
+        light = {{"type", "point"},
+                 {"position", {at.x, at.y, at.z}},
+                 {"intensity", {intensity.r, intensity.g, intensity.b}}};
+    } else if (p.type == "directional") {
+        // Mitsuba: irradiance (W/m^2, default 1) travelling along `direction`
+        // or along to_world's +z.
+        const Rgb irradiance = props.colour("irradiance").value_or(Rgb(1));
+        const auto direction = props.vector("direction");
+        const auto toWorld = props.transform("to_world");
+        props.finish({"irradiance", "direction", "to_world"});
+        if (direction && toWorld)
+            im.file.fail(p.node, p.where,
+                         "a directional emitter takes direction or to_world, not both");
+        const Vec3 d = direction ? *direction : toWorld.value_or(Affine{}).vector({0, 0, 1});
+        if (d.x == 0 && d.y == 0 && d.z == 0)
+            im.file.fail(p.node, p.where, "a directional emitter's direction cannot be 0");
+        light = {{"type", "directional"},
+                 {"direction", {d.x, d.y, d.z}},
+                 {"irradiance", {irradiance.r, irradiance.g, irradiance.b}}};
     } else {
         im.file.fail(p.node, p.where,
                      "emitter \"" + printable(p.type) +
-                         "\": weft has constant and envmap emitters, and spheres with an area "
-                         "emitter (no point, directional, spot or area lights on other shapes)");
+                         "\": weft has constant, envmap, point and directional emitters, and "
+                         "spheres with an area emitter (no spot lights or area lights on other "
+                         "shapes)");
     }
     if (!p.children.empty() || !p.refs.empty())
         im.file.fail(p.node, p.where, "an emitter takes no nested plugins here");
@@ -1158,6 +1187,16 @@ MitsubaExport exportMitsubaScene(const SceneDesc& scene, bool fibers) {
             x << "    <emitter type=\"constant\">\n        <rgb name=\"radiance\" value=\""
               << formatNumber(l["radiance"][0]) << ", " << formatNumber(l["radiance"][1]) << ", "
               << formatNumber(l["radiance"][2]) << "\"/>\n    </emitter>\n";
+        } else if (type == "point" || type == "directional") {
+            const bool point = type == "point";
+            const json& at = l[point ? "position" : "direction"];
+            const json& power = l[point ? "intensity" : "irradiance"];
+            x << "    <emitter type=\"" << type << "\">\n        <"
+              << (point ? "point name=\"position\"" : "vector name=\"direction\"") << " value=\""
+              << formatVec({at[0], at[1], at[2]}) << "\"/>\n        <rgb name=\""
+              << (point ? "intensity" : "irradiance") << "\" value=\"" << formatNumber(power[0])
+              << ", " << formatNumber(power[1]) << ", " << formatNumber(power[2])
+              << "\"/>\n    </emitter>\n";
         } else if (type == "sphere") {
             const Vec3 c{l["center"][0], l["center"][1], l["center"][2]};
             x << "    <shape type=\"sphere\">\n        <point name=\"center\" value=\""

@@ -236,6 +236,14 @@ TEST_F(MitsubaTest, ImportExportImportIsTheIdentity) {
         <transform name="to_world"><rotate y="1" angle="30"/></transform>
     </emitter>
     <emitter type="constant"><rgb name="radiance" value="0.1, 0.2, 0.3"/></emitter>
+    <emitter type="point">
+        <transform name="to_world"><translate value="1, 5, -2"/></transform>
+        <rgb name="intensity" value="10, 20, 30"/>
+    </emitter>
+    <emitter type="directional">
+        <vector name="direction" value="0, -1, 1"/>
+        <spectrum name="irradiance" value="3"/>
+    </emitter>
     <bsdf type="twosided" id="wall"><bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.4, 0.6"/></bsdf></bsdf>
     <shape type="obj">
         <string name="filename" value="mesh.obj"/>
@@ -274,6 +282,11 @@ TEST_F(MitsubaTest, ImportExportImportIsTheIdentity) {
     EXPECT_EQ(first.scene["yarns"][0]["plies"], 3);
     EXPECT_EQ(first.scene["yarns"][0]["mode"], "fiber");
     EXPECT_NEAR(first.scene["lights"][0]["rotate_deg"].get<double>(), 30, 1e-9);
+    EXPECT_EQ(first.scene["lights"][2],
+              json({{"type", "point"}, {"position", {1, 5, -2}}, {"intensity", {10, 20, 30}}}));
+    EXPECT_EQ(
+        first.scene["lights"][3],
+        json({{"type", "directional"}, {"direction", {0, -1, 1}}, {"irradiance", {3, 3, 3}}}));
     EXPECT_EQ(first.scene["objects"][0]["material"]["reflectance"], json({0.2, 0.4, 0.6}));
     const CurveSet knit = readCurves(path("weft1/curves/knit.txt"));
     EXPECT_NEAR(knit.curves[0].points[1].x, 2, 1e-6);  // scaled by to_world
@@ -311,8 +324,17 @@ TEST_F(MitsubaTest, WhatIsOutsideTheSubsetIsRefusedWithItsLineAndPath) {
     refuses("<scene version=\"0.6.0\">" + sensor + "</scene>", {"bad.xml:1", "version \"0.6.0\""});
     refuses("<scene version=\"3.0.0\">\n" + sensor + "\n<shape type=\"cube\"/>\n</scene>",
             {"bad.xml:3", "scene/shape", "\"cube\""});
-    refuses("<scene version=\"3.0.0\">" + sensor + "<emitter type=\"point\"/></scene>",
-            {"scene/emitter", "\"point\""});
+    refuses("<scene version=\"3.0.0\">" + sensor + "<emitter type=\"spot\"/></scene>",
+            {"scene/emitter", "\"spot\""});
+    refuses("<scene version=\"3.0.0\">" + sensor +
+                "<emitter type=\"directional\"><vector name=\"direction\" value=\"0, 0, 0\"/>"
+                "</emitter></scene>",
+            {"scene/emitter", "direction cannot be 0"});
+    refuses("<scene version=\"3.0.0\">" + sensor +
+                "<emitter type=\"point\"><point name=\"position\" value=\"0, 0, 0\"/>"
+                "<transform name=\"to_world\"><translate value=\"1, 0, 0\"/></transform>"
+                "</emitter></scene>",
+            {"scene/emitter", "position or to_world, not both"});
     refuses("<scene version=\"3.0.0\">" + sensor +
                 "<shape type=\"linearcurve\"><string name=\"filename\" value=\"yarn.txt\"/>"
                 "<ref id=\"nowhere\"/></shape></scene>",

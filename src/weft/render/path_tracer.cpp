@@ -57,6 +57,7 @@ struct LightSampleAtHit {
     Vec3 wi;  // world direction to the light
     Rgb radiance;
     double lightPdf = 0;  // the pick's probability times the light's density
+    bool delta = false;   // a point or directional light: no BSDF sample finds it
 };
 
 // Next-event estimation's light part: one light picked by the scene's light
@@ -81,14 +82,16 @@ LightSampleAtHit sampleLightAtHit(const Scene& scene, const TubeHit& hit, Sample
         if (static_cast<int>(i) != pick && !lights[i]->isInfinite() &&
             lights[i]->intersect(hit.point, ls.wi, tMax) > 0)
             return {};
-    return {true, ls.wi, ls.radiance, pickPdf * ls.pdf};
+    return {true, ls.wi, ls.radiance, pickPdf * ls.pdf, l.isDelta()};
 }
 
 // The light sample's contribution with the BSDF's value and density there,
-// weighted against BSDF sampling by the power heuristic.
+// weighted against BSDF sampling by the power heuristic (by 1 for a delta
+// light, which BSDF sampling cannot reach).
 Rgb directLight(const LightSampleAtHit& light, const BsdfEval& e) {
     if (!light.pending || e.value.isBlack()) return Rgb(0.0);
-    return e.value * light.radiance * (powerHeuristic(light.lightPdf, e.pdf) / light.lightPdf);
+    const double weight = light.delta ? 1.0 : powerHeuristic(light.lightPdf, e.pdf);
+    return e.value * light.radiance * (weight / light.lightPdf);
 }
 
 // One path between its scattering events: where its next ray starts, what
@@ -103,7 +106,7 @@ struct PathState {
 };
 
 // Traces the path's next ray and adds the emission it sees: a sphere light
-// in front of the tube, or every infinite light if it escapes (the MIS
+// in front of the tube, or every infinite light but a directional one if it escapes (the MIS
 // weight uses the probability with which NEE picks light i). True when the
 // ray hit a tube that scatters the path further (in *hit); false when the
 // path ends here (a light, the sky, or maxDepth events: counted truncated).
@@ -128,7 +131,8 @@ bool traceToNextHit(const Scene& scene, PathState& p, int depth, bool nee,
     }
     if (!hitTube) {
         for (size_t i = 0; i < lights.size(); ++i)
-            if (lights[i]->isInfinite()) addEmission(i, lights[i]->radiance(p.dir));
+            if (lights[i]->isInfinite() && !lights[i]->isDelta())
+                addEmission(i, lights[i]->radiance(p.dir));
         return false;
     }
     if (depth >= options.maxDepth) {

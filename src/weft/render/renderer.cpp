@@ -41,9 +41,9 @@ void RenderOptions::validate() const {
     checkRange("--threads", threads, 0, 1024, " (0: all cores)");
     checkRange("max_depth", maxDepth, 1, 10000);
     if (checkpointSeconds != 0 &&
-        (!std::isfinite(checkpointSeconds) || checkpointSeconds < 1 || checkpointSeconds > 1e6))
+        (!std::isfinite(checkpointSeconds) || checkpointSeconds < 0.1 || checkpointSeconds > 1e6))
         throw InputError("--checkpoint " + std::to_string(checkpointSeconds) +
-                         " is out of range: allowed [1, 1e6] seconds");
+                         " is out of range: allowed [0.1, 1e6] seconds");
     if (aovs != 0 && shard)
         throw InputError(
             "--aov does not apply to --shard parts: weft render merge merges the image "
@@ -138,6 +138,14 @@ int64_t peakResidentBytes() {
 
 RenderResult render(const Scene& scene, const RenderOptions& options) {
     options.validate();
+    // Without next-event estimation a point or directional light would
+    // silently light nothing: no BSDF sample can reach it.
+    if (!options.nextEventEstimation)
+        for (size_t i = 0; i < scene.lights().size(); ++i)
+            if (scene.lights()[i]->isDelta())
+                throw InputError("lights[" + std::to_string(i) +
+                                 "] is a point or directional light, which only next-event "
+                                 "estimation reaches: render without --no-nee");
     using Clock = std::chrono::steady_clock;
     const auto start = Clock::now();
     auto secondsSince = [](Clock::time_point t) {

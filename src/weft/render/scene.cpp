@@ -458,6 +458,13 @@ void Scene::buildLightSampler() {
             break;
         case LightSamplerKind::Weights:
             lightSampler_ = LightSampler(lightSamplerDesc_.weights);
+            // Only light samples reach a point or directional light: weight 0 would drop it.
+            for (size_t i = 0; i < lights_.size(); ++i)
+                if (lights_[i]->isDelta() && lightSampler_.pmf(i) == 0)
+                    throw InputError("light_sampler.weights[" + std::to_string(i) +
+                                     "] = 0, but lights[" + std::to_string(i) +
+                                     "] is a point or directional light, which only light "
+                                     "samples reach: allowed > 0");
             break;
         case LightSamplerKind::Power: {
             // The geometry's bounding sphere (radius 1 for an empty scene).

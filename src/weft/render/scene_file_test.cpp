@@ -23,6 +23,7 @@
 #include "weft/core/rng.h"
 #include "weft/core/test_util.h"
 #include "weft/render/constant_light.h"
+#include "weft/render/delta_lights.h"
 #include "weft/render/environment_light.h"
 #include "weft/render/sphere_light.h"
 #include "weft/render/yarn_mode.h"
@@ -43,7 +44,9 @@ const std::string kFullScene = R"({
     {"type": "sky", "scale": 0.5},
     {"type": "envmap", "file": "maps/studio.exr", "scale": 2, "rotate_deg": -90},
     {"type": "sphere", "center": [1, 2, 3], "radius": 0.25, "radiance": [10, 9, 8]},
-    {"type": "constant", "radiance": [0.1, 0.2, 0.3]}
+    {"type": "constant", "radiance": [0.1, 0.2, 0.3]},
+    {"type": "point", "position": [-1, 3, 0.5], "intensity": [5, 6, 7]},
+    {"type": "directional", "direction": [1, -2, 0], "irradiance": [2, 3, 4]}
   ],
   "yarns": [
     {"curves": "knit.bcc", "scale": 0.01, "radius": 0.02, "plies": 3, "ply_twist": -0.3,
@@ -156,7 +159,7 @@ TEST(SceneFile, FullSceneParsesEveryKey) {
     EXPECT_EQ(s.render.seed, 7u);
     EXPECT_EQ(s.render.sampler, SamplerKind::Sobol);
 
-    ASSERT_EQ(s.lights.size(), 4u);
+    ASSERT_EQ(s.lights.size(), 6u);
     EXPECT_STREQ(s.lights[0]->type(), "sky");
     EXPECT_EQ(s.lights[0]->as<SkyLightDesc>().scale, 0.5);
     EXPECT_STREQ(s.lights[1]->type(), "envmap");
@@ -172,6 +175,12 @@ TEST(SceneFile, FullSceneParsesEveryKey) {
     EXPECT_STREQ(s.lights[3]->type(), "constant");
     EXPECT_EQ(s.lights[3]->as<ConstantLightDesc>().radiance, Rgb(0.1, 0.2, 0.3));
     EXPECT_THROW(s.lights[3]->as<SphereLightDesc>(), std::logic_error);
+    const auto& point = s.lights[4]->as<PointLightDesc>();
+    EXPECT_EQ(point.position, Vec3(-1, 3, 0.5));
+    EXPECT_EQ(point.intensity, Rgb(5, 6, 7));
+    const auto& directional = s.lights[5]->as<DirectionalLightDesc>();
+    EXPECT_EQ(directional.direction, Vec3(1, -2, 0));  // as written, not normalized
+    EXPECT_EQ(directional.irradiance, Rgb(2, 3, 4));
 
     ASSERT_EQ(s.yarns.size(), 2u);
     const YarnDesc& y = s.yarns[0];
@@ -201,7 +210,8 @@ TEST(SceneFile, EveryRegisteredLightTypeIsInTheFullScene) {
         names.push_back(type.name);
         EXPECT_NE(std::find(read.begin(), read.end(), type.name), read.end()) << type.name;
     }
-    EXPECT_EQ(names, (std::vector<std::string>{"sky", "envmap", "sphere", "constant"}));
+    EXPECT_EQ(names, (std::vector<std::string>{"sky", "envmap", "sphere", "constant", "point",
+                                               "directional"}));
     // Each description writes itself under its own type name.
     for (const auto& light : s.lights) EXPECT_EQ(toJson(*light).at("type"), light->type());
     // The modes the scene names are the registered ones.
@@ -260,6 +270,10 @@ TEST(SceneFile, EveryMissingRequiredKeyIsNamed) {
         {"/lights/2/radius", "lights[2]: missing key \"radius\""},
         {"/lights/2/radiance", "lights[2]: missing key \"radiance\""},
         {"/lights/3/radiance", "lights[3]: missing key \"radiance\""},
+        {"/lights/4/position", "lights[4]: missing key \"position\""},
+        {"/lights/4/intensity", "lights[4]: missing key \"intensity\""},
+        {"/lights/5/direction", "lights[5]: missing key \"direction\""},
+        {"/lights/5/irradiance", "lights[5]: missing key \"irradiance\""},
         {"/yarns/0/curves", "yarns[0]: missing key \"curves\""},
         {"/yarns/1/model", "yarns[1]: missing key \"model\""},
     };
@@ -288,6 +302,13 @@ TEST(SceneFile, UnknownKeysAreNamedWithTheirPath) {
                      {"lights[0]: unknown key \"radius\" (allowed: type, scale)"});
     expectInputError([] { parseJson(fullWith("/lights/3/scale", 1)); },
                      {"lights[3]: unknown key \"scale\" (allowed: type, radiance)"});
+    expectInputError(
+        [] {
+            parseJson(fullWith("/lights/4/radiance", json::array({1, 1, 1})));
+        },
+        {"lights[4]: unknown key \"radiance\" (allowed: type, position, intensity)"});
+    expectInputError([] { parseJson(fullWith("/lights/5/angle", 0.5)); },
+                     {"lights[5]: unknown key \"angle\" (allowed: type, direction, irradiance)"});
     expectInputError(
         [] { parseJson(fullWith("/yarns/1/twist", 1)); },
         {"yarns[1]: unknown key \"twist\" (allowed: curves, scale, radius, plies, ply_twist, "
@@ -326,7 +347,8 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
          nullptr},
         {"/camera/from",
          json::array({0, 1}),
-         {"camera.from: expected an array of 3 numbers in [-1e+06, 1e+06] scene units, got an array of 2"},
+         {"camera.from: expected an array of 3 numbers in [-1e+06, 1e+06] scene units, got an "
+          "array of 2"},
          nullptr},
         {"/camera/from",
          json::array({0, 1, inf}),
@@ -373,15 +395,23 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
         {"/lights/0", 3, {"lights[0]: expected an object, got 3"}, nullptr},
         {"/lights/0/type",
          "area",
-         {"lights[0].type: expected one of \"sky\", \"envmap\", \"sphere\", \"constant\", got "
+         {"lights[0].type: expected one of \"sky\", \"envmap\", \"sphere\", \"constant\", "
+          "\"point\", \"directional\", got "
           "the string \"area\""},
          nullptr},
         {"/lights/0/type",
          1,
-         {"lights[0].type: expected one of \"sky\", \"envmap\", \"sphere\", \"constant\", got 1"},
+         {"lights[0].type: expected one of \"sky\", \"envmap\", \"sphere\", \"constant\", "
+          "\"point\", \"directional\", got 1"},
          nullptr},
-        {"/lights/0/scale", -0.5, {"lights[0].scale = -0.5 is out of range: allowed [0, 1e+06]"}, 0},
-        {"/lights/0/scale", 1e308, {"lights[0].scale = 1e+308 is out of range: allowed [0, 1e+06]"}, 1e6},
+        {"/lights/0/scale",
+         -0.5,
+         {"lights[0].scale = -0.5 is out of range: allowed [0, 1e+06]"},
+         0},
+        {"/lights/0/scale",
+         1e308,
+         {"lights[0].scale = 1e+308 is out of range: allowed [0, 1e+06]"},
+         1e6},
         {"/lights/1/scale", -1e-300, {"lights[1].scale = -1e-300 is out of range"}, 0},
         {"/lights/1/rotate_deg", nan, {"lights[1].rotate_deg: expected a finite number"}, 3600},
         {"/lights/1/file",
@@ -398,10 +428,14 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
          json::array(),
          {"lights[1].file: expected a file name, got an array"},
          nullptr},
-        {"/lights/2/radius", 0, {"lights[2].radius = 0 is out of range: allowed [1e-06, 1e+06] scene units"}, 1e-6},
+        {"/lights/2/radius",
+         0,
+         {"lights[2].radius = 0 is out of range: allowed [1e-06, 1e+06] scene units"},
+         1e-6},
         {"/lights/2/center",
          json::array({1, 2, 3, 4}),
-         {"lights[2].center: expected an array of 3 numbers in [-1e+06, 1e+06] scene units, got an array of 4"},
+         {"lights[2].center: expected an array of 3 numbers in [-1e+06, 1e+06] scene units, got an "
+          "array of 4"},
          nullptr},
         {"/lights/2/radiance",
          json::array({1, -1, 1}),
@@ -409,7 +443,24 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
          json::array({0, 0, 0})},
         {"/lights/3/radiance",
          json::array({1, 1}),
-         {"lights[3].radiance: expected an array of 3 numbers in [0, 1e+06] (r, g, b), got an array of 2"},
+         {"lights[3].radiance: expected an array of 3 numbers in [0, 1e+06] (r, g, b), got an "
+          "array of 2"},
+         nullptr},
+        {"/lights/4/intensity",
+         json::array({1, nan, 1}),
+         {"lights[4].intensity[1]: expected a finite number in [0, 1e+06]"},
+         json::array({0, 0, 1e6})},
+        {"/lights/4/position",
+         json::array({0, 2e6, 0}),
+         {"lights[4].position[1] = 2e+06 is out of range: allowed [-1e+06, 1e+06] scene units"},
+         json::array({0, -1e6, 0})},
+        {"/lights/5/direction",
+         json::array({0, 0, 0}),
+         {"lights[5].direction: the direction the light travels cannot be 0"},
+         json::array({0, 0, 1e-300})},
+        {"/lights/5/irradiance",
+         json::array({-1, 0, 0}),
+         {"lights[5].irradiance[0] = -1 is out of range: allowed [0, 1e+06]"},
          nullptr},
         {"/yarns", "knit.bcc", {"yarns: expected an array of objects, got the string"}, nullptr},
         {"/yarns/0", json::array(), {"yarns[0]: expected an object, got an array of 0"}, nullptr},
@@ -420,9 +471,18 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
          "knit.Txt"},
         {"/yarns/0/curves", 7, {"yarns[0].curves: expected a file name, got 7"}, nullptr},
         {"/yarns/0/model", nullptr, {"yarns[0].model: expected a file name, got null"}, nullptr},
-        {"/yarns/0/scale", 0, {"yarns[0].scale = 0 is out of range: allowed [1e-06, 1e+06] scene units"}, 1e-6},
-        {"/yarns/0/radius", -0.02, {"yarns[0].radius = -0.02 is out of range: allowed [1e-06, 1e+06] scene units"}, 1e-6},
-        {"/yarns/0/radius", nullptr, {"yarns[0].radius: expected a number in [1e-06, 1e+06] scene units, got null"}, nullptr},
+        {"/yarns/0/scale",
+         0,
+         {"yarns[0].scale = 0 is out of range: allowed [1e-06, 1e+06] scene units"},
+         1e-6},
+        {"/yarns/0/radius",
+         -0.02,
+         {"yarns[0].radius = -0.02 is out of range: allowed [1e-06, 1e+06] scene units"},
+         1e-6},
+        {"/yarns/0/radius",
+         nullptr,
+         {"yarns[0].radius: expected a number in [1e-06, 1e+06] scene units, got null"},
+         nullptr},
         {"/yarns/0/plies", 17, {"yarns[0].plies = 17 is out of range: allowed [1, 16]"}, 16},
         {"/yarns/1/plies", 0, {"yarns[1].plies = 0 is out of range: allowed [1, 16]"}, 1},
         {"/yarns/0/plies", 3.5, {"yarns[0].plies: expected an integer in [1, 16], got 3.5"}, 3.0},
@@ -1079,6 +1139,12 @@ void checkAccepted(const SceneDesc& s, bool roundTrip, std::vector<std::string>*
             check(std::isfinite(sphere->radius) && sphere->radius > 0, "sphere radius");
             check(isFinite(sphere->center), "sphere center");
             check(nonNegative(sphere->radiance), "radiance");
+        } else if (const auto* point = dynamic_cast<const PointLightDesc*>(light.get())) {
+            check(isFinite(point->position), "point position");
+            check(nonNegative(point->intensity), "intensity");
+        } else if (const auto* sun = dynamic_cast<const DirectionalLightDesc*>(light.get())) {
+            check(isFinite(sun->direction) && !(sun->direction == Vec3(0, 0, 0)), "direction");
+            check(nonNegative(sun->irradiance), "irradiance");
         } else {
             check(nonNegative(light->as<ConstantLightDesc>().radiance), "radiance");
         }

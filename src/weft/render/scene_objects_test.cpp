@@ -10,8 +10,10 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "weft/core/file.h"
+#include "weft/core/math.h"
 #include "weft/core/test_util.h"
 #include "weft/render/renderer.h"
 #include "weft/render/scene.h"
@@ -166,6 +168,79 @@ TEST_F(SceneObjectsTest, AFloorReflectsLightOntoTheYarn) {
         }
         EXPECT_GT(sum[1], 1.05 * sum[0]) << mode;
     }
+}
+
+// Direct light from a point light and from a sun on a diffuse floor against
+// their formulas, L = (rho / pi) I cos(theta) / d^2 and L = (rho / pi) E
+// cos(theta), each pixel the average of that over its footprint: no other
+// light, so the paths that leave the floor add nothing and only the pixel
+// position varies between samples. Both lights in one scene, picked by power,
+// give the sum (the pick probability divides each delta sample).
+TEST_F(SceneObjectsTest, PointAndDirectionalLightsOnADiffuseFloorFollowTheirFormulas) {
+    const Rgb rho(0.2, 0.5, 0.9);
+    const double floorY = -0.05;
+    // Big enough to fill the view, small enough that the sun's power (pi R^2 E,
+    // R the scene's radius) does not starve the point light of picks.
+    const std::string floor =
+        R"({"type": "rectangle", "center": [0, -0.05, 0], "size": [4, 4],
+        "material": {"type": "diffuse", "reflectance": [0.2, 0.5, 0.9]}})";
+    const Vec3 position(0.05, 0.45, -0.02);
+    const Rgb intensity(3, 2, 1), irradiance(1, 2, 3);
+    const Vec3 towardsSun = normalize(Vec3(-1, 2, -0.5));
+    const std::string point = R"({"type": "point", "position": [0.05, 0.45, -0.02],
+                                  "intensity": [3, 2, 1]})";
+    const std::string sun =
+        R"({"type": "directional", "direction": [1, -2, 0.5], "irradiance": [1, 2, 3]})";
+    const auto pointRadiance = [&](const Vec3& p) {
+        const Vec3 d = position - p;
+        const double d2 = dot(d, d);
+        return rho * intensity * ((d.y / std::sqrt(d2)) / (kPi * d2));
+    };
+    const auto sunRadiance = [&](const Vec3&) { return rho * irradiance * (towardsSun.y / kPi); };
+    const auto parse = [&](const std::string& text) {
+        return parseSceneText(text, path("scene.json"), dir_.string());
+    };
+    // The formula averaged over each pixel (8 x 8 film positions).
+    const auto expected = [&](const Scene& s, auto&& radiance) {
+        std::vector<Rgb> out;
+        for (int y = 0; y < s.height(); ++y)
+            for (int x = 0; x < s.width(); ++x) {
+                Rgb sum(0.0);
+                for (int j = 0; j < 8; ++j)
+                    for (int i = 0; i < 8; ++i) {
+                        Vec3 org, dir;
+                        s.camera().ray(x + (i + 0.5) / 8, y + (j + 0.5) / 8, &org, &dir);
+                        sum += radiance(org + dir * ((floorY - org.y) / dir.y));
+                    }
+                out.push_back(sum / 64.0);
+            }
+        return out;
+    };
+    std::vector<Rgb> truth[2];
+    for (int k = 0; k < 2; ++k) {
+        SCOPED_TRACE(k == 0 ? "point" : "directional");
+        const Scene s(parse(scene(floor, "", k == 0 ? point : sun)));
+        truth[k] = k == 0 ? expected(s, pointRadiance) : expected(s, sunRadiance);
+        const RenderResult r = render(scene(floor, "", k == 0 ? point : sun), "neural", true, 64);
+        for (size_t i = 0; i < r.image.pixels.size(); ++i) {
+            const double want = truth[k][i / 3][static_cast<int>(i % 3)];
+            ASSERT_NEAR(r.image.pixels[i], want, 0.01 * want) << i;
+        }
+    }
+    // Both, picked by power: the sum, within the pick's noise (image means).
+    std::string both = scene(floor, "", point + ", " + sun);
+    both.replace(both.find("\"lights\""), 8, R"("light_sampler": "power", "lights")");
+    const RenderResult r = render(both, "neural", true, 64);
+    Rgb mean(0.0), want(0.0);
+    for (size_t i = 0; i < r.image.pixels.size(); ++i) {
+        mean[static_cast<int>(i % 3)] += r.image.pixels[i];
+        want[static_cast<int>(i % 3)] +=
+            truth[0][i / 3][static_cast<int>(i % 3)] + truth[1][i / 3][static_cast<int>(i % 3)];
+    }
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(mean[c], want[c], 0.02 * want[c]) << c;
+    // Without next-event estimation nothing would reach them: refused, not black.
+    expectInputError([&] { render(scene(floor, "", point), "neural", false); },
+                     {"lights[0]", "point or directional", "--no-nee"});
 }
 
 TEST_F(SceneObjectsTest, ObjectsAreValidatedAndWrittenBack) {

@@ -132,19 +132,21 @@ std::vector<ModelChoice> modelChoices(const render::SceneDesc& desc, const ViewO
     return choices;
 }
 
-// A light at `strength` times its scene's radiance (sky, envmap: "scale";
-// sphere, constant: "radiance").
+// A light at `strength` times its scene's emission (sky, envmap: "scale";
+// sphere, constant: "radiance"; point: "intensity"; directional: "irradiance").
 json scaledLight(const json& light, double strength, const std::string& what) {
     json out = light;
     const std::string type = light.value("type", "");
     if (type == "sky" || type == "envmap") {
         out["scale"] = light.value("scale", 1.0) * strength;
-    } else if (light.contains("radiance") && light["radiance"].is_array()) {
-        for (auto& v : out["radiance"]) v = v.get<double>() * strength;
-    } else {
-        throw InputError(what + ": a " + type + " light has no strength to change");
+        return out;
     }
-    return out;
+    for (const char* key : {"radiance", "intensity", "irradiance"}) {
+        if (!light.contains(key) || !light[key].is_array()) continue;
+        for (auto& v : out[key]) v = v.get<double>() * strength;
+        return out;
+    }
+    throw InputError(what + ": a " + type + " light has no strength to change");
 }
 
 json srgbJson(const Rgb& linear) {

@@ -864,7 +864,7 @@ void readMeshShape(Importer& im, Plugin& p, json& objects) {
     const Affine toWorld = props.transform("to_world").value_or(Affine{});
     if (props.boolean("face_normals")) im.note(p, "face_normals: weft shades with face normals");
     props.finish({"filename", "to_world", "face_normals"});
-    if (!name) im.file.fail(p.node, p.where, "an obj shape needs its filename");
+    if (!name) im.file.fail(p.node, p.where, "a mesh shape needs its filename");
     const Plugin* bsdf = nullptr;
     for (const Plugin::Ref& r : p.refs) {
         const auto it = im.bsdfs.find(r.id);
@@ -873,18 +873,19 @@ void readMeshShape(Importer& im, Plugin& p, json& objects) {
         bsdf = &it->second;
     }
     for (const Plugin& c : p.children) {
-        if (c.tag != "bsdf") im.file.fail(c.node, c.where, "an obj shape takes a bsdf only");
+        if (c.tag != "bsdf") im.file.fail(c.node, c.where, "a mesh shape takes a bsdf only");
         bsdf = &c;
     }
     const std::string source = im.resolve(*name);
-    if (lowercaseExtension(source) != ".obj")
-        im.file.fail(p.node, p.where, "an obj shape's filename must end in .obj, not " + *name);
+    if (lowercaseExtension(source) != "." + p.type)
+        im.file.fail(p.node, p.where,
+                     "a " + p.type + " shape's filename must end in ." + p.type + ", not " + *name);
     std::string file;
     if (toWorld.isIdentity()) {
         file = im.files.copy(source, "meshes");
     } else {
         // The triangles moved into the world, as an OBJ of their own.
-        Triangles t = parseObjTriangles(readFile(source), source);
+        Triangles t = readMeshTriangles(source);
         for (Vec3& v : t.vertices) v = toWorld.point(v);
         file = im.files.add("meshes", fs::path(*name).stem().string(), ".obj", objText(t));
     }
@@ -1055,15 +1056,15 @@ MitsubaImport importMitsubaText(std::string text, const std::string& xmlPath,
         } else if (tag == "shape") {
             if (p.type == "linearcurve" || p.type == "bsplinecurve") {
                 readCurveShape(im, p, yarns);
-            } else if (p.type == "obj") {
+            } else if (p.type == "obj" || p.type == "ply") {
                 readMeshShape(im, p, objects);
             } else if (p.type == "sphere") {
                 readSphereShape(im, p, lights);
             } else {
                 im.file.fail(child, w,
                              "shape \"" + printable(p.type) +
-                                 "\": weft reads linearcurve, bsplinecurve, obj, and spheres "
-                                 "with an area emitter");
+                                 "\": weft reads linearcurve, bsplinecurve, obj, ply, and "
+                                 "spheres with an area emitter");
             }
         } else {
             im.file.fail(child, w, "<" + tag + "> at the top level is not read by weft");

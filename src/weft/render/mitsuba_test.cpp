@@ -20,6 +20,7 @@
 #include "weft/core/test_util.h"
 #include "weft/render/renderer.h"
 #include "weft/render/scene.h"
+#include "weft/render/scene_objects.h"
 #include "weft/yarn/yarn_model.h"
 
 namespace weft::render {
@@ -291,6 +292,50 @@ TEST_F(MitsubaTest, ImportExportImportIsTheIdentity) {
     const CurveSet knit = readCurves(path("weft1/curves/knit.txt"));
     EXPECT_NEAR(knit.curves[0].points[1].x, 2, 1e-6);  // scaled by to_world
     EXPECT_NEAR(knit.curves[0].radii[2], 0.4, 1e-6);
+}
+
+// PLY meshes: copied as they are, or moved by to_world into an OBJ of their
+// own; either way weft reads the same triangles (placed by to_world).
+TEST_F(MitsubaTest, PlyMeshesImportCopiedOrMoved) {
+    write("tri.ply",
+          "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+          "property float z\nelement face 1\nproperty list uchar uint vertex_indices\n"
+          "end_header\n0 0 0\n1 0 0\n0 0 1\n3 0 1 2\n");
+    const std::string xml = write("ply.xml", R"(<scene version="3.0.0">
+    <sensor type="perspective"><float name="fov" value="30"/></sensor>
+    <shape type="ply"><string name="filename" value="tri.ply"/><bsdf type="diffuse"/></shape>
+    <shape type="ply">
+        <string name="filename" value="tri.ply"/>
+        <transform name="to_world"><translate value="0, -1, 0"/></transform>
+        <bsdf type="diffuse"/>
+    </shape>
+</scene>)");
+    MitsubaImportOptions options;
+    options.model = kModel;
+    const MitsubaImport im = importMitsubaScene(xml, options);
+    {
+        auto files = im.files;
+        files.push_back({"scene.json", im.scene.dump(2)});
+        writeSceneFolder(files, path("weft"));
+    }
+    const SceneDesc scene = loadScene(path("weft/scene.json"));
+    ASSERT_EQ(scene.objects.size(), 2u);
+    EXPECT_EQ(fs::path(scene.objects[0].file).extension(), ".ply");
+    EXPECT_EQ(fs::path(scene.objects[1].file).extension(), ".obj");
+    const Triangles copied = objectTriangles(scene.objects[0]);
+    const Triangles moved = objectTriangles(scene.objects[1]);
+    ASSERT_EQ(copied.vertices.size(), 3u);
+    ASSERT_EQ(moved.vertices.size(), 3u);
+    for (int i = 0; i < 3; ++i)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(moved.vertices[i][c], copied.vertices[i][c] - (c == 1 ? 1 : 0), 1e-6);
+    // A ply shape's file must be a .ply.
+    write(
+        "bad.xml",
+        R"(<scene version="3.0.0"><sensor type="perspective"><float name="fov" value="30"/></sensor>
+<shape type="ply"><string name="filename" value="yarn.txt"/><bsdf type="diffuse"/></shape></scene>)");
+    expectInputError([&] { importMitsubaScene(path("bad.xml"), options); },
+                     {"bad.xml:2", "ply shape's filename must end in .ply"});
 }
 
 TEST_F(MitsubaTest, FibersExportAsCurvesOfTheirRadius) {

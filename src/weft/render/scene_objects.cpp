@@ -75,7 +75,7 @@ ObjectDesc readObject(JsonObjectReader r, const std::string& baseDir) {
     } else {
         r.allowKeys({"type", "file", "scale", "translate", "material"});
         o.type = ObjectDesc::Type::Mesh;
-        o.file = readFileName(r, "file", baseDir, {".obj"});
+        o.file = readFileName(r, "file", baseDir, {".obj", ".ply"});
         if (r.has("scale")) o.scale = r.number("scale", sceneLengthRange());
         if (r.has("translate")) o.translate = readSceneVec3(r, "translate");
     }
@@ -147,6 +147,12 @@ Triangles parseObjTriangles(std::string_view text, const std::string& path) {
     return t;
 }
 
+Triangles readMeshTriangles(const std::string& path) {
+    const std::string bytes = readFile(path);
+    return lowercaseExtension(path) == ".ply" ? parsePlyTriangles(bytes, path)
+                                              : parseObjTriangles(bytes, path);
+}
+
 Triangles objectTriangles(const ObjectDesc& o) {
     if (o.type == ObjectDesc::Type::Rectangle) {
         const Vec3 u = rectangleU(o.normal) * (0.5 * o.size[0]);
@@ -156,7 +162,7 @@ Triangles objectTriangles(const ObjectDesc& o) {
         t.indices = {{0, 1, 2}, {0, 2, 3}};
         return t;
     }
-    Triangles t = parseObjTriangles(readFile(o.file), o.file);
+    Triangles t = readMeshTriangles(o.file);
     for (Vec3& p : t.vertices) {
         p = o.scale * p + o.translate;
         if (!(std::abs(p.x) <= kMaxSceneCoordinate && std::abs(p.y) <= kMaxSceneCoordinate &&

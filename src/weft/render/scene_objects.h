@@ -14,7 +14,10 @@
 // normal +y: width along x, height along z). A mesh is the triangles of an OBJ file ("v"
 // and "f" lines; a face of k vertices is a fan of k - 2 triangles; indices
 // 1-based or negative, "v/vt/vn" forms read for their first number; other
-// lines ignored), each vertex p placed at scale p + translate. Materials are
+// lines ignored) or of a PLY file (ascii or binary, either byte order: the
+// vertex element's x, y, z and the face element's vertex_indices, faces as
+// fans; every other property and element read past), each vertex p placed
+// at scale p + translate. Materials are
 // surface_bsdf.h's: "diffuse" (reflectance, default 0.5 grey) and
 // "conductor" (colour F0, default copper-ish 0.95 0.64 0.54; roughness,
 // default 0.3). Objects occlude and reflect light in every yarn mode.
@@ -53,7 +56,7 @@ struct ObjectDesc {
     Vec3 center, normal{0, 1, 0};
     std::array<double, 2> size{1, 1};
     // mesh
-    std::string file;  // resolved path of an .obj
+    std::string file;  // resolved path of an .obj or .ply
     double scale = 1;
     Vec3 translate;
     SurfaceMaterialDesc material;
@@ -75,6 +78,12 @@ struct Triangles {
 Triangles objectTriangles(const ObjectDesc& object);
 // The OBJ reader on text already in memory (pathForErrors in messages).
 Triangles parseObjTriangles(std::string_view text, const std::string& pathForErrors);
+// The PLY reader on a file's bytes (ply_triangles.cpp): InputError naming
+// the file, and the header line, the body line (ascii) or the element
+// instance, for anything malformed, truncated or out of range.
+Triangles parsePlyTriangles(std::string_view bytes, const std::string& pathForErrors);
+// The triangles of a mesh file, by its extension (.obj or .ply, any case).
+Triangles readMeshTriangles(const std::string& path);
 // Its material's BSDF, validated (`what`: "objects[i].material").
 std::unique_ptr<Bsdf> makeSurfaceBsdf(const SurfaceMaterialDesc& material, const std::string& what);
 

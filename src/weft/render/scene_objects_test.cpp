@@ -7,7 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -53,6 +57,104 @@ TEST(ObjTriangles, BadLinesAreNamed) {
                      {"a.obj:4", "index 4", "3 vertices"});
     expectInputError([] { parseObjTriangles("v 0 0 0\nf 0 1 1\n", "a.obj"); }, {"a.obj:2", "'0'"});
     expectInputError([] { parseObjTriangles("v 0 0 0\n", "a.obj"); }, {"a.obj", "no faces"});
+}
+
+// The PLY reader: one mesh (a quad and a triangle, as the OBJ test above) in
+// ascii and in both binary byte orders, with properties and an element weft
+// does not use, written here byte by byte from the format's description.
+static_assert(std::endian::native == std::endian::little, "the PLY test writes host bytes");
+
+template <typename T>
+void putPly(std::string& out, T v, bool bigEndian) {
+    char b[sizeof(T)];
+    std::memcpy(b, &v, sizeof v);
+    if (bigEndian) std::reverse(b, b + sizeof(T));
+    out.append(b, sizeof(T));
+}
+
+const char* const kPlyHeaderBody =
+    "comment a quad and a triangle\n"
+    "element vertex 5\n"
+    "property float x\nproperty double y\nproperty float z\nproperty uchar red\n"
+    "element face 2\n"
+    "property list uchar int vertex_indices\nproperty list ushort float texcoord\n"
+    "element edge 1\nproperty list int uint vertex_pair\n"
+    "element nothing 1000000000000\n"
+    "end_header\n";
+const double kPlyVertices[5][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 2, 2}};
+
+std::string binaryPly(bool bigEndian, double firstX = 0) {
+    std::string out = std::string("ply\nformat binary_") + (bigEndian ? "big" : "little") +
+                      "_endian 1.0\n" + kPlyHeaderBody;
+    for (int i = 0; i < 5; ++i) {
+        putPly(out, static_cast<float>(i == 0 ? firstX : kPlyVertices[i][0]), bigEndian);
+        putPly(out, kPlyVertices[i][1], bigEndian);
+        putPly(out, static_cast<float>(kPlyVertices[i][2]), bigEndian);
+        putPly(out, static_cast<uint8_t>(200), bigEndian);
+    }
+    const std::vector<std::vector<int32_t>> faces = {{0, 1, 2, 3}, {4, 3, 2}};
+    for (const auto& f : faces) {
+        putPly(out, static_cast<uint8_t>(f.size()), bigEndian);
+        for (int32_t v : f) putPly(out, v, bigEndian);
+        putPly(out, static_cast<uint16_t>(2), bigEndian);
+        putPly(out, 0.5f, bigEndian);
+        putPly(out, 0.25f, bigEndian);
+    }
+    putPly(out, int32_t{2}, bigEndian);
+    putPly(out, uint32_t{0}, bigEndian);
+    putPly(out, uint32_t{1}, bigEndian);
+    return out;
+}
+
+const std::string kAsciiPly = std::string("ply\nformat ascii 1.0\n") + kPlyHeaderBody +
+                              "0 0 0 200\n1 0 0 200\n1 1 0 200\n0 1 0 200\n2 2 2 200\n"
+                              "4 0 1 2 3 2 0.5 0.25\n3 4 3 2 2 0.5 0.25\n"
+                              "2 0 1\n";
+
+TEST(PlyTriangles, AsciiAndBothByteOrdersGiveTheSameTriangles) {
+    for (const std::string& bytes : {kAsciiPly, binaryPly(false), binaryPly(true)}) {
+        SCOPED_TRACE(bytes.substr(0, 30));
+        const Triangles t = parsePlyTriangles(bytes, "m.ply");
+        ASSERT_EQ(t.vertices.size(), 5u);
+        for (int i = 0; i < 5; ++i)
+            EXPECT_EQ(t.vertices[i],
+                      Vec3(kPlyVertices[i][0], kPlyVertices[i][1], kPlyVertices[i][2]));
+        ASSERT_EQ(t.indices.size(), 3u);
+        EXPECT_EQ(t.indices[0], (std::array<uint32_t, 3>{0, 1, 2}));
+        EXPECT_EQ(t.indices[1], (std::array<uint32_t, 3>{0, 2, 3}));
+        EXPECT_EQ(t.indices[2], (std::array<uint32_t, 3>{4, 3, 2}));
+    }
+}
+
+TEST(PlyTriangles, BadFilesAreNamedWithWhereTheyGoWrong) {
+    const auto rejects = [](const std::string& bytes, std::initializer_list<std::string> parts) {
+        expectInputError([&] { parsePlyTriangles(bytes, "m.ply"); }, parts);
+    };
+    const auto replaced = [](std::string s, const std::string& from, const std::string& to) {
+        return s.replace(s.find(from), from.size(), to);
+    };
+    rejects("plx\n", {"m.ply:1", "not a PLY file"});
+    rejects(replaced(kAsciiPly, "ascii", "binary_middle_endian"),
+            {"m.ply:2", "binary_middle_endian", "allowed: ascii"});
+    rejects(replaced(kAsciiPly, "end_header", "end_head"), {"m.ply:15", "unknown header line"});
+    rejects("ply\nformat ascii 1.0\nelement vertex 1\n", {"m.ply", "no end_header"});
+    rejects("ply\nformat ascii 1.0\nproperty float x\nend_header\n",
+            {"m.ply:3", "a property before any element"});
+    rejects(replaced(kAsciiPly, "list uchar int", "list float int"),
+            {"m.ply:10", "count type must be an integer"});
+    rejects(replaced(kAsciiPly, "property float x", "property float w"),
+            {"m.ply", "no property x"});
+    rejects(replaced(kAsciiPly, "1 1 0 200", "1 abc 0 200"),
+            {"m.ply:18", "element vertex 2.y", "expected a number", "abc"});
+    rejects(replaced(kAsciiPly, "3 4 3 2", "3 4 3 7"),
+            {"m.ply", "vertex index 7 is out of range: 5 vertices"});
+    rejects(replaced(kAsciiPly, "3 4 3 2", "2 4 3"), {"element face 1", "at least 3 vertices"});
+    const std::string binary = binaryPly(false);
+    rejects(binary.substr(0, binary.size() - 3),
+            {"m.ply", "element edge 0.vertex_pair", "the file ends before it"});
+    rejects(binaryPly(true, std::numeric_limits<double>::quiet_NaN()),
+            {"m.ply", "element vertex 0", "vertex coordinate out of range"});
+    rejects(replaced(kAsciiPly, "element face 2", "element face 0"), {"m.ply", "no faces"});
 }
 
 TEST(SceneObjects, RectangleIsTwoTrianglesOfItsSizeAroundItsCentre) {
@@ -241,6 +343,23 @@ TEST_F(SceneObjectsTest, PointAndDirectionalLightsOnADiffuseFloorFollowTheirForm
     // Without next-event estimation nothing would reach them: refused, not black.
     expectInputError([&] { render(scene(floor, "", point), "neural", false); },
                      {"lights[0]", "point or directional", "--no-nee"});
+}
+
+// A mesh object reads PLY as it reads OBJ: the same mesh in both formats
+// renders the same image, to the bit.
+TEST_F(SceneObjectsTest, PlyAndObjMeshesRenderTheSame) {
+    writeFileAtomic(path("m.obj"),
+                    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 2 2\nf 1 2 3 4\nf 5 4 3\n");
+    writeFileAtomic(path("m.ply"), binaryPly(true));
+    const auto mesh = [](const std::string& file) {
+        return R"({"type": "mesh", "file": ")" + file +
+               R"(", "scale": 0.2, "translate": [-0.1, -0.1, 0]})";
+    };
+    const RenderResult obj = render(scene(mesh("m.obj")), "neural");
+    const RenderResult ply = render(scene(mesh("m.ply")), "neural");
+    EXPECT_EQ(obj.stats.scene.triangles, 3);
+    EXPECT_EQ(ply.image.pixels, obj.image.pixels);
+    EXPECT_NE(obj.image.pixels, render(scene(""), "neural").image.pixels);  // the mesh shows
 }
 
 TEST_F(SceneObjectsTest, ObjectsAreValidatedAndWrittenBack) {

@@ -365,7 +365,7 @@ void addRenderCommand(CLI::App& app) {
         "denoisers and compositing, docs/render.md \"Render passes\"); not with --shard");
     cmd->add_option("--checkpoint", o->checkpoint,
                     "Write the image so far (EXR, PNG and statistics with \"partial\": true) "
-                    "every SECONDS while rendering, in [1, 1e6] (docs/render.md, \"Keeping the "
+                    "every SECONDS while rendering, in [0.1, 1e6] (docs/render.md, \"Keeping the "
                     "work\"); Ctrl-C or SIGTERM writes it without this flag too");
     cmd->add_option("--integrator", o->integrator,
                     "batch (paths of a tile advance together, the BSDF's networks run many "

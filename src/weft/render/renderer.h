@@ -104,7 +104,7 @@ struct RenderOptions {
 
     // InputError naming the flag and its range (exactly one budget, threads
     // in [0, 1024], maxDepth in [1, 10000]; a shard needs spp and N <= spp;
-    // checkpointSeconds 0 or in [1, 1e6]).
+    // checkpointSeconds 0 or in [0.1, 1e6]).
     void validate() const;
 };
 

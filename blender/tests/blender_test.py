@@ -444,6 +444,10 @@ class CyclesAgrees(unittest.TestCase):
                 exported.scene["lights"][0]["rotate_deg"] += 90
                 turned, _ = weft.render(exported.scene, spp=4, base_dir=str(folder / "turned"))
                 self.assertGreater(relative_difference(turned, cycles), 0.1)
+        # An image in a colour space weft does not read is refused, not misread.
+        scene.world.node_tree.nodes["Environment Texture"].image.colorspace_settings.name = "XYZ"
+        with self.assertRaisesRegex(export.ExportError, "env.exr.*colour space XYZ"):
+            export.export_scene(bpy.context.evaluated_depsgraph_get(), WORK / "xyz")
 
     def test_lights_on_a_diffuse_floor(self):
         """A point light with a radius (a weft sphere), one of radius 0 (a weft

@@ -34,6 +34,8 @@ from . import curves as curve_maths
 PRESET_MODELS = ("fleece", "silk", "polyester", "cotton", "gabardine")
 COLOUR_MODELS = ("fleece-colour", "polyester-colour", "cotton-colour", "gabardine-colour")
 MODES = ("neural", "fiber", "dual")
+# Blender's colour spaces whose values are linear Rec.709, as weft reads an envmap.
+LINEAR_SPACES = ("Linear", "Non-Color", "Raw")
 
 
 class ExportError(Exception):
@@ -388,6 +390,11 @@ def _world_lights(writer, scene):
     # node's Z rotation (Cycles looks up the rotated direction).
     rotate_deg = 90.0 - math.degrees(rotation_z)
     image = texture.image
+    space = image.colorspace_settings.name
+    if space not in LINEAR_SPACES and not (space == "sRGB" and not image.is_float):
+        raise ExportError(f"world '{world.name}': image '{image.name}' is in colour space "
+                          f"{space}; weft reads linear Rec.709 images ({', '.join(LINEAR_SPACES)}) "
+                          "and 8-bit sRGB ones")
     path = bpy.path.abspath(image.filepath, library=image.library)
     if image.packed_file is None and path.lower().endswith((".exr", ".hdr")) and \
             os.path.isfile(path):
@@ -410,6 +417,7 @@ def _save_image_linear(image, path):
     rgb = pixels.reshape(h, w, 4)[::-1, :, :3].astype(np.float64)
     if not image.is_float and image.colorspace_settings.name == "sRGB":
         rgb = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+    # Otherwise one of LINEAR_SPACES (_world_lights refuses the others).
     weft_module.get().save_image(path, np.ascontiguousarray(rgb))
 
 

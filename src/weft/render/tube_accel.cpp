@@ -73,6 +73,32 @@ OriginContext makeContext(const TubeId& origin,
 
 }  // namespace
 
+Vec3 TubeAccel::smoothTangent(const GeometryInfo& info, uint32_t segment, float u) {
+    // The index buffer gives the segment's first vertex; its neighbours, where
+    // the flags say it has them, are one vertex before and after.
+    const float* v0 = info.vertices + 4 * static_cast<size_t>(info.indices[segment]);
+    const auto point = [&](int k) { return Vec3{v0[4 * k], v0[4 * k + 1], v0[4 * k + 2]}; };
+    const Vec3 along = normalizeAnyLength(point(1) - point(0));
+    const unsigned char flags = info.flags[segment];
+    const bool left = flags & RTC_CURVE_FLAG_NEIGHBOR_LEFT;
+    const bool right = flags & RTC_CURVE_FLAG_NEIGHBOR_RIGHT;
+    Vec3 t0 = left ? normalizeAnyLength(point(1) - point(-1)) : along;
+    Vec3 t1 = right ? normalizeAnyLength(point(2) - point(0)) : along;
+    // At an open end, the end tangent of the parabola through the last three
+    // points (2 x the chord's direction - the inner tangent): exact on a
+    // circle, the segment itself on a straight tube.
+    const auto endTangent = [&](const Vec3& inner) {
+        const Vec3 t = along * 2.0 - inner;
+        return dot(t, t) > 1e-12 ? normalize(t) : along;
+    };
+    if (!left && right) t0 = endTangent(t1);
+    if (left && !right) t1 = endTangent(t0);
+    const double w = std::clamp(static_cast<double>(u), 0.0, 1.0);
+    const Vec3 t = t0 * (1 - w) + t1 * w;
+    // A hairpin (the neighbours on opposite sides) has no smooth tangent there.
+    return dot(t, t) > 1e-12 ? normalize(t) : along;
+}
+
 uint32_t TubeAccel::GeometryInfo::tubeOf(uint32_t segment) const {
     const auto it = std::upper_bound(tubeFirstSegment.begin(), tubeFirstSegment.end(), segment);
     return static_cast<uint32_t>(it - tubeFirstSegment.begin()) - 1;
@@ -154,6 +180,7 @@ uint32_t TubeAccel::addGeometry(const std::vector<Tube>& tubes, int material,
     info.segmentCount = static_cast<uint32_t>(segmentCount);
     info.vertices = vertices;
     info.indices = indices;
+    info.flags = flags;
     rtcCommitGeometry(geom);
     const unsigned id = rtcAttachGeometry(scene_, geom);
     rtcReleaseGeometry(geom);
@@ -243,11 +270,7 @@ bool TubeAccel::intersect(const Vec3& org, const Vec3& dir, double tMax, const T
     hit->material = info.materialAlong.empty()
                         ? info.material
                         : info.materialAlong[rh.hit.primID - info.tubeFirstSegment[hit->id.tube]];
-    // Tangent: the segment direction (the index buffer gives its first vertex).
-    const float* v0 = info.vertices + 4 * static_cast<size_t>(info.indices[rh.hit.primID]);
-    const float* v1 = v0 + 4;
-    const Vec3 axis{v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]};
-    hit->tangent = normalize(axis);
+    hit->tangent = smoothTangent(info, rh.hit.primID, rh.hit.u);
     // Normal: Embree's geometric normal without its component along the
     // tangent (on a cone of varying radius, or on a joint sphere, it has one).
     Vec3 n{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};

@@ -4,8 +4,14 @@
 // Embree geometry of round linear curves (cones joined by spheres, with the
 // neighbour flags so that joints are hit once); each tube of a geometry is a
 // run of consecutive segments. A hit reports the tube it is on and the
-// shading geometry: the segment direction as tangent and Embree's geometric
-// normal, made orthogonal to it, as the outward normal.
+// shading geometry: a smooth tangent and Embree's geometric normal, made
+// orthogonal to it, as the outward normal. The tangent is that of the curve
+// the segments sample, not the segment's own direction, which jumps at every
+// joint and draws a fiber's highlight as facets (issue 47): at each vertex
+// the central difference of its neighbours (at a tube's open end, the end
+// tangent of the parabola through its last three points), interpolated
+// linearly along the segment by Embree's curve parameter u and normalized
+// (as Phong interpolates normals).
 //
 // Self-intersection (docs/design.md 7): a ray that leaves a tube (reflected,
 // transmitted, or a shadow ray) carries that tube as its origin, and an
@@ -114,8 +120,12 @@ class TubeAccel {
         // Embree's buffers (owned by the geometry the scene holds), for the hit tangent.
         const float* vertices = nullptr;    // x, y, z, r per vertex
         const unsigned* indices = nullptr;  // first vertex of each segment
+        const unsigned char* flags = nullptr;  // RTC_CURVE_FLAG_NEIGHBOR_* of each segment
         uint32_t tubeOf(uint32_t segment) const;
     };
+
+    // The smooth shading tangent on `segment` at curve parameter u (see the top).
+    static Vec3 smoothTangent(const GeometryInfo& info, uint32_t segment, float u);
 
   private:
     EmbreeDevice device_;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -172,6 +173,55 @@ TEST(TubeAccel, AClosedLoopIsHitAgainFromAcrossTheLoop) {
     ASSERT_TRUE(accel.intersect(hit.point, -dir, kInf, ring, &across));
     EXPECT_NEAR(across.t, 5.2, 0.04);
     EXPECT_LT(dot(-dir, across.normal), 0.0);
+}
+
+// The shading tangent is the sampled curve's, not the segment's: on a ring of
+// 12 segments (30 degrees each, so a segment's own direction is up to 15
+// degrees off the circle's tangent) the tangent at every hit is within 1
+// degree of the circle's tangent at that hit's angle, continuous across the
+// joints, and orthogonal to the normal; so is an open arc of it, up to its
+// ends.
+TEST(TubeAccel, ShadingTangentFollowsTheCurveNotTheSegment) {
+    for (const bool closed : {true, false}) {
+        SCOPED_TRACE(closed ? "closed ring" : "open arc");
+        Tube tube = ringTube(1.0, 0.05, 12);
+        if (!closed) {
+            tube.closed = false;
+            tube.points.resize(7);  // the arc from 0 to 180 degrees
+            tube.radii.resize(7);
+        }
+        TubeAccel accel;
+        accel.addGeometry({tube}, 0);
+        accel.commit();
+        const int segments = closed ? 12 : 6;
+        double worstSmooth = 0, worstSegment = 0;
+        Vec3 previous;
+        for (int k = 0; k < segments; ++k)
+            for (const double u : {0.02, 0.25, 0.5, 0.75, 0.98}) {
+                const Vec3& a = tube.points[k];
+                const Vec3& b = tube.points[(k + 1) % 12];
+                const Vec3 p = a * (1 - u) + b * u;
+                TubeHit hit;
+                ASSERT_TRUE(accel.intersect(p + Vec3(0, 0, 1), {0, 0, -1}, kInf, {}, &hit));
+                const double angle = std::atan2(p.y, p.x);
+                const Vec3 circle{-std::sin(angle), std::cos(angle), 0.0};
+                const double smooth = std::acos(std::min(1.0, std::abs(dot(hit.tangent, circle))));
+                const double segment =
+                    std::acos(std::min(1.0, std::abs(dot(normalize(b - a), circle))));
+                worstSmooth = std::max(worstSmooth, smooth);
+                worstSegment = std::max(worstSegment, segment);
+                EXPECT_NEAR(dot(hit.tangent, hit.normal), 0.0, 1e-9);
+                EXPECT_NEAR(length(hit.tangent), 1.0, 1e-12);
+                // Across a joint (u = 0.98 on one segment, 0.02 on the next):
+                // the tangent moves by the 1.2 degrees the curve turns, not 30.
+                if (u == 0.02 && k > 0) {
+                    EXPECT_LT(std::acos(std::min(1.0, dot(hit.tangent, previous))), 0.03);
+                }
+                previous = hit.tangent;
+            }
+        EXPECT_LT(worstSmooth * 180 / kPi, 1.0);
+        EXPECT_GT(worstSegment * 180 / kPi, 13.0);  // the facets the test would see
+    }
 }
 
 TEST(TubeAccel, TubesWithinOneGeometryAreTold) {

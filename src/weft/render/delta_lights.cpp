@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 
 #include "weft/core/error.h"
 #include "weft/core/json_message.h"
@@ -12,23 +11,13 @@
 
 namespace weft::render {
 
-namespace {
-
-std::string format(const Vec3& v) {
-    std::ostringstream s;
-    s << v;
-    return s.str();
-}
-
-}  // namespace
-
 // ---------------------------------------------------------------------------
 // PointLight
 
 PointLight::PointLight(const Vec3& position, const Rgb& intensity)
     : position_(position), intensity_(intensity) {
     if (!isFinite(position))
-        throw InputError("point light: position " + format(position) + " must be finite");
+        throw InputError("point light: position " + streamedText(position) + " must be finite");
     checkLightRadiance(intensity, "point light");
 }
 
@@ -52,7 +41,7 @@ DirectionalLight::DirectionalLight(const Vec3& direction, const Rgb& irradiance)
     const double largest =
         std::max({std::abs(direction.x), std::abs(direction.y), std::abs(direction.z)});
     if (!isFinite(direction) || !(largest > 0))
-        throw InputError("directional light: direction " + format(direction) +
+        throw InputError("directional light: direction " + streamedText(direction) +
                          " must be finite and not 0");
     towardsLight_ = -normalize(direction / largest);
     checkLightRadiance(irradiance, "directional light");

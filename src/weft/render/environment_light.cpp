@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 
 #include "weft/core/error.h"
 #include "weft/core/image_io.h"
@@ -16,13 +15,6 @@ namespace weft::render {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-template <typename T>
-std::string format(const T& value) {
-    std::ostringstream s;
-    s << value;
-    return s.str();
-}
 
 // The cell of t in [0, 1] on a grid of n cells; NaN and out-of-range values clamp.
 int cellIndex(double t, int n) {
@@ -64,9 +56,9 @@ EnvironmentLight::EnvironmentLight(Image image, double scale, double rotateDeg,
     const std::string what = "envmap '" + source + "'";
     checkImage(image_, what);
     if (!(std::isfinite(scale) && scale >= 0))
-        throw InputError(what + ": scale = " + format(scale) + " must be finite and >= 0");
+        throw InputError(what + ": scale = " + streamedText(scale) + " must be finite and >= 0");
     if (!std::isfinite(rotateDeg))
-        throw InputError(what + ": rotate_deg = " + format(rotateDeg) + " must be finite");
+        throw InputError(what + ": rotate_deg = " + streamedText(rotateDeg) + " must be finite");
     const int w = image_.width, h = image_.height;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
@@ -75,8 +67,9 @@ EnvironmentLight::EnvironmentLight(Image image, double scale, double rotateDeg,
                 if (!(std::isfinite(v) && v >= 0 && v * scale <= kMaxRadiance))
                     throw InputError(what + ": texel (x " + std::to_string(x) + ", y " +
                                      std::to_string(y) + ") channel " + "RGB"[c] + " = " +
-                                     format(v) + " must be finite, >= 0 and, times scale " +
-                                     format(scale) + ", at most " + format(kMaxRadiance));
+                                     streamedText(v) + " must be finite, >= 0 and, times scale " +
+                                     streamedText(scale) + ", at most " +
+                                     streamedText(kMaxRadiance));
             }
     cosRot_ = std::cos(rotateRad_);
     sinRot_ = std::sin(rotateRad_);

@@ -18,6 +18,7 @@
 #include <array>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -75,6 +76,15 @@ class Light {
 // The radiance of an infinite light averaged over the sphere of directions
 // (a quadrature of radiance(d), 256 x 128 cells in (phi, cos theta)).
 Rgb averageRadiance(const Light& infinite);
+
+// A value as `os << value` writes it (a Vec3, an Rgb, a number), for the
+// lights' error messages.
+template <typename T>
+std::string streamedText(const T& value) {
+    std::ostringstream s;
+    s << value;
+    return s.str();
+}
 
 // For light constructors: InputError "<light>: radiance (r, g, b) must be
 // finite and >= 0 in every channel" unless it is.

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 
 #include "weft/core/error.h"
 #include "weft/core/json_message.h"
@@ -11,26 +10,16 @@
 
 namespace weft::render {
 
-namespace {
-
-template <typename T>
-std::string format(const T& value) {
-    std::ostringstream s;
-    s << value;
-    return s.str();
-}
-
-}  // namespace
-
 // ---------------------------------------------------------------------------
 // SphereLight
 
 SphereLight::SphereLight(const Vec3& center, double radius, const Rgb& radiance)
     : center_(center), radius_(radius), radiance_(radiance) {
     if (!isFinite(center))
-        throw InputError("sphere light: center " + format(center) + " must be finite");
+        throw InputError("sphere light: center " + streamedText(center) + " must be finite");
     if (!(std::isfinite(radius) && radius > 0))
-        throw InputError("sphere light: radius = " + format(radius) + " must be finite and > 0");
+        throw InputError("sphere light: radius = " + streamedText(radius) +
+                         " must be finite and > 0");
     checkLightRadiance(radiance, "sphere light");
 }
 

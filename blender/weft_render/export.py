@@ -443,12 +443,17 @@ def camera_entry(scene, camera):
     half = sensor / (2 * data.lens)  # tan of the half angle across the fitted side
     tan_x, tan_y = (half, half * h / w) if fit == "HORIZONTAL" else (half * w / h, half)
     fov = 2 * math.degrees(math.atan(min(tan_x, tan_y)))  # weft: across the shorter side
-    m = camera.matrix_world.normalized()
+    return camera_from_matrix(camera.matrix_world.normalized(), fov)
+
+
+def camera_from_matrix(m, fov_deg):
+    """weft's camera entry of a camera-to-world matrix (Blender's cameras look
+    down their -z with +y up), fov_deg across the shorter side."""
     eye = m.translation
     forward = m.to_3x3() @ _vec((0.0, 0.0, -1.0))
     up = m.to_3x3() @ _vec((0.0, 1.0, 0.0))
     return {"from": to_weft(eye), "to": to_weft(eye + forward), "up": to_weft(up),
-            "fov_deg": fov}
+            "fov_deg": fov_deg}
 
 
 def film_size(scene):

@@ -12,8 +12,6 @@ run it headless (blender/tests/blender_test.py).
 import math
 import threading
 
-import mathutils
-
 from . import export
 
 
@@ -27,13 +25,9 @@ def viewport_camera(view_matrix, window_matrix):
     if abs(p[3][3]) > 1e-12 or abs(p[3][2]) < 1e-12:
         raise export.ExportError("the viewport is orthographic: weft's camera is a perspective "
                                  "camera (press numpad 5)")
-    m = view_matrix.inverted()
-    eye = m.translation
-    forward = m.to_3x3() @ mathutils.Vector((0.0, 0.0, -1.0))
-    up = m.to_3x3() @ mathutils.Vector((0.0, 1.0, 0.0))
     tan_half = min(1.0 / abs(p[0][0]), 1.0 / abs(p[1][1]))
-    return {"from": export.to_weft(eye), "to": export.to_weft(eye + forward),
-            "up": export.to_weft(up), "fov_deg": 2 * math.degrees(math.atan(tan_half))}
+    return export.camera_from_matrix(view_matrix.inverted(),
+                                     2 * math.degrees(math.atan(tan_half)))
 
 
 def preview_film(region_width, region_height, scale):

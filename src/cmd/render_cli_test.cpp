@@ -74,6 +74,30 @@ TEST_F(RenderCliTest, WritesExrPngAndStatistics) {
     EXPECT_EQ(readImage(path("again.exr")).pixels, readImage(path("neural.exr")).pixels);
 }
 
+// --fiber-seed is the scene's render.fiber_seed: the same image and scene
+// hash as the scene file with it, other fibers than the default.
+TEST_F(RenderCliTest, FiberSeedFlagIsTheScenesFiberSeed) {
+    ASSERT_EQ(run("render scene.json --mode fiber --spp 1 --quiet --out f0.exr").status, 0);
+    ASSERT_EQ(
+        run("render scene.json --mode fiber --spp 1 --fiber-seed 7 --quiet --out f7.exr").status,
+        0);
+    nlohmann::json scene = nlohmann::json::parse(readFile(path("scene.json")));
+    scene["render"]["fiber_seed"] = 7;
+    writeFileAtomic(path("seeded.json"), scene.dump());
+    ASSERT_EQ(run("render seeded.json --mode fiber --spp 1 --quiet --out s7.exr").status, 0);
+    EXPECT_EQ(readImage(path("f7.exr")).pixels, readImage(path("s7.exr")).pixels);
+    EXPECT_NE(readImage(path("f7.exr")).pixels, readImage(path("f0.exr")).pixels);
+    const auto hash = [&](const std::string& name) {
+        return nlohmann::json::parse(readFile(path(name))).at("scene_hash").get<std::string>();
+    };
+    EXPECT_EQ(hash("f7.json"), hash("s7.json"));
+    EXPECT_NE(hash("f7.json"), hash("f0.json"));
+    const RunResult bad = run("render scene.json --fiber-seed -1 --out bad.exr");
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_TRUE(testing::contains(bad.err, "--fiber-seed: a seed is an integer in [0, 2^64 - 1]"))
+        << bad.err;
+}
+
 TEST_F(RenderCliTest, TimeBudgetAndSceneDefaults) {
     RunResult r = run("render scene.json --time 0.5 --quiet --out timed.exr");
     ASSERT_EQ(r.status, 0) << r.err;

@@ -33,7 +33,8 @@ struct RenderCmdOptions {
     std::string exposure = "0", aovs, frames, frameShard;
     double turntable = 0;
     CLI::Option* turntableOpt = nullptr;
-    uint64_t seed = 0;
+    uint64_t seed = 0, fiberSeed = 0;
+    CLI::Option* fiberSeedOpt = nullptr;
     CLI::Option *sppOpt = nullptr, *timeOpt = nullptr, *seedOpt = nullptr, *shardOpt = nullptr,
                 *samplerOpt = nullptr;
     bool noNee = false, quiet = false;
@@ -244,6 +245,8 @@ void runRender(const RenderCmdOptions& o) {
     setup.sceneOptions.quiet = o.quiet;
     setup.sceneOptions.yarn.sampling = parseYarnSampling(o.yarnSampling, "--yarn-sampling");
     render::SceneDesc desc = render::loadScene(o.scene);
+    // Part of the scene (its hash, the statistics' scene), not a render option.
+    if (o.fiberSeedOpt->count()) desc.render.fiberSeed = o.fiberSeed;
     if (!o.frames.empty()) {
         const auto [a, b] = parseFrames(o.frames);
         desc.animation.first = a, desc.animation.last = b;
@@ -348,6 +351,12 @@ void addRenderCommand(CLI::App& app) {
     o->seedOpt =
         cmd->add_option("--seed", o->seed,
                         "Random seed, integer >= 0 (default: the scene's render.seed)")
+            ->check(seedValidator());
+    o->fiberSeedOpt =
+        cmd->add_option("--fiber-seed", o->fiberSeed,
+                        "Arrangement of the fibers in each ply in fiber mode, integer >= 0 "
+                        "(default: the scene's render.fiber_seed, else 0; --seed does not move "
+                        "the fibers)")
             ->check(seedValidator());
     o->samplerOpt = cmd->add_option(
         "--sampler", o->sampler,

@@ -1248,7 +1248,8 @@ MitsubaExport exportMitsubaScene(const SceneDesc& scene, bool fibers) {
                 const std::vector<FramedCurve> plies =
                     yarnPlyCurves(set.curves[c], yarn, &model.ply, c);
                 for (size_t j = 0; j < plies.size(); ++j)
-                    for (const Tube& t : fiberTubes(plies[j], model.ply, fiberSeed(y, c, j))) {
+                    for (const Tube& t : fiberTubes(plies[j], model.ply,
+                                                    fiberSeed(y, c, j, scene.render.fiberSeed))) {
                         Curve f;
                         f.points = t.points;
                         f.radii.assign(t.radii.begin(), t.radii.end());

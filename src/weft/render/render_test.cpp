@@ -820,6 +820,102 @@ TEST_F(RenderTest, SampleRangesAndRowBandsAreTheWholeRendersSamples) {
     weft::testing::expectInputError([&] { render(built, o); }, {"samples [3, 6)", "spp (5)"});
 }
 
+// weft view's colour change (Scene::setYarnColours): a scene built in one
+// set of yarn colours and given another renders, bit for bit, what a scene
+// built in the other renders; in both modes, with a material shared by two
+// yarns and then split, one kept, and an object whose material follows the
+// yarns' in the list. A colour the model refuses leaves the scene as it was.
+TEST_F(RenderTest, ChangedYarnColoursRenderAsAFreshBuildInThem) {
+    const std::string colourModel =
+        std::string(WEFT_SOURCE_DIR) + "/tests/data/fleece-colour-small.json";
+    writeFileAtomic(path("left.txt"), "-0.2 -0.5 0\n-0.2 0.5 0\n");
+    writeFileAtomic(path("right.txt"), "0.2 -0.5 0\n0.2 0.5 0\n");
+    const auto sceneIn = [&](const std::string& left, const std::string& right) {
+        const auto yarn = [&](const std::string& curves, const std::string& colour) {
+            return R"({"curves": ")" + curves +
+                   R"(", "radius": 0.08, "plies": 3, "ply_twist": 0.3, "model": ")" + colourModel +
+                   "\", " + colour + "}";
+        };
+        return parseSceneText(R"({
+            "camera": {"from": [0, 0, 2], "to": [0, 0, 0], "fov_deg": 20},
+            "film": {"width": 32, "height": 16},
+            "lights": [{"type": "constant", "radiance": [1, 1, 1]}],
+            "objects": [{"type": "rectangle", "center": [0, 0, -0.2], "normal": [0, 0, 1],
+                         "size": [4, 4],
+                         "material": {"type": "diffuse", "reflectance": [0.2, 0.6, 0.3]}}],
+            "yarns": [)" + yarn("left.txt", left) +
+                                  ", " + yarn("right.txt", right) + "]}",
+                              path("scene.json"), dir_.string());
+    };
+    const std::string red = R"("colour": [0.8, 0.2, 0.1])", blue = R"("colour": [0.1, 0.3, 0.9])",
+                      pale = R"("appearance": [0.7, 0.75, 0.6])";
+    RenderOptions options;
+    options.spp = 2;
+    options.seed = 5;
+    options.quiet = true;
+    for (const std::string mode : {"neural", "fiber"}) {
+        SCOPED_TRACE(mode);
+        Scene changed(sceneIn(red, red), inMode(mode));
+        EXPECT_EQ(changed.stats().materials, 2);  // one yarn material, the floor's
+        const Image before = render(changed, options).image;
+        for (const auto& [left, right] : std::vector<std::pair<std::string, std::string>>{
+                 {red, blue}, {pale, blue}, {blue, blue}, {red, red}}) {
+            SCOPED_TRACE(left + " | " + right);
+            const SceneDesc desc = sceneIn(left, right);
+            changed.setYarnColours(desc);
+            const Scene fresh(desc, inMode(mode));
+            EXPECT_EQ(changed.stats().materials, fresh.stats().materials);
+            EXPECT_EQ(changed.stats().appearanceColours.size(),
+                      fresh.stats().appearanceColours.size());
+            const Image a = render(changed, options).image, b = render(fresh, options).image;
+            EXPECT_EQ(a.pixels, b.pixels);
+        }
+        // Back at red and red: the first image; then a refused colour keeps it.
+        EXPECT_EQ(render(changed, options).image.pixels, before.pixels);
+        weft::testing::expectInputError(
+            [&] { changed.setYarnColours(sceneIn(red, R"("appearance": [0.0, 0.0, 1.0])")); },
+            {"yarns[1].appearance"});
+        EXPECT_EQ(render(changed, options).image.pixels, before.pixels);
+    }
+}
+
+// render.fiber_seed draws another arrangement of the same fibers: as many
+// fibers and segments, the ply as covered, the fibers elsewhere; 0 is the
+// scene's default arrangement; plies (neural mode) do not change.
+TEST_F(RenderTest, FiberSeedRearrangesTheFibersOfEachPly) {
+    const SceneDesc first = scene(kFleece, R"([{"type": "sky"}])", 24, 24);
+    SceneDesc other = first;
+    other.render.fiberSeed = 1;
+    const Scene a(first, inMode("fiber")), b(other, inMode("fiber"));
+    EXPECT_EQ(a.stats().tubes, b.stats().tubes);
+    EXPECT_EQ(a.stats().segments, b.stats().segments);
+    int hitsA = 0, hitsB = 0, moved = 0;
+    for (int k = 0; k < 2500; ++k) {
+        Vec3 org, dir;
+        a.camera().ray((k % 50 + 0.5) * a.width() / 50.0, (k / 50 + 0.5) * a.height() / 50.0, &org,
+                       &dir);
+        TubeHit ha, hb;
+        const double inf = std::numeric_limits<double>::infinity();
+        const bool inA = a.accel().intersect(org, dir, inf, {}, &ha);
+        const bool inB = b.accel().intersect(org, dir, inf, {}, &hb);
+        hitsA += inA, hitsB += inB;
+        moved += inA != inB || (inA && std::abs(ha.t - hb.t) > 1e-6);
+    }
+    std::printf("fiber hits %d and %d of 2500 rays, %d moved\n", hitsA, hitsB, moved);
+    EXPECT_GT(hitsA, 200);
+    EXPECT_NEAR(hitsB, hitsA, 0.1 * hitsA);
+    EXPECT_GT(moved, hitsA / 4);
+    RenderOptions options;
+    options.spp = 2;
+    options.quiet = true;
+    SceneDesc zero = first;
+    zero.render.fiberSeed = 0;
+    EXPECT_EQ(render(Scene(zero, inMode("fiber")), options).image.pixels,
+              render(a, options).image.pixels);
+    EXPECT_EQ(render(Scene(first, inMode("neural")), options).image.pixels,
+              render(Scene(other, inMode("neural")), options).image.pixels);
+}
+
 TEST(RenderOptions, BudgetsAndRangesAreValidated) {
     using weft::testing::expectInputError;
     RenderOptions o;

@@ -120,10 +120,19 @@ std::optional<double> overlapRadius(const YarnDesc& yarn, const CurveSet& set) {
 // yarn asks for each of its colours, yarn_geometry.h kColourSteps).
 class SceneMaterials {
   public:
+    // `reuse`: materials of an earlier build by their keys, moved in instead
+    // of built where a key recurs (Scene::setYarnColours).
     SceneMaterials(const SceneDesc& desc, const std::vector<const YarnMode*>& modes,
                    const YarnBsdfOptions& options, std::vector<std::unique_ptr<Bsdf>>* bsdfs,
-                   std::vector<uint8_t>* plyFrame)
-        : desc_(desc), modes_(modes), options_(options), bsdfs_(bsdfs), plyFrame_(plyFrame) {}
+                   std::vector<uint8_t>* plyFrame, std::vector<MaterialKey>* keys,
+                   std::map<MaterialKey, std::unique_ptr<Bsdf>>* reuse = nullptr)
+        : desc_(desc),
+          modes_(modes),
+          options_(options),
+          bsdfs_(bsdfs),
+          plyFrame_(plyFrame),
+          keys_(keys),
+          reuse_(reuse) {}
 
     // The model of yarn entry y: as its file holds it, or a family model's
     // yarn at the entry's "yarn" (docs/family.md); each file read once, each
@@ -173,17 +182,25 @@ class SceneMaterials {
         if (colour && last_ && last_->y == y && last_->colour == *colour) return last_->material;
         const std::vector<double> colourKey =
             colour ? std::vector<double>{colour->r, colour->g, colour->b} : std::vector<double>{};
-        auto [it, inserted] = index_.try_emplace({modelKey(y), colourKey, mode.name()}, 0);
+        const MaterialKey key{modelKey(y), colourKey, mode.name()};
+        auto [it, inserted] = index_.try_emplace(key, 0);
         if (inserted) {
             if (bsdfs_->size() >= static_cast<size_t>(kMaxSceneMaterials))
                 throw InputError(entryName(y) + ": more than " + std::to_string(kMaxSceneMaterials) +
                                  " materials (distinct models, colours and modes) in the scene; "
                                  "give fewer distinct colours");
             it->second = static_cast<int>(bsdfs_->size());
-            const std::string what =
-                entryName(y) + (yarn.vertexColours.empty() ? ".colour" : ".vertex_colours");
-            bsdfs_->push_back(mode.makeBsdf(model(y), colour, yarn.model, what, options_));
+            auto old = reuse_ ? reuse_->find(key) : decltype(reuse_->end()){};
+            if (reuse_ && old != reuse_->end()) {
+                bsdfs_->push_back(std::move(old->second));
+                reuse_->erase(old);
+            } else {
+                const std::string what =
+                    entryName(y) + (yarn.vertexColours.empty() ? ".colour" : ".vertex_colours");
+                bsdfs_->push_back(mode.makeBsdf(model(y), colour, yarn.model, what, options_));
+            }
             plyFrame_->push_back(mode.drawsPlies());
+            keys_->push_back(key);
         }
         if (colour) last_ = Last{y, *colour, it->second};
         return it->second;
@@ -206,10 +223,12 @@ class SceneMaterials {
     YarnBsdfOptions options_;
     std::vector<std::unique_ptr<Bsdf>>* bsdfs_;
     std::vector<uint8_t>* plyFrame_;
+    std::vector<MaterialKey>* keys_;
+    std::map<MaterialKey, std::unique_ptr<Bsdf>>* reuse_;
     std::map<std::string, YarnModel> models_;
     std::map<std::string, ModelFile> files_;  // by path
     std::map<std::string, AppearanceTable> tables_;
-    std::map<std::tuple<std::string, std::vector<double>, std::string>, int> index_;
+    std::map<MaterialKey, int> index_;
     // The last coloured lookup: neighbouring segments mostly share a colour.
     struct Last {
         size_t y;
@@ -296,7 +315,7 @@ nlohmann::json appearanceJson(const SceneBuildStats& stats) {
 }
 
 Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
-    : accel_(std::make_unique<TubeAccel>()) {
+    : options_(options), accel_(std::make_unique<TubeAccel>()) {
     const auto start = std::chrono::steady_clock::now();
     setView(desc);
     createLights(desc);  // their sampler once the geometry gives the scene's size
@@ -304,9 +323,9 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
     // One material per distinct model file, colour and mode (SceneMaterials).
     const std::vector<const YarnMode*> modes = entryModes(desc, options.mode);
     modeName_ = modesName(modes, options.mode);
-    SceneMaterials materials(desc, modes, options.yarn, &bsdfs_, &plyFrame_);
+    SceneMaterials materials(desc, modes, options.yarn, &bsdfs_, &plyFrame_, &materialKeys_);
     std::vector<CurveSet> curveSets;
-    std::vector<int> entryMaterial(desc.yarns.size(), -1);  // -1: vertex-coloured
+    entryMaterial_.assign(desc.yarns.size(), -1);  // -1: vertex-coloured
     for (size_t y = 0; y < desc.yarns.size(); ++y) {
         const YarnDesc& yarn = desc.yarns[y];
         curveSets.push_back(readCurves(yarn.curves));
@@ -323,7 +342,7 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
             stats_.appearanceColours.push_back({y, *yarn.appearance, *colour});
         }
         if (yarn.vertexColours.empty())
-            entryMaterial[y] = materials.material(y, colour);
+            entryMaterial_[y] = materials.material(y, colour);
         else if (!read.empty()) materials.material(y, read.front().colours.front());
     }
     // The whole geometry's estimate first: the overlap check samples the
@@ -348,7 +367,7 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
         const YarnDesc& yarn = desc.yarns[y];
         const YarnMode& mode = *modes[y];
         const bool vertexColoured = !yarn.vertexColours.empty();
-        const int material = entryMaterial[y];
+        const int material = entryMaterial_[y];
         const PlyParams& fibers = materials.model(y).ply;
         const std::vector<Curve>& curves = curveSets[y].curves;
         for (size_t c = 0; c < curves.size(); ++c) {
@@ -376,8 +395,9 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
                 if (mode.drawsPlies()) {
                     id = accel_->addGeometry({toTube(plies[j])}, first, std::move(along));
                 } else {
-                    id = accel_->addGeometry(fiberTubes(plies[j], fibers, fiberSeed(y, c, j)),
-                                             first, std::move(along));
+                    id = accel_->addGeometry(
+                        fiberTubes(plies[j], fibers, fiberSeed(y, c, j, desc.render.fiberSeed)),
+                        first, std::move(along));
                 }
                 if (id != kNoTube) passIds_.push_back(static_cast<int>(y) + 1);
             }
@@ -412,6 +432,7 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
     }
     accel_->commit();
     progress.finish();
+    yarnMaterials_ = materialKeys_.size();
     buildLightSampler();  // the power of infinite lights needs the scene's size
     stats_.objects = static_cast<int64_t>(desc.objects.size());
     stats_.triangles = accel_->triangleCount();
@@ -424,6 +445,60 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
         stats_.materialBytes += static_cast<int64_t>(bsdf->memoryBytes());
     stats_.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void Scene::setYarnColours(const SceneDesc& desc) {
+    if (desc.yarns.size() != entryMaterial_.size())
+        throw std::logic_error("Scene::setYarnColours: another number of yarn entries");
+    for (size_t y = 0; y < desc.yarns.size(); ++y)
+        if (!desc.yarns[y].vertexColours.empty() || entryMaterial_[y] < 0)
+            throw std::logic_error("Scene::setYarnColours: a vertex-coloured yarn");
+    // The yarns' materials afresh, those whose key recurs moved over.
+    std::map<MaterialKey, std::unique_ptr<Bsdf>> reuse;
+    for (size_t m = 0; m < yarnMaterials_; ++m)
+        reuse.emplace(materialKeys_[m], std::move(bsdfs_[m]));
+    std::vector<std::unique_ptr<Bsdf>> bsdfs;
+    std::vector<uint8_t> plyFrame;
+    std::vector<MaterialKey> keys;
+    std::vector<int> entryMaterial(desc.yarns.size());
+    std::vector<SceneBuildStats::AppearanceColour> appearanceColours;
+    const std::vector<const YarnMode*> modes = entryModes(desc, options_.mode);
+    try {
+        SceneMaterials materials(desc, modes, options_.yarn, &bsdfs, &plyFrame, &keys, &reuse);
+        for (size_t y = 0; y < desc.yarns.size(); ++y) {
+            std::optional<Rgb> colour = desc.yarns[y].colour;
+            if (desc.yarns[y].appearance) {
+                colour = materials.appearanceColour(y);
+                appearanceColours.push_back({y, *desc.yarns[y].appearance, *colour});
+            }
+            entryMaterial[y] = materials.material(y, colour);
+        }
+    } catch (...) {
+        // This scene as it was: the materials not moved yet, and those that were.
+        for (size_t m = 0; m < keys.size(); ++m) reuse.emplace(keys[m], std::move(bsdfs[m]));
+        for (size_t m = 0; m < yarnMaterials_; ++m)
+            bsdfs_[m] = std::move(reuse.at(materialKeys_[m]));
+        throw;
+    }
+    // The objects' materials after them, as the constructor orders them.
+    for (size_t m = yarnMaterials_; m < bsdfs_.size(); ++m) {
+        bsdfs.push_back(std::move(bsdfs_[m]));
+        plyFrame.push_back(plyFrame_[m]);
+    }
+    const int objectShift = static_cast<int>(keys.size()) - static_cast<int>(yarnMaterials_);
+    for (uint32_t g = 0; g < passIds_.size(); ++g)
+        accel_->setMaterial(g, passIds_[g] > 0 ? entryMaterial[passIds_[g] - 1]
+                                               : accel_->material(g) + objectShift);
+    bsdfs_ = std::move(bsdfs);
+    plyFrame_ = std::move(plyFrame);
+    materialKeys_ = std::move(keys);
+    yarnMaterials_ = materialKeys_.size();
+    entryMaterial_ = std::move(entryMaterial);
+    stats_.appearanceColours = std::move(appearanceColours);
+    stats_.materials = static_cast<int64_t>(bsdfs_.size());
+    stats_.materialBytes = 0;
+    for (const auto& bsdf : bsdfs_)
+        stats_.materialBytes += static_cast<int64_t>(bsdf->memoryBytes());
 }
 
 void Scene::setView(const SceneDesc& desc) {
@@ -486,8 +561,9 @@ std::vector<FramedCurve> yarnPlyCurves(const Curve& curve, const YarnDesc& yarn,
     return plyCurves(centre, yarn.plies, yarn.plyTwist);
 }
 
-uint64_t fiberSeed(size_t y, size_t c, size_t j) {
-    return mixBits(mixBits(mixBits(y + 1) ^ (c + 1)) ^ (j + 1));
+uint64_t fiberSeed(size_t y, size_t c, size_t j, uint64_t arrangement) {
+    const uint64_t seed = mixBits(mixBits(mixBits(y + 1) ^ (c + 1)) ^ (j + 1));
+    return arrangement == 0 ? seed : mixBits(seed ^ mixBits(arrangement));
 }
 
 }  // namespace weft::render

@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "weft/core/bsdf.h"
@@ -101,6 +102,10 @@ std::vector<std::string> appearanceNotes(const std::string& sceneName,
 // The "appearance" list of IMAGE.json: {"yarn", "appearance" (sRGB), "c_tt"} per entry.
 nlohmann::json appearanceJson(const SceneBuildStats& stats);
 
+// A yarn material's identity: its model (file, and a family yarn's
+// parameters), its colour (empty: the model's own) and its drawing mode.
+using MaterialKey = std::tuple<std::string, std::vector<double>, std::string>;
+
 struct SceneOptions {
     // A drawing mode for every yarn (a registered name, yarn_mode.h), over
     // the yarns' own "mode"; empty: each yarn's own (neural where it has none).
@@ -118,6 +123,13 @@ class Scene {
     // and its lights. Not while a render of this scene runs.
     void setView(const SceneDesc& desc);
     void setLights(const SceneDesc& desc);
+    // The yarns' colours ("colour", "appearance") of `desc`, whose yarn
+    // entries are otherwise the constructor's (curves, model, mode: the
+    // caller's to ensure; weft view compares the scene files), none of them
+    // vertex-coloured: materials whose model, colour and mode recur are
+    // kept, the others built, the geometry kept. On an InputError (a colour
+    // the model refuses) the scene is as it was.
+    void setYarnColours(const SceneDesc& desc);
 
     // The drawing mode of every yarn, or "mixed" when they differ (neural for
     // a scene without yarns).
@@ -157,6 +169,7 @@ class Scene {
     }
 
   private:
+    SceneOptions options_;
     std::string modeName_;
     Camera camera_;
     int width_ = 0, height_ = 0;
@@ -169,6 +182,11 @@ class Scene {
     std::vector<std::unique_ptr<Bsdf>> bsdfs_;  // one per material
     std::vector<uint8_t> plyFrame_;             // per material: its mode draws plies
     std::vector<int> passIds_;                  // per accel geometry (passId)
+    // The yarns' materials come first in bsdfs_, these keys theirs; the
+    // objects' follow.
+    std::vector<MaterialKey> materialKeys_;
+    size_t yarnMaterials_ = 0;
+    std::vector<int> entryMaterial_;  // per yarn entry; -1: vertex-coloured
     SceneBuildStats stats_;
 };
 
@@ -179,9 +197,10 @@ class Scene {
 std::vector<FramedCurve> yarnPlyCurves(const Curve& curve, const YarnDesc& yarn,
                                        const PlyParams* fibers, size_t curveIndex);
 
-// The seed of the fibers of ply j of curve c of yarn entry y: where the ply
-// is, not the render's seed (a fiber render's geometry is the same at every
-// seed).
-uint64_t fiberSeed(size_t y, size_t c, size_t j);
+// The seed of the fibers of ply j of curve c of yarn entry y in the scene's
+// fiber arrangement `arrangement` (render.fiber_seed): where the ply is, not
+// the render's seed (a fiber render's geometry is the same at every seed).
+// Arrangement 0 is the one every earlier version drew.
+uint64_t fiberSeed(size_t y, size_t c, size_t j, uint64_t arrangement);
 
 }  // namespace weft::render

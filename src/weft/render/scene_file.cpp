@@ -73,11 +73,13 @@ FilmDesc readFilm(const JsonObjectReader& scene) {
 }
 
 RenderDesc readRender(const JsonObjectReader& scene) {
-    const JsonObjectReader r = scene.object("render", {"spp", "max_depth", "seed", "sampler"});
+    const JsonObjectReader r =
+        scene.object("render", {"spp", "max_depth", "seed", "sampler", "fiber_seed"});
     RenderDesc d;
     if (r.has("spp")) d.spp = static_cast<int>(r.integer("spp", {1, kMaxSpp}));
     if (r.has("max_depth")) d.maxDepth = static_cast<int>(r.integer("max_depth", {1, kMaxDepth}));
     if (r.has("seed")) d.seed = r.unsignedInteger("seed");
+    if (r.has("fiber_seed")) d.fiberSeed = r.unsignedInteger("fiber_seed");
     static_assert(kSamplerKinds.size() == 2, "name every sampler kind below");
     if (r.has("sampler"))
         d.sampler = kSamplerKinds[r.oneOf(
@@ -213,6 +215,8 @@ json toJson(const SceneDesc& scene) {
                    {"max_depth", scene.render.maxDepth},
                    {"seed", scene.render.seed},
                    {"sampler", samplerKindName(scene.render.sampler)}};
+    // Written only when not 0, so that a scene without one keeps its hash.
+    if (scene.render.fiberSeed != 0) j["render"]["fiber_seed"] = scene.render.fiberSeed;
     json lights = json::array();
     for (const auto& light : scene.lights) lights.push_back(render::toJson(*light));
     j["lights"] = std::move(lights);

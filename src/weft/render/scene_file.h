@@ -59,6 +59,9 @@ struct RenderDesc {
     int maxDepth = 1000;                             // scattering events per path, [1, 10000]
     uint64_t seed = 0;                               // any non-negative integer
     SamplerKind sampler = SamplerKind::Independent;  // "independent" or "sobol"
+    // The fibers' arrangement in fiber mode (scene.h fiberSeed): 0 is the
+    // default one; any other integer an independent one of the same ply.
+    uint64_t fiberSeed = 0;
 };
 
 struct YarnDesc {

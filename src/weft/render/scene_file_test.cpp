@@ -83,6 +83,7 @@ std::vector<std::string> differences(const SceneDesc& a, const SceneDesc& b) {
     check(a.render.maxDepth == b.render.maxDepth, "render.max_depth");
     check(a.render.seed == b.render.seed, "render.seed");
     check(a.render.sampler == b.render.sampler, "render.sampler");
+    check(a.render.fiberSeed == b.render.fiberSeed, "render.fiber_seed");
     check(a.lights.size() == b.lights.size(), "lights.size");
     for (size_t i = 0; i < std::min(a.lights.size(), b.lights.size()); ++i) {
         const LightDesc &x = *a.lights[i], &y = *b.lights[i];
@@ -295,8 +296,9 @@ TEST(SceneFile, UnknownKeysAreNamedWithTheirPath) {
                       "light_sampler, lights, yarns, objects, animation)"});
     expectInputError([] { parseJson(fullWith("/film/depth", 8)); },
                      {"film: unknown key \"depth\" (allowed: width, height)"});
-    expectInputError([] { parseJson(fullWith("/render/samples", 8)); },
-                     {"render: unknown key \"samples\" (allowed: spp, max_depth, seed, sampler)"});
+    expectInputError(
+        [] { parseJson(fullWith("/render/samples", 8)); },
+        {"render: unknown key \"samples\" (allowed: spp, max_depth, seed, sampler, fiber_seed)"});
     // Keys of another light type are unknown for this one.
     expectInputError([] { parseJson(fullWith("/lights/0/radius", 1)); },
                      {"lights[0]: unknown key \"radius\" (allowed: type, scale)"});
@@ -380,6 +382,10 @@ TEST(SceneFile, RangeAndTypeChecksNameThePathAndTheAllowedRange) {
           "18446744073709551615]"},
          std::numeric_limits<uint64_t>::max()},
         {"/render/seed", 0x1p64, {"render.seed = 18446744073709551616 is out of range"}, 0},
+        {"/render/fiber_seed",
+         -3,
+         {"render.fiber_seed = -3 is out of range: allowed [0, 18446744073709551615]"},
+         5},
         {"/render/sampler",
          "halton",
          {"render.sampler: expected one of \"independent\", \"sobol\", got the string \"halton\""},
@@ -762,6 +768,7 @@ TEST(SceneFile, ToJsonRoundTripsFieldByField) {
     editLight<SphereLightDesc>(s, 2, [](auto& l) { l.radius = std::nextafter(1e-6, 1.0); });
     editLight<EnvmapLightDesc>(s, 1, [](auto& l) { l.rotateDeg = -1.0 / 3.0; });
     s.render.seed = std::numeric_limits<uint64_t>::max();
+    s.render.fiberSeed = std::numeric_limits<uint64_t>::max() - 1;
     s.yarns[1].radius = 1.0 / 3e5;
     const SceneDesc back = parseScene(json::parse(toJson(s).dump()), "scene.json", "/data/scenes");
     EXPECT_TRUE(differences(s, back).empty()) << joined(differences(s, back));
@@ -827,6 +834,7 @@ TEST_F(SceneHashTest, StableAcrossFoldersAndSensitiveToEveryInput) {
     };
     variant("spp", [](SceneDesc& s) { s.render.spp = 17; });
     variant("seed", [](SceneDesc& s) { s.render.seed = 1; });
+    variant("fiber_seed", [](SceneDesc& s) { s.render.fiberSeed = 1; });
     variant("max_depth", [](SceneDesc& s) { s.render.maxDepth = 99; });
     variant("width", [](SceneDesc& s) { s.film.width = 511; });
     variant("fov", [](SceneDesc& s) { s.camera.fovDeg = std::nextafter(30.0, 31.0); });

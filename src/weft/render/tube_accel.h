@@ -36,6 +36,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 #include "weft/core/embree.h"
@@ -88,6 +89,15 @@ class TubeAccel {
     static constexpr double kSurfaceSelfHit = 1e-7;
     uint32_t addTriangles(const std::vector<Vec3>& vertices,
                           const std::vector<std::array<uint32_t, 3>>& triangles, int material);
+    // The material a geometry's hits report (weft view's colour change):
+    // its `material`; a geometry with materials along its tubes keeps them.
+    int material(uint32_t geometry) const { return geometries_.at(geometry).material; }
+    void setMaterial(uint32_t geometry, int material) {
+        GeometryInfo& info = geometries_.at(geometry);
+        if (!info.materialAlong.empty())
+            throw std::logic_error("TubeAccel::setMaterial: materials along its tubes");
+        info.material = material;
+    }
     // Builds the BVH; call once after the last addGeometry.
     void commit();
 

@@ -58,8 +58,8 @@ Layer parseLayer(const std::string& name, const std::string& what) {
 struct ViewSession::LayerState {
     Layer layer;
     std::unique_ptr<render::Scene> scene;
-    json geometryKey, viewKey, lightsKey;  // what `scene` was made with
-    json accumKey;                         // the scene JSON whose samples `sum` holds
+    json geometryKey, coloursKey, viewKey, lightsKey;  // what `scene` was made with
+    json accumKey;                                     // the scene JSON whose samples `sum` holds
     std::vector<double> sum;
     int width = 0, height = 0;
     // Bands of rows [bandEdges[b], bandEdges[b + 1]) and the samples each
@@ -183,9 +183,31 @@ json appearanceInReach(const json& value, const ModelChoice& model, const std::s
     return out;
 }
 
-// The parts of a scene JSON that each need a different update.
+// The parts of a scene JSON that each need a different update. A yarn's
+// colour is not its geometry (Scene::setYarnColours) unless a yarn of the
+// scene is vertex-coloured.
+bool vertexColoured(const json& scene) {
+    for (const json& y : scene.at("yarns"))
+        if (y.contains("vertex_colours")) return true;
+    return false;
+}
+constexpr const char* kColourKeys[] = {"colour", "appearance"};
 json geometryOf(const json& scene) {
-    return {scene.at("yarns"), scene.contains("objects") ? scene["objects"] : json()};
+    json yarns = scene.at("yarns");
+    if (!vertexColoured(scene))
+        for (json& y : yarns)
+            for (const char* k : kColourKeys) y.erase(k);
+    return {yarns, scene.contains("objects") ? scene["objects"] : json()};
+}
+json coloursOf(const json& scene) {
+    json colours = json::array();
+    for (const json& y : scene.at("yarns")) {
+        json c = json::object();
+        for (const char* k : kColourKeys)
+            if (y.contains(k)) c[k] = y[k];
+        colours.push_back(c);
+    }
+    return colours;
 }
 json viewOf(const json& scene) { return {scene.at("camera"), scene.at("film")}; }
 
@@ -243,6 +265,7 @@ ViewSession::ViewSession(const ViewOptions& options) : options_(options) {
     sceneOptions.mode = "neural";
     neural_->scene = std::make_unique<render::Scene>(desc_, sceneOptions);
     neural_->geometryKey = geometryOf(scene_);
+    neural_->coloursKey = coloursOf(scene_);
     neural_->viewKey = viewOf(scene_);
     neural_->lightsKey = scene_["lights"];
     fiber_ = std::make_unique<LayerState>();
@@ -599,8 +622,21 @@ void ViewSession::renderPass(LayerState& layer, const render::SceneDesc& desc, u
             layer.scene.reset();  // the old one's memory first (a fiber scene is large)
             layer.scene = std::make_unique<render::Scene>(desc, sceneOptions);
             layer.geometryKey = geometry;
+            layer.coloursKey = coloursOf(key);
             layer.viewKey = viewOf(key);
             layer.lightsKey = key["lights"];
+            std::lock_guard lock(mutex_);
+            building_ = false;
+        }
+        if (layer.coloursKey != coloursOf(key)) {
+            // A colour alone: its materials, not the geometry (issue 44's
+            // colour latency, 0.05 s of a knit's 0.19 s).
+            {
+                std::lock_guard lock(mutex_);
+                building_ = true;
+            }
+            layer.scene->setYarnColours(desc);
+            layer.coloursKey = coloursOf(key);
             std::lock_guard lock(mutex_);
             building_ = false;
         }
@@ -678,9 +714,14 @@ void ViewSession::renderPass(LayerState& layer, const render::SceneDesc& desc, u
                          layer.measuredSecondsPerSpp > 0.04 && layer.width >= 64 &&
                          layer.height >= 64;
     if (preview) {
-        render::SceneDesc half = desc;
-        half.film = {layer.width / 2, layer.height / 2};
-        layer.scene->setView(half);
+        int factor = 2;
+        while (factor < 8 &&
+               layer.measuredSecondsPerSpp / (factor * factor) > kViewPreviewSeconds &&
+               std::min(layer.width, layer.height) / (2 * factor) >= 16)
+            factor *= 2;
+        render::SceneDesc coarse = desc;
+        coarse.film = {layer.width / factor, layer.height / factor};
+        layer.scene->setView(coarse);
         ro.spp = 1;
         ro.samples = {0, 1};
         render::RenderResult small;
@@ -695,8 +736,8 @@ void ViewSession::renderPass(LayerState& layer, const render::SceneDesc& desc, u
         for (int y = 0; y < layer.height; ++y)
             for (int x = 0; x < layer.width; ++x)
                 layer.display.set(x, y,
-                                  small.image.get(std::min(x / 2, small.image.width - 1),
-                                                  std::min(y / 2, small.image.height - 1)));
+                                  small.image.get(std::min(x / factor, small.image.width - 1),
+                                                  std::min(y / factor, small.image.height - 1)));
         const std::string jpeg = encodeJpeg(small.image, exposure);
         std::lock_guard lock(mutex_);
         layer.frame = ViewFrame{++seq_,
@@ -705,7 +746,7 @@ void ViewSession::renderPass(LayerState& layer, const render::SceneDesc& desc, u
                                 small.image.width,
                                 small.image.height,
                                 0,
-                                small.stats.secondsPerSpp * 4};
+                                small.stats.secondsPerSpp * factor * factor};
         frameReady_.notify_all();
     }
     // The band behind; it catches up with the others, or (all equal) takes

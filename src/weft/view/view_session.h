@@ -47,6 +47,10 @@ namespace weft::view {
 // The pass the session aims for: long enough that the tiles that finish last
 // cost little, short enough for several refinements a second.
 inline constexpr double kViewPassSeconds = 0.15;
+// About how long the low-resolution first look of a view may take: its
+// pixels are 2, 4 or 8 image pixels a side, the fewest that keep it this
+// short (a 256 x 256 knit on 2 cores: 4).
+inline constexpr double kViewPreviewSeconds = 0.03;
 // A client that has not asked for a frame for this long has gone: the
 // session stops rendering until one asks again.
 inline constexpr double kClientGoneSeconds = 3.0;

@@ -122,6 +122,18 @@ class Runner:
         cached(folder, dict(params, weft_sha256=self.weft_sha256), make)
 
 
+def table2_scene(weft, preset, kind, folder, size, patch=3, extra=()):
+    """`weft scene KIND` of models/PRESET.json as bench/table2.py makes it (a
+    PATCH x PATCH weave or knit; a close-up), SIZE pixels square, in FOLDER;
+    returns FOLDER/scene.json."""
+    cmd = [weft, "scene", kind, "--model", os.path.join(ROOT, "models", preset + ".json"),
+           "--width", str(size), "--height", str(size), "--spp", "1", "--out", folder]
+    if kind != "closeup":
+        cmd += ["--size", str(patch)]
+    subprocess.run(cmd + list(extra), check=True, stdout=subprocess.DEVNULL)
+    return os.path.join(folder, "scene.json")
+
+
 def now():
     """The time in UTC, to the second, as ISO 8601."""
     return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")

@@ -27,7 +27,7 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from benchlib import binary_digest, now, write_results  # noqa: E402
+from benchlib import binary_digest, now, table2_scene, write_results  # noqa: E402
 
 
 def weft_json(cmd):
@@ -79,13 +79,7 @@ def main():
         for spec in a.scenes:
             preset, kind = spec.split(",")
             folder = os.path.join(work, f"{preset}-{kind}")
-            model = os.path.join(ROOT, "models", preset + ".json")
-            cmd = [a.after, "scene", kind, "--model", model, "--width", str(a.size), "--height",
-                   str(a.size), "--spp", "1", "--out", folder]
-            if kind != "closeup":
-                cmd += ["--size", str(a.patch)]
-            subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-            scene = os.path.join(folder, "scene.json")
+            scene = table2_scene(a.after, preset, kind, folder, a.size, a.patch)
             img = {}
             stats = {}
             for name, weft, mode, seed in (("fb1", a.before, "fiber", 1), ("fb2", a.before, "fiber", 2),

@@ -139,13 +139,13 @@ def main():
             scene = table2_scene(a.weft, preset, kind, folder, a.size, a.patch,
                                  ["--plies", plies[0]] if plies else [])
             img = {}
-            for name, mode, seed, arrangement in (("F0a", "fiber", 1, 0), ("F0b", "fiber", 2, 0),
-                                                  ("F1a", "fiber", 3, 1), ("F1b", "fiber", 4, 1),
-                                                  ("Na", "neural", 1, 0), ("Nb", "neural", 2, 0)):
-                out = os.path.join(folder, name + ".exr")
+            for key, mode, seed, arrangement in (("F0a", "fiber", 1, 0), ("F0b", "fiber", 2, 0),
+                                                 ("F1a", "fiber", 3, 1), ("F1b", "fiber", 4, 1),
+                                                 ("Na", "neural", 1, 0), ("Nb", "neural", 2, 0)):
+                out = os.path.join(folder, key + ".exr")
                 render(a.weft, scene, mode, a.spp, seed, arrangement, a.threads, out)
-                img[name] = np.asarray(weft.read_image(out), dtype=np.float64)
-                print(f"[fidelity_budget] {spec} {name}", flush=True)
+                img[key] = np.asarray(weft.read_image(out), dtype=np.float64)
+                print(f"[fidelity_budget] {spec} {key}", flush=True)
             rows, ratio, arrangement = budget(img, np)
             results["rows"].append({"scene": spec, "by_scale": {str(k): v for k, v in rows.items()},
                                     "neural_over_fiber_means": ratio,

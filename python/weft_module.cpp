@@ -974,9 +974,9 @@ class PyView {
 
 py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const py::object& spp,
                    const py::object& seconds, const py::object& threads, const py::object& seed,
-                   bool nee, const std::string& yarnSampling, const py::object& sampler,
-                   const py::object& baseDir, const py::object& shard, bool quiet,
-                   const std::string& integrator, const py::object& progressCallback,
+                   const py::object& fiberSeed, bool nee, const std::string& yarnSampling,
+                   const py::object& sampler, const py::object& baseDir, const py::object& shard,
+                   bool quiet, const std::string& integrator, const py::object& progressCallback,
                    double progressSeconds) {
     if (!progressCallback.is_none() && !PyCallable_Check(progressCallback.ptr()))
         throw InputError("progress: expected a callable progress(fraction, image) or None");
@@ -986,6 +986,9 @@ py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const
     const int threadCount = intArg(threads, "threads", 0, 1024);
     const std::optional<uint64_t> seedValue =
         seed.is_none() ? std::nullopt : std::optional<uint64_t>(seedArg(seed, "seed"));
+    const std::optional<uint64_t> fiberSeedValue =
+        fiberSeed.is_none() ? std::nullopt
+                            : std::optional<uint64_t>(seedArg(fiberSeed, "fiber_seed"));
     const std::optional<Shard> shardValue =
         shard.is_none() ? std::nullopt : std::optional<Shard>(shardOf(shard));
     render::SceneOptions sceneOptions;
@@ -1012,6 +1015,8 @@ py::tuple pyRender(const py::object& sceneArg, const py::object& modeName, const
         desc = render::loadScene(path);
         sceneFile = py::str(path);
     }
+    // Part of the scene (its hash), as `weft render --fiber-seed`.
+    if (fiberSeedValue) desc.render.fiberSeed = *fiberSeedValue;
     render::RenderOptions options;
     options.spp = sppCount ? *sppCount : (!seconds.is_none() ? 0 : desc.render.spp);
     options.seconds = seconds.is_none() ? 0.0 : seconds.cast<double>();
@@ -1473,7 +1478,7 @@ PYBIND11_MODULE(weft, m) {
 
     m.def("render", &pyRender, py::arg("scene"), py::kw_only(), py::arg("mode") = py::none(),
           py::arg("spp") = py::none(), py::arg("seconds") = py::none(), py::arg("threads") = 0,
-          py::arg("seed") = py::none(), py::arg("nee") = true,
+          py::arg("seed") = py::none(), py::arg("fiber_seed") = py::none(), py::arg("nee") = true,
           py::arg("yarn_sampling") = "tabulated", py::arg("sampler") = py::none(),
           py::arg("base_dir") = py::none(), py::arg("shard") = py::none(), py::arg("quiet") = true,
           py::arg("integrator") = "auto", py::arg("progress") = py::none(),
@@ -1481,7 +1486,8 @@ PYBIND11_MODULE(weft, m) {
           "`weft render`: a scene file or dict to an (H,W,3) float32 linear RGB image and the "
           "statistics dict; mode (\"neural\", \"fiber\" or \"dual\") draws every yarn so, "
           "over the yarns' own \"mode\" (None: each yarn's, neural where it names none); "
-          "shard=(k, n) traces only shard k of n of the spp samples. quiet=False shows the "
+          "shard=(k, n) traces only shard k of n of the spp samples; fiber_seed draws the "
+          "fibers in another arrangement (render.fiber_seed). quiet=False shows the "
           "progress on sys.stderr (as Jupyter shows it); integrator (\"auto\", \"path\" or "
           "\"batch\") as `weft render --integrator`, the same image. progress(fraction, image) "
           "is called every progress_seconds (default 1, at least 0.1; between passes) with the "

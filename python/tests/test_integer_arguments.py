@@ -74,6 +74,7 @@ CASES = [
     ("spp", "[1, 1048576]", lambda v, tmp: weft.render(NOWHERE, spp=v)),
     ("threads", "[0, 1024]", lambda v, tmp: weft.render(NOWHERE, threads=v)),
     ("seed", U64, lambda v, tmp: weft.render(NOWHERE, seed=v)),
+    ("fiber_seed", U64, lambda v, tmp: weft.render(NOWHERE, fiber_seed=v)),
     ("shard n", "[1, 65536]", lambda v, tmp: weft.render(NOWHERE, spp=4, shard=(0, v))),
     ("shard k", "[0, 2]", lambda v, tmp: weft.render(NOWHERE, spp=4, shard=(v, 3))),
 ]

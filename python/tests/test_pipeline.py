@@ -80,6 +80,14 @@ def test_tiny_render(cli, tmp_path, root):
 
     fiber, fstats = weft.render(scene, mode="fiber", spp=1)
     assert fiber.shape == (16, 16, 3) and fstats["mode"] == "fiber"
+    # Another arrangement of the fibers: by keyword or by the scene's render.fiber_seed.
+    other, ostats = weft.render(scene, mode="fiber", spp=1, fiber_seed=3)
+    assert not np.array_equal(other, fiber) and ostats["scene_hash"] != fstats["scene_hash"]
+    seeded = dict(doc, render=dict(doc["render"], fiber_seed=3))
+    np.testing.assert_array_equal(
+        weft.render(seeded, mode="fiber", spp=1, base_dir=tmp_path / "closeup")[0], other)
+    with pytest.raises(ValueError, match="fiber_seed"):
+        weft.render(scene, spp=1, fiber_seed=-1)
 
     # The sobol sampler: by keyword or by the scene's render.sampler, the same image.
     sobol, sstats = weft.render(scene, spp=2, seed=1, sampler="sobol")

@@ -175,6 +175,18 @@ class SceneMaterials {
         return it->second.cTTFor(srgbToLinear(srgb), what);
     }
 
+    // The material of yarn entry y (not vertex-coloured) in its "colour", or
+    // in the C_TT of its "appearance", which `appearances` records.
+    int ownMaterial(size_t y, std::vector<SceneBuildStats::AppearanceColour>* appearances) {
+        const YarnDesc& yarn = desc_.yarns[y];
+        std::optional<Rgb> colour = yarn.colour;
+        if (yarn.appearance) {
+            colour = appearanceColour(y);
+            appearances->push_back({y, *yarn.appearance, *colour});
+        }
+        return material(y, colour);
+    }
+
     // The material of yarn entry y in `colour` (none: the model's own).
     int material(size_t y, const std::optional<Rgb>& colour) {
         const YarnDesc& yarn = desc_.yarns[y];
@@ -190,15 +202,18 @@ class SceneMaterials {
                                  " materials (distinct models, colours and modes) in the scene; "
                                  "give fewer distinct colours");
             it->second = static_cast<int>(bsdfs_->size());
-            auto old = reuse_ ? reuse_->find(key) : decltype(reuse_->end()){};
-            if (reuse_ && old != reuse_->end()) {
-                bsdfs_->push_back(std::move(old->second));
-                reuse_->erase(old);
-            } else {
+            std::unique_ptr<Bsdf> bsdf;
+            if (reuse_)
+                if (auto old = reuse_->find(key); old != reuse_->end()) {
+                    bsdf = std::move(old->second);
+                    reuse_->erase(old);
+                }
+            if (!bsdf) {
                 const std::string what =
                     entryName(y) + (yarn.vertexColours.empty() ? ".colour" : ".vertex_colours");
-                bsdfs_->push_back(mode.makeBsdf(model(y), colour, yarn.model, what, options_));
+                bsdf = mode.makeBsdf(model(y), colour, yarn.model, what, options_);
             }
+            bsdfs_->push_back(std::move(bsdf));
             plyFrame_->push_back(mode.drawsPlies());
             keys_->push_back(key);
         }
@@ -336,13 +351,8 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
         // The yarn's own material now, so that its model is checked before any
         // geometry; vertex-coloured yarns get the rest segment by segment below.
         const std::vector<Curve>& read = curveSets.back().curves;
-        std::optional<Rgb> colour = yarn.colour;
-        if (yarn.appearance) {
-            colour = materials.appearanceColour(y);
-            stats_.appearanceColours.push_back({y, *yarn.appearance, *colour});
-        }
         if (yarn.vertexColours.empty())
-            entryMaterial_[y] = materials.material(y, colour);
+            entryMaterial_[y] = materials.ownMaterial(y, &stats_.appearanceColours);
         else if (!read.empty()) materials.material(y, read.front().colours.front());
     }
     // The whole geometry's estimate first: the overlap check samples the
@@ -465,14 +475,8 @@ void Scene::setYarnColours(const SceneDesc& desc) {
     const std::vector<const YarnMode*> modes = entryModes(desc, options_.mode);
     try {
         SceneMaterials materials(desc, modes, options_.yarn, &bsdfs, &plyFrame, &keys, &reuse);
-        for (size_t y = 0; y < desc.yarns.size(); ++y) {
-            std::optional<Rgb> colour = desc.yarns[y].colour;
-            if (desc.yarns[y].appearance) {
-                colour = materials.appearanceColour(y);
-                appearanceColours.push_back({y, *desc.yarns[y].appearance, *colour});
-            }
-            entryMaterial[y] = materials.material(y, colour);
-        }
+        for (size_t y = 0; y < desc.yarns.size(); ++y)
+            entryMaterial[y] = materials.ownMaterial(y, &appearanceColours);
     } catch (...) {
         // This scene as it was: the materials not moved yet, and those that were.
         for (size_t m = 0; m < keys.size(); ++m) reuse.emplace(keys[m], std::move(bsdfs[m]));

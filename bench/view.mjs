@@ -50,26 +50,24 @@ async function measure(browser, binary) {
     // waits (no page for 3 s). Then the same while it renders for another page.
     await new Promise((r) => setTimeout(r, 4000));
     const page = await browser.newPage({ viewport: { width: 1100, height: 800 } });
-    const loads = [], busyLoads = [];
-    for (let i = 0; i < 3; i++) {
-      await page.goto('about:blank');
-      await new Promise((r) => setTimeout(r, 4000));
-      const t0 = Date.now();
-      await page.goto(view.url);
-      await waitForFrame(page, 'neural', { spp: 0 });
-      loads.push(Date.now() - t0);
+    // Three loads of the page, each after `pauseMs` away from it: the times to its first image.
+    async function timeLoads(pauseMs) {
+      const times = [];
+      for (let i = 0; i < 3; i++) {
+        await page.goto('about:blank');
+        await new Promise((r) => setTimeout(r, pauseMs));
+        const t0 = Date.now();
+        await page.goto(view.url);
+        await waitForFrame(page, 'neural', { spp: 0 });
+        times.push(Date.now() - t0);
+      }
+      return times;
     }
+    const loads = await timeLoads(4000);
     const other = await browser.newPage();
     await other.goto(view.url);
     await other.evaluate(() => send({ spp_cap: 65536 }));
-    for (let i = 0; i < 3; i++) {
-      await page.goto('about:blank');
-      await new Promise((r) => setTimeout(r, 500));
-      const t0 = Date.now();
-      await page.goto(view.url);
-      await waitForFrame(page, 'neural', { spp: 0 });
-      busyLoads.push(Date.now() - t0);
-    }
+    const busyLoads = await timeLoads(500);
     await other.close();
     await page.evaluate((cap) => send({ spp_cap: cap }), spp);
     result.first_image_busy_ms = median(busyLoads);

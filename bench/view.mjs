@@ -74,27 +74,45 @@ async function measure(browser, binary) {
     result.first_image_ms = median(loads);
 
     // A camera drag, and a colour change: the time to the first image of the new view.
-    async function timeEdit(action) {
-      return page.evaluate(async (action) => {
+    // Colour i of the changes: red and blue in turn, by the count and not by
+    // the picker's value (the page shows the colour the model reaches,
+    // which a toggle on the value would send again: an edit that changes
+    // nothing, whose next pass has the new generation anyway).
+    async function timeEdit(action, i = 0) {
+      return page.evaluate(async ([action, i]) => {
         const sleep = () => new Promise((r) => setTimeout(r, 1));
         const g0 = generation;
         const t0 = performance.now();
         if (action === 'orbit') orbit(12, 3);
         else {
           const input = document.querySelector('[data-role=appearance]');
-          input.value = input.value === '#c03020' ? '#2030c0' : '#c03020';
+          input.value = i % 2 ? '#2030c0' : '#c03020';
           input.dispatchEvent(new Event('input', { bubbles: true }));
         }
         while (generation === g0) await sleep();
         const g = generation;
         const img = document.getElementById('neural');
+        // The first image of the new view: its samples start again.
         while (Number(img.dataset.generation) < g) await sleep();
-        return performance.now() - t0;
-      }, action);
+        return [performance.now() - t0, Number(img.dataset.spp)];
+      }, [action, i]);
     }
     const drags = [], colours = [];
-    for (let i = 0; i < 8; i++) { drags.push(await timeEdit('orbit')); await page.waitForTimeout(400); }
-    for (let i = 0; i < 6; i++) { colours.push(await timeEdit('colour')); await page.waitForTimeout(600); }
+    let restarted = 0;
+    for (let i = 0; i < 8; i++) {
+      const [ms, shownSpp] = await timeEdit('orbit');
+      drags.push(ms);
+      restarted += shownSpp <= 1;
+      await page.waitForTimeout(400);
+    }
+    for (let i = 0; i < 6; i++) {
+      const [ms, shownSpp] = await timeEdit('colour', i);
+      colours.push(ms);
+      restarted += shownSpp <= 1;
+      await page.waitForTimeout(600);
+    }
+    // Every edit must have started the image again (else it measured a pass, not an edit).
+    result.edits_restarted = `${restarted} of ${drags.length + colours.length}`;
     result.drag_to_image_ms = median(drags);
     result.colour_to_image_ms = median(colours);
 
@@ -182,6 +200,7 @@ ${table}
 
 Samples per second while refining: ${result.spp_per_second.toFixed(1)}; SSIM of the
 neural and fiber layers at 4 spp each (noise included): ${result.ab_ssim_at_4spp === null ? 'n/a' : result.ab_ssim_at_4spp.toFixed(3)}.
+Edits whose first image started the samples again (each should): ${result.edits_restarted}${resultBefore ? ` (before: ${resultBefore.edits_restarted})` : ''}.
 
 Command: \`node bench/view.mjs --size ${size} --spp ${spp}${resultBefore ? ' --before OLD/weft' : ''}\`
 `;

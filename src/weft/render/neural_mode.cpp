@@ -17,6 +17,22 @@ class NeuralYarnMode final : public YarnMode {
         return std::make_unique<YarnBsdf>(colour ? model.forColour(*colour, what) : model, source,
                                           yarn);
     }
+    // The draft samples by the fitted lobes (paper eq. 9-11) instead of the
+    // table, whose build is about half of the BSDF's; finishing builds the
+    // table from the draft's own evaluator.
+    std::unique_ptr<Bsdf> makeDraftBsdf(const YarnModel& model, const std::optional<Rgb>& colour,
+                                        const std::string& source, const std::string& what,
+                                        const YarnBsdfOptions& yarn) const override {
+        YarnBsdfOptions draft = yarn;
+        if (draft.sampling == YarnSampling::Tabulated) draft.sampling = YarnSampling::Fitted;
+        return makeBsdf(model, colour, source, what, draft);
+    }
+    std::unique_ptr<Bsdf> finishDraft(const Bsdf& draft,
+                                      const YarnBsdfOptions& yarn) const override {
+        const auto& bsdf = static_cast<const YarnBsdf&>(draft);  // makeBsdf's kind
+        if (bsdf.sampling() == yarn.sampling) return nullptr;
+        return bsdf.withTabulatedSampling();
+    }
 };
 
 }  // namespace

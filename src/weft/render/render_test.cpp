@@ -824,7 +824,10 @@ TEST_F(RenderTest, SampleRangesAndRowBandsAreTheWholeRendersSamples) {
 // set of yarn colours and given another renders, bit for bit, what a scene
 // built in the other renders; in both modes, with a material shared by two
 // yarns and then split, one kept, and an object whose material follows the
-// yarns' in the list. A colour the model refuses leaves the scene as it was.
+// yarns' in the list; so do draft materials once finished (a draft kept by a
+// later final edit included). Neural drafts shade with another sampler (other
+// noise), fiber ones are final. A colour the model refuses leaves the scene
+// as it was.
 TEST_F(RenderTest, ChangedYarnColoursRenderAsAFreshBuildInThem) {
     const std::string colourModel =
         std::string(WEFT_SOURCE_DIR) + "/tests/data/fleece-colour-small.json";
@@ -858,17 +861,36 @@ TEST_F(RenderTest, ChangedYarnColoursRenderAsAFreshBuildInThem) {
         Scene changed(sceneIn(red, red), inMode(mode));
         EXPECT_EQ(changed.stats().materials, 2);  // one yarn material, the floor's
         const Image before = render(changed, options).image;
-        for (const auto& [left, right] : std::vector<std::pair<std::string, std::string>>{
-                 {red, blue}, {pale, blue}, {blue, blue}, {red, red}}) {
-            SCOPED_TRACE(left + " | " + right);
-            const SceneDesc desc = sceneIn(left, right);
-            changed.setYarnColours(desc);
+        // Drafts: left as drafts (blue is kept by the next, final edit), then finished.
+        struct Edit {
+            std::string left, right;
+            bool draft, finish;
+        };
+        for (const Edit& e : std::vector<Edit>{{red, blue, true, false},
+                                               {pale, blue, false, false},
+                                               {blue, blue, true, true},
+                                               {red, red, false, false}}) {
+            SCOPED_TRACE(e.left + " | " + e.right + (e.draft ? " draft" : ""));
+            const SceneDesc desc = sceneIn(e.left, e.right);
+            changed.setYarnColours(desc, e.draft);
             const Scene fresh(desc, inMode(mode));
             EXPECT_EQ(changed.stats().materials, fresh.stats().materials);
             EXPECT_EQ(changed.stats().appearanceColours.size(),
                       fresh.stats().appearanceColours.size());
-            const Image a = render(changed, options).image, b = render(fresh, options).image;
-            EXPECT_EQ(a.pixels, b.pixels);
+            const Image b = render(fresh, options).image;
+            if (e.draft) {
+                const Image draft = render(changed, options).image;
+                if (mode == std::string("neural") && e.left != e.right) {
+                    EXPECT_NE(draft.pixels, b.pixels);
+                } else if (mode == std::string("fiber")) {
+                    EXPECT_EQ(draft.pixels, b.pixels);
+                }
+                for (float v : draft.pixels) EXPECT_TRUE(std::isfinite(v));
+                if (!e.finish) continue;
+                changed.finishMaterials();
+                EXPECT_EQ(changed.stats().materialBytes, fresh.stats().materialBytes);
+            }
+            EXPECT_EQ(render(changed, options).image.pixels, b.pixels);
         }
         // Back at red and red: the first image; then a refused colour keeps it.
         EXPECT_EQ(render(changed, options).image.pixels, before.pixels);

@@ -125,14 +125,16 @@ class SceneMaterials {
     SceneMaterials(const SceneDesc& desc, const std::vector<const YarnMode*>& modes,
                    const YarnBsdfOptions& options, std::vector<std::unique_ptr<Bsdf>>* bsdfs,
                    std::vector<uint8_t>* plyFrame, std::vector<MaterialKey>* keys,
-                   std::map<MaterialKey, std::unique_ptr<Bsdf>>* reuse = nullptr)
+                   std::map<MaterialKey, std::unique_ptr<Bsdf>>* reuse = nullptr,
+                   bool draft = false)
         : desc_(desc),
           modes_(modes),
           options_(options),
           bsdfs_(bsdfs),
           plyFrame_(plyFrame),
           keys_(keys),
-          reuse_(reuse) {}
+          reuse_(reuse),
+          draft_(draft) {}
 
     // The model of yarn entry y: as its file holds it, or a family model's
     // yarn at the entry's "yarn" (docs/family.md); each file read once, each
@@ -211,7 +213,8 @@ class SceneMaterials {
             if (!bsdf) {
                 const std::string what =
                     entryName(y) + (yarn.vertexColours.empty() ? ".colour" : ".vertex_colours");
-                bsdf = mode.makeBsdf(model(y), colour, yarn.model, what, options_);
+                bsdf = draft_ ? mode.makeDraftBsdf(model(y), colour, yarn.model, what, options_)
+                              : mode.makeBsdf(model(y), colour, yarn.model, what, options_);
             }
             bsdfs_->push_back(std::move(bsdf));
             plyFrame_->push_back(mode.drawsPlies());
@@ -240,6 +243,7 @@ class SceneMaterials {
     std::vector<uint8_t>* plyFrame_;
     std::vector<MaterialKey>* keys_;
     std::map<MaterialKey, std::unique_ptr<Bsdf>>* reuse_;
+    bool draft_;  // new materials as their modes' drafts
     std::map<std::string, YarnModel> models_;
     std::map<std::string, ModelFile> files_;  // by path
     std::map<std::string, AppearanceTable> tables_;
@@ -450,14 +454,27 @@ Scene::Scene(const SceneDesc& desc, const SceneOptions& options)
     stats_.segments = accel_->segmentCount();
     stats_.embreeBytes = accel_->embreeBytes();
     stats_.embreePeakBytes = accel_->embreePeakBytes();
-    stats_.materials = static_cast<int64_t>(bsdfs_.size());
-    for (const auto& bsdf : bsdfs_)
-        stats_.materialBytes += static_cast<int64_t>(bsdf->memoryBytes());
+    countMaterials();
     stats_.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-void Scene::setYarnColours(const SceneDesc& desc) {
+void Scene::countMaterials() {
+    stats_.materials = static_cast<int64_t>(bsdfs_.size());
+    stats_.materialBytes = 0;
+    for (const auto& bsdf : bsdfs_)
+        stats_.materialBytes += static_cast<int64_t>(bsdf->memoryBytes());
+}
+
+void Scene::finishMaterials() {
+    for (size_t m = 0; m < yarnMaterials_; ++m) {
+        const YarnMode& mode = yarnModeNamed(std::get<2>(materialKeys_[m]));
+        if (auto final = mode.finishDraft(*bsdfs_[m], options_.yarn)) bsdfs_[m] = std::move(final);
+    }
+    countMaterials();
+}
+
+void Scene::setYarnColours(const SceneDesc& desc, bool draft) {
     if (desc.yarns.size() != entryMaterial_.size())
         throw std::logic_error("Scene::setYarnColours: another number of yarn entries");
     for (size_t y = 0; y < desc.yarns.size(); ++y)
@@ -474,7 +491,8 @@ void Scene::setYarnColours(const SceneDesc& desc) {
     std::vector<SceneBuildStats::AppearanceColour> appearanceColours;
     const std::vector<const YarnMode*> modes = entryModes(desc, options_.mode);
     try {
-        SceneMaterials materials(desc, modes, options_.yarn, &bsdfs, &plyFrame, &keys, &reuse);
+        SceneMaterials materials(desc, modes, options_.yarn, &bsdfs, &plyFrame, &keys, &reuse,
+                                 draft);
         for (size_t y = 0; y < desc.yarns.size(); ++y)
             entryMaterial[y] = materials.ownMaterial(y, &appearanceColours);
     } catch (...) {
@@ -499,10 +517,10 @@ void Scene::setYarnColours(const SceneDesc& desc) {
     yarnMaterials_ = materialKeys_.size();
     entryMaterial_ = std::move(entryMaterial);
     stats_.appearanceColours = std::move(appearanceColours);
-    stats_.materials = static_cast<int64_t>(bsdfs_.size());
-    stats_.materialBytes = 0;
-    for (const auto& bsdf : bsdfs_)
-        stats_.materialBytes += static_cast<int64_t>(bsdf->memoryBytes());
+    if (draft)
+        countMaterials();
+    else
+        finishMaterials();  // kept drafts too; counts
 }
 
 void Scene::setView(const SceneDesc& desc) {

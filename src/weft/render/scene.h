@@ -128,8 +128,14 @@ class Scene {
     // caller's to ensure; weft view compares the scene files), none of them
     // vertex-coloured: materials whose model, colour and mode recur are
     // kept, the others built, the geometry kept. On an InputError (a colour
-    // the model refuses) the scene is as it was.
-    void setYarnColours(const SceneDesc& desc);
+    // the model refuses) the scene is as it was. `draft`: the new materials
+    // are their modes' drafts (YarnMode::makeDraftBsdf: the same values,
+    // built faster, sampled more coarsely) until finishMaterials(); without
+    // it every material ends final, kept drafts included.
+    void setYarnColours(const SceneDesc& desc, bool draft = false);
+    // Every draft material made final: the scene then renders bit for bit
+    // what a scene built afresh renders. Cheap when there is none.
+    void finishMaterials();
 
     // The drawing mode of every yarn, or "mixed" when they differ (neural for
     // a scene without yarns).
@@ -188,6 +194,9 @@ class Scene {
     size_t yarnMaterials_ = 0;
     std::vector<int> entryMaterial_;  // per yarn entry; -1: vertex-coloured
     SceneBuildStats stats_;
+
+    // stats_'s material count and bytes, from bsdfs_.
+    void countMaterials();
 };
 
 // The plies of curve `curveIndex` of a yarn entry, framed at the sampling

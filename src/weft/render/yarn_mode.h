@@ -44,6 +44,21 @@ class YarnMode {
                                            const std::optional<Rgb>& colour,
                                            const std::string& source, const std::string& what,
                                            const YarnBsdfOptions& yarn) const = 0;
+    // A viewport's quick first look (weft view, after a colour edit): a BSDF
+    // with makeBsdf's values that builds faster, sampled more coarsely (so its
+    // images are unbiased, only noisier), and the step that makes such a
+    // draft makeBsdf's BSDF bit for bit (null when `draft` is final already).
+    // Modes whose BSDF builds fast have no draft: makeBsdf's, already final.
+    virtual std::unique_ptr<Bsdf> makeDraftBsdf(const YarnModel& model,
+                                                const std::optional<Rgb>& colour,
+                                                const std::string& source, const std::string& what,
+                                                const YarnBsdfOptions& yarn) const {
+        return makeBsdf(model, colour, source, what, yarn);
+    }
+    virtual std::unique_ptr<Bsdf> finishDraft(const Bsdf& /*draft*/,
+                                              const YarnBsdfOptions& /*yarn*/) const {
+        return nullptr;
+    }
 };
 
 // The model's fiber in `colour` (none: its own C_TT): the fiber-level modes

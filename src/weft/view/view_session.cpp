@@ -68,6 +68,7 @@ struct ViewSession::LayerState {
     std::vector<int64_t> bandSpp;
     Image display;
     double measuredSecondsPerSpp = 0;  // the last pass's (worker only)
+    bool draftMaterials = false;       // the scene's materials are drafts (a colour edit)
     // Under mutex_:
     int64_t spp = 0;
     double secondsPerSpp = 0;
@@ -609,37 +610,44 @@ void ViewSession::run() {
 
 void ViewSession::renderPass(LayerState& layer, const render::SceneDesc& desc, uint64_t generation,
                              const json& key) {
+    // The page's status says "building" while `build` runs (an exception
+    // clears it below).
+    const auto whileBuilding = [&](const auto& build) {
+        {
+            std::lock_guard lock(mutex_);
+            building_ = true;
+        }
+        build();
+        std::lock_guard lock(mutex_);
+        building_ = false;
+    };
     // The scene up to date with `key`.
     try {
         const json geometry = geometryOf(key);
-        if (!layer.scene || layer.geometryKey != geometry) {
-            {
-                std::lock_guard lock(mutex_);
-                building_ = true;
-            }
-            render::SceneOptions sceneOptions;
-            sceneOptions.mode = layerName(layer.layer);
-            layer.scene.reset();  // the old one's memory first (a fiber scene is large)
-            layer.scene = std::make_unique<render::Scene>(desc, sceneOptions);
-            layer.geometryKey = geometry;
-            layer.coloursKey = coloursOf(key);
-            layer.viewKey = viewOf(key);
-            layer.lightsKey = key["lights"];
-            std::lock_guard lock(mutex_);
-            building_ = false;
-        }
-        if (layer.coloursKey != coloursOf(key)) {
+        if (!layer.scene || layer.geometryKey != geometry)
+            whileBuilding([&] {
+                render::SceneOptions sceneOptions;
+                sceneOptions.mode = layerName(layer.layer);
+                layer.scene.reset();  // the old one's memory first (a fiber scene is large)
+                layer.scene = std::make_unique<render::Scene>(desc, sceneOptions);
+                layer.geometryKey = geometry;
+                layer.coloursKey = coloursOf(key);
+                layer.viewKey = viewOf(key);
+                layer.lightsKey = key["lights"];
+                layer.draftMaterials = false;
+            });
+        if (layer.coloursKey != coloursOf(key))
             // A colour alone: its materials, not the geometry (a 256 px
-            // knit's geometry is about 15 ms of the 130 ms a colour costs).
-            {
-                std::lock_guard lock(mutex_);
-                building_ = true;
-            }
-            layer.scene->setYarnColours(desc);
-            layer.coloursKey = coloursOf(key);
-            std::lock_guard lock(mutex_);
-            building_ = false;
-        }
+            // knit's geometry is about 15 ms of the 130 ms a colour costs),
+            // and drafts at first (the neural BSDF without its sampling
+            // table, about half of its build): the first look below shows
+            // them, the samples that accumulate are the final materials'.
+            whileBuilding([&] {
+                const bool draft = layer.layer == Layer::Neural;
+                layer.scene->setYarnColours(desc, draft);
+                layer.coloursKey = coloursOf(key);
+                layer.draftMaterials = draft;
+            });
         if (layer.viewKey != viewOf(key)) {
             layer.scene->setView(desc);
             layer.viewKey = viewOf(key);
@@ -710,9 +718,10 @@ void ViewSession::renderPass(LayerState& layer, const render::SceneDesc& desc, u
     // A low-resolution first look while the full image's first sample is
     // traced, where that sample is slow (a camera drag then answers at once);
     // it stands for the bands not traced yet.
+    // Draft materials are shown that way too, never accumulated.
     const bool preview = layer.bandSpp == std::vector<int64_t>(bands, 0) &&
-                         layer.measuredSecondsPerSpp > 0.04 && layer.width >= 64 &&
-                         layer.height >= 64;
+                         (layer.measuredSecondsPerSpp > 0.04 || layer.draftMaterials) &&
+                         layer.width >= 64 && layer.height >= 64;
     if (preview) {
         int factor = 2;
         while (factor < 8 &&
@@ -748,6 +757,10 @@ void ViewSession::renderPass(LayerState& layer, const render::SceneDesc& desc, u
                                 0,
                                 small.stats.secondsPerSpp * factor * factor};
         frameReady_.notify_all();
+    }
+    if (layer.draftMaterials) {
+        whileBuilding([&] { layer.scene->finishMaterials(); });
+        layer.draftMaterials = false;
     }
     // The band behind; it catches up with the others, or (all equal) takes
     // as many samples as fit in a pass.

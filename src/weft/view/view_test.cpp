@@ -61,6 +61,32 @@ class ViewTest : public weft::testing::TempDirTest {
         return path("scene.json");
     }
 
+    // The saved scene rendered at its spp, as weft render would, is the saved
+    // image: the view's samples were [0, 1), [1, n), ... of the same pixels
+    // and seed, with the same materials.
+    void expectSavedIsTheSppRender(const json& saved) {
+        const render::SceneDesc desc =
+            render::loadScene(path("out/" + saved["scene"].get<std::string>()));
+        EXPECT_EQ(desc.render.spp, saved["spp"].get<int>());
+        const render::Scene built(desc);
+        render::RenderOptions ro;
+        ro.spp = desc.render.spp;
+        ro.seed = desc.render.seed;
+        ro.threads = 1;
+        ro.quiet = true;
+        const Image reference = render::render(built, ro).image;
+        const Image view = readImage(path("out/" + saved["exr"].get<std::string>()));
+        ASSERT_EQ(view.pixels.size(), reference.pixels.size());
+        double largest = 0, sum = 0;
+        for (size_t i = 0; i < view.pixels.size(); ++i) {
+            largest = std::max(largest, std::abs(double(view.pixels[i]) - reference.pixels[i]) /
+                                            (1e-3 + std::abs(double(reference.pixels[i]))));
+            sum += reference.pixels[i];
+        }
+        EXPECT_GT(sum, 0.0);
+        EXPECT_LT(largest, 1e-4);
+    }
+
     ViewOptions options(const std::string& scene) {
         ViewOptions o;
         o.scenePath = scene;
@@ -100,27 +126,7 @@ TEST_F(ViewTest, ProgressiveViewIsTheSppRenderOfTheSavedScene) {
     const json saved = session.save();
     EXPECT_EQ(saved["scene"], "view-0001.json");
     EXPECT_EQ(saved["spp"], 6);
-    // The saved scene rendered at its spp, as weft render would: the view's
-    // samples were [0, 1), [1, n), ... of the same pixels and seed.
-    const render::SceneDesc desc = render::loadScene(path("out/view-0001.json"));
-    EXPECT_EQ(desc.render.spp, 6);
-    const render::Scene built(desc);
-    render::RenderOptions ro;
-    ro.spp = desc.render.spp;
-    ro.seed = desc.render.seed;
-    ro.threads = 1;
-    ro.quiet = true;
-    const Image reference = render::render(built, ro).image;
-    const Image view = readImage(path("out/view-0001.exr"));
-    ASSERT_EQ(view.pixels.size(), reference.pixels.size());
-    double largest = 0, sum = 0;
-    for (size_t i = 0; i < view.pixels.size(); ++i) {
-        largest = std::max(largest, std::abs(double(view.pixels[i]) - reference.pixels[i]) /
-                                        (1e-3 + std::abs(double(reference.pixels[i]))));
-        sum += reference.pixels[i];
-    }
-    EXPECT_GT(sum, 0.0);
-    EXPECT_LT(largest, 1e-4);
+    expectSavedIsTheSppRender(saved);
     // A second save clobbers nothing.
     writeFileAtomic(path("out/view-0002.png"), "taken");
     EXPECT_EQ(session.save()["scene"], "view-0003.json");
@@ -280,6 +286,25 @@ TEST_F(ViewTest, AColourEditMovesTheYarnsColourThatWay) {
     const Rgb blue = meanAt(Rgb(0.2, 0.2, 0.9));
     EXPECT_GT(red.r / red.b, 1.5 * blue.r / blue.b)
         << "red " << red.r << " " << red.b << ", blue " << blue.r << " " << blue.b;
+}
+
+// At 64 px a colour edit's first look is shown with draft materials
+// (docs/view.md); the samples the view then accumulates and saves are the
+// final materials', as weft render's: also after edits that came before a
+// draft was finished.
+TEST_F(ViewTest, AfterAColourEditTheSavedImageIsTheSppRender) {
+    ViewSession session(options(writeScene(64, 3)));
+    session.applyEdit({{"spp_cap", 3}});
+    uint64_t g = 0;
+    for (const Rgb& colour : {Rgb(0.9, 0.2, 0.2), Rgb(0.3, 0.8, 0.2), Rgb(0.2, 0.2, 0.9)})
+        g = session.applyEdit(
+            {{"yarns",
+              {{{"index", 0}, {"colour", {colour.r, colour.g, colour.b}}}}}})["generation"];
+    waitForSpp(session, 3, g);
+    expectSavedIsTheSppRender(session.save());
+    g = session.applyEdit({{"yarns", {{{"index", 0}, {"colour", {0.6, 0.6, 0.3}}}}}})["generation"];
+    waitForSpp(session, 3, g);
+    expectSavedIsTheSppRender(session.save());
 }
 
 TEST_F(ViewTest, AbRendersTheFibersAndComparesThem) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "weft/yarn/tabulated_sampler.h"
 #include "weft/yarn/yarn_lobes.h"
 
 namespace weft {
@@ -38,6 +39,12 @@ YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
     // `new`, not make_shared: the evaluator's networks are over-aligned (FixedMlp).
     : model_(new YarnEvaluator(model, source, options.energyGuard)),
       sampler_(makeYarnSampler(options.sampling, model, model_)) {}
+
+std::unique_ptr<YarnBsdf> YarnBsdf::withTabulatedSampling() const {
+    auto bsdf = std::make_unique<YarnBsdf>(*this);
+    bsdf->sampler_ = std::make_shared<TabulatedYarnSampler>(model_);
+    return bsdf;
+}
 
 YarnBsdf YarnBsdf::load(const std::string& path, const YarnBsdfOptions& options) {
     return YarnBsdf(loadYarnModel(path), path, options);

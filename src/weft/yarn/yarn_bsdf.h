@@ -101,6 +101,14 @@ class YarnBsdf final : public Bsdf {
     YarnAblation ablation() const { return model_->ablation(); }
     YarnSampling sampling() const { return sampler_->kind(); }
 
+    // This BSDF with the tabulated sampler built from its own evaluator
+    // (shared, not built again): bit for bit YarnBsdf(model, source, {guard,
+    // Tabulated}) of the model it was made from. weft view shades its first
+    // look after a colour edit with fitted sampling, whose BSDF builds in
+    // about half the time (the sampling table is the other half), then with
+    // this (docs/view.md).
+    std::unique_ptr<YarnBsdf> withTabulatedSampling() const;
+
   private:
     // The constructor proper, for a model of one colour.
     struct OneColour {};

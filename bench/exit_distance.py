@@ -16,7 +16,9 @@ material, in one run:
     radius in pixels from the chunk's scene: `weft scene`'s yarn radius,
     plies, camera and film), beside the chunk's SSIM at 4 x 4 px blocks and
     its "relMSE minus noise" (the model's error) from
-    bench/results/table2.json, where those exist.
+    bench/results/table2.json, where those exist;
+  - the signed offsets' spread along and around the axis, and their
+    correlation, per band of incident angle (docs/gather.md#exit-offset).
 
 Writes bench/results/exit-distance.md and .json (or --out).
 
@@ -98,7 +100,8 @@ def main():
                "c_tt": meta["fiber"]["c_tt"], "exit_distance": e, "channel": c,
                "m_albedo": e["m_weight"][c], "mean": e["mean"][c], "median": e["median"][c],
                "p90": e["p90"][c], "beyond_fraction": e["beyond_fraction"][c],
-               "gather_seconds": summary["seconds"], "scenes": {}}
+               "gather_seconds": summary["seconds"], "scenes": {},
+               "exit_offset": meta.get("exit_offset")}
         for kind in SCENES:
             cell = table2.get((preset, kind))
             size = cell["size"] if cell else 256
@@ -143,6 +146,20 @@ def main():
                 r["preset"], kind, s["size"], s["ply_radius_px"], s["median_px"], s["p90_px"],
                 fmt(s.get("ssim"), "%.3f"), fmt(s.get("ssim_4x4"), "%.3f"),
                 fmt(s.get("rel_mse_minus_noise"), "%.4f")))
+    lines += ["", "Signed exit offsets (docs/gather.md#exit-offset), same channel, per band of "
+              "theta_i from the normal (0-22.5, 22.5-45, 45-67.5, 67.5-90 degrees): the standard "
+              "deviation of the offset along the axis (dz, ply radii) and around it (dpsi, "
+              "radians: ply radii of arc), and their correlation; every mean is within 0.06 "
+              "of 0 (exit-distance.json has them).", "",
+              "| material | sd dz by band | sd dpsi by band | correlation by band |",
+              "|---|---|---|---|"]
+    for r in rows:
+        bands = r["exit_offset"]["theta_bands_summary"]
+        c = r["channel"]
+        lines.append("| %s | %s | %s | %s |" % (
+            r["preset"], " / ".join("%.2f" % b["sd_dz"][c] for b in bands),
+            " / ".join("%.2f" % b["sd_dpsi"][c] for b in bands),
+            " / ".join("%.2f" % b["correlation"][c] for b in bands)))
     out_json = benchlib.write_md_and_json(args.out, "\n".join(lines) + "\n",
                                           {"paths": args.paths, "rows": rows})
     print("exit_distance: wrote %s and %s" % (args.out, out_json))

@@ -594,6 +594,9 @@ py::dict gatherPartDict(const GatherSums& s, const GatherOptions& o, const std::
     d["sum_m"] = ndarray(s.sumM, {ti, pi, to, po, 3});
     d["sum_truncated"] = ndarray(s.sumTruncated, {ti, pi, 3});
     d["sum_exit_distance"] = ndarray(s.sumExitDistance, {kExitDistanceBins + 1, 3});
+    d["sum_exit_offset"] =
+        ndarray(s.sumExitOffset,
+                {kExitOffsetTheta, kExitOffsetPhi, static_cast<py::ssize_t>(kExitOffsetSlots), 3});
     d["depth"] = ndarray(s.depth, {static_cast<py::ssize_t>(s.depth.size())});
     json stats = gatherInputs(o, s.fiberRadius, s.period, s.segments);
     stats["shard"] = {{"index", o.shard.index},
@@ -740,6 +743,11 @@ py::dict gatherDict(const GatherResult& r, const GatherOptions& o, const std::st
     d["exit_distance"] = r.exitDistance.empty()
                              ? py::object(py::none())
                              : py::object(ndarray(r.exitDistance, {kExitDistanceBins + 1, 3}));
+    d["exit_offset"] =
+        r.exitOffset.empty()
+            ? py::object(py::none())
+            : py::object(ndarray(r.exitOffset, {kExitOffsetTheta, kExitOffsetPhi,
+                                                static_cast<py::ssize_t>(kExitOffsetSlots), 3}));
     if (o.anyColour) {
         const ColourPathColumns c = colourPathColumns(r.colourPaths);
         const auto n = static_cast<py::ssize_t>(r.colourPaths.size());
@@ -1399,13 +1407,15 @@ PYBIND11_MODULE(weft, m) {
           py::arg("seed") = 0, py::arg("ply_seed") = py::none(),
           py::arg("bins") = std::vector<int>{22, 90, 45, 90}, py::arg("max_depth") = 1000,
           py::arg("threads") = 0, py::arg("segments_per_twist") = 128,
-          py::arg("shard") = py::none(), py::arg("any_colour") = false,
-          py::arg("out") = py::none(), py::arg("quiet") = true,
+          py::arg("shard") = py::none(), py::arg("any_colour") = false, py::arg("out") = py::none(),
+          py::arg("quiet") = true,
           "`weft gather`: the RDM of a ply as a dict of arrays (count, count_t, p_t, rdm_r, "
-          "rdm_m, truncated, depth, exit_distance) and stats; out=DIR also writes the gather "
+          "rdm_m, truncated, depth, exit_distance, exit_offset) and stats; out=DIR also writes "
+          "the gather "
           "folder. "
           "shard=(k, n): only shard k of n of the paths, as integer sums (count, count_t, "
-          "sum_r, sum_m, sum_truncated, sum_exit_distance, depth) for gather_merge; out=DIR "
+          "sum_r, sum_m, sum_truncated, sum_exit_distance, sum_exit_offset, depth) for "
+          "gather_merge; out=DIR "
           "writes the part. "
           "any_colour=True: colour-blind lobe choice and the recorded paths (paths_bins, "
           "paths_kind, paths_weight) for gather_recolour.");

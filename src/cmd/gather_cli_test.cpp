@@ -104,6 +104,9 @@ TEST_F(GatherCliTest, WritesArraysOfTheDocumentedTypesAndShapes) {
     const auto rdmM = values<float>(readChecked(dir, "rdm_m.npy", "<f4", {ti, pi, to, po, 3}));
     const auto trunc = values<double>(readChecked(dir, "truncated.npy", "<f8", {ti, pi, 3}));
     const auto depth = values<int64_t>(readChecked(dir, "depth.npy", "<i8", {1002}));
+    const auto offsets =
+        values<double>(readChecked(dir, "exit_offset.npy", "<f8", {4, 8, 8193, 3}));
+    for (double v : offsets) EXPECT_TRUE(std::isfinite(v) && v >= 0) << v;
 
     int64_t paths = 0, depthPaths = 0;
     for (int64_t c : count) paths += c;
@@ -148,10 +151,10 @@ TEST_F(GatherCliTest, WritesArraysOfTheDocumentedTypesAndShapes) {
     std::vector<std::string> files;
     for (const auto& e : fs::directory_iterator(dir)) files.push_back(e.path().filename());
     std::sort(files.begin(), files.end());
-    EXPECT_EQ(files, (std::vector<std::string>{"count.npy", "count_t.npy", "depth.npy",
-                                               "exit_distance.npy", "meta.json", "p_t.npy",
-                                               "ply.txt", "rdm_m.npy", "rdm_r.npy",
-                                               "truncated.npy"}));
+    EXPECT_EQ(files,
+              (std::vector<std::string>{
+                  "count.npy", "count_t.npy", "depth.npy", "exit_distance.npy", "exit_offset.npy",
+                  "meta.json", "p_t.npy", "ply.txt", "rdm_m.npy", "rdm_r.npy", "truncated.npy"}));
 }
 
 TEST_F(GatherCliTest, MetaJsonAndPly) {

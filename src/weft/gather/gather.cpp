@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <climits>
@@ -57,6 +58,7 @@ GatherSums zeroSums(const GatherOptions& o, const PlyGeometry& ply,
     s.countT.assign(nIn, 0);
     s.sumTruncated.assign(nIn * 3, 0);
     s.sumExitDistance.assign((kExitDistanceBins + 1) * 3, 0);
+    s.sumExitOffset.assign(kExitOffsetCells * kExitOffsetSlots * 3, 0);
     s.sumR.assign(nIn * nOut * 3, 0);
     s.sumM.assign(nIn * nOut * 3, 0);
     s.depth.assign(static_cast<size_t>(o.maxDepth) + 2, 0);
@@ -151,6 +153,7 @@ GatherSums gatherSums(const GatherOptions& o) {
                     const double uCosTheta = rng.uniform(), uPhi = rng.uniform();
                     const Vec3 wiLocal = sampleUniformHemisphere(uCosTheta, uPhi);
                     const size_t binIn = bins.incidentBin(wiLocal);
+                    const size_t offsetCell = exitOffsetCell(wiLocal);
                     Vec3 dir = -entry.fromLocal(wiLocal);
                     // Any colour: weight = W0 C_TT^ttEvents.
                     Rgb weight(1.0);
@@ -226,13 +229,16 @@ GatherSums gatherSums(const GatherOptions& o) {
                             std::remainder(std::atan2(exitPoint.y, exitPoint.x) - psi, kTwoPi);
                         const size_t bin =
                             static_cast<size_t>(exitDistanceBin(std::hypot(dz, dpsi))) * 3;
+                        const size_t slot =
+                            (offsetCell * kExitOffsetSlots + exitOffsetSlot(dz, dpsi)) * 3;
                         // The weight for the gather's own colour (any colour: W0 C_TT^k,
                         // as addColourPath gives the RDM).
-                        for (int c = 0; c < 3; ++c)
-                            atomicAdd(sums.sumExitDistance[bin + c],
-                                      GatherSums::toFixed(o.anyColour
-                                                              ? path.weightFor(o.fiber.cTT, c)
-                                                              : weight[c]));
+                        for (int c = 0; c < 3; ++c) {
+                            const int64_t w = GatherSums::toFixed(
+                                o.anyColour ? path.weightFor(o.fiber.cTT, c) : weight[c]);
+                            atomicAdd(sums.sumExitDistance[bin + c], w);
+                            atomicAdd(sums.sumExitOffset[slot + c], w);
+                        }
                     }
                     if (!o.anyColour) {
                         addPathWeight(sums, path.kind, binIn,
@@ -308,6 +314,9 @@ GatherResult normaliseGather(GatherSums sums, const GatherOptions& o, int64_t sh
     r.exitDistance.resize(sums.sumExitDistance.size());
     for (size_t k = 0; k < r.exitDistance.size(); ++k)
         r.exitDistance[k] = sums.sumExitDistance[k] / kFixedScale / o.paths;
+    r.exitOffset.resize(sums.sumExitOffset.size());
+    for (size_t k = 0; k < r.exitOffset.size(); ++k)
+        r.exitOffset[k] = sums.sumExitOffset[k] / kFixedScale / o.paths;
     r.colourPaths = std::move(sums.colourPaths);
 
     GatherStats& st = r.stats;
@@ -357,6 +366,8 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
     if (!r.exitDistance.empty())
         writeNpy(file("exit_distance.npy"), r.exitDistance.data(),
                  {static_cast<size_t>(kExitDistanceBins) + 1, 3});
+    if (!r.exitOffset.empty())
+        writeNpy(file("exit_offset.npy"), r.exitOffset.data(), exitOffsetShape());
     if (all) writePlyLines(file("ply.txt"), r.plyLines, r.fiberRadius);
     if (o.anyColour) writeColourPaths(out.path(), r.colourPaths);
     nlohmann::json meta = gatherMetadata(r, o);
@@ -436,6 +447,63 @@ GatherOptions gatherOptionsFromJson(const nlohmann::json& meta, const std::strin
     return o;
 }
 
+size_t exitOffsetCell(const Vec3& wiLocal) {
+    const double theta = safeAcos(wiLocal.z), phi = std::atan2(wiLocal.y, wiLocal.x);
+    const int a =
+        std::clamp(static_cast<int>(theta / kHalfPi * kExitOffsetTheta), 0, kExitOffsetTheta - 1);
+    const int b =
+        std::clamp(static_cast<int>((phi + kPi) / kTwoPi * kExitOffsetPhi), 0, kExitOffsetPhi - 1);
+    return static_cast<size_t>(a) * kExitOffsetPhi + b;
+}
+
+size_t exitOffsetSlot(double dz, double dpsi) {
+    const double axial = dz / kExitOffsetAxialWidth + 0.5 * kExitOffsetAxialBins;
+    if (!(axial >= 0 && axial < kExitOffsetAxialBins)) return kExitOffsetSlots - 1;
+    const int around = std::clamp(static_cast<int>((dpsi + kPi) / kTwoPi * kExitOffsetAroundBins),
+                                  0, kExitOffsetAroundBins - 1);
+    return static_cast<size_t>(axial) * kExitOffsetAroundBins + around;
+}
+
+std::vector<size_t> exitOffsetShape() {
+    return {kExitOffsetTheta, kExitOffsetPhi, kExitOffsetSlots, 3};
+}
+
+ExitOffsetSummary summarizeExitOffset(const std::vector<double>& histogram, int thetaBand,
+                                      int channel) {
+    ExitOffsetSummary e;
+    if (histogram.size() != kExitOffsetCells * kExitOffsetSlots * 3) return e;
+    double inRange = 0, beyond = 0, sz = 0, sp = 0, szz = 0, spp = 0, szp = 0;
+    for (int b = 0; b < kExitOffsetPhi; ++b) {
+        const size_t cell = static_cast<size_t>(thetaBand) * kExitOffsetPhi + b;
+        const auto weight = [&](size_t slot) {
+            return histogram[(cell * kExitOffsetSlots + slot) * 3 + channel];
+        };
+        beyond += weight(kExitOffsetSlots - 1);
+        for (int i = 0; i < kExitOffsetAxialBins; ++i)
+            for (int j = 0; j < kExitOffsetAroundBins; ++j) {
+                const double w = weight(static_cast<size_t>(i) * kExitOffsetAroundBins + j);
+                if (w == 0) continue;
+                const double z = (i + 0.5 - 0.5 * kExitOffsetAxialBins) * kExitOffsetAxialWidth;
+                const double p = -kPi + (j + 0.5) * kTwoPi / kExitOffsetAroundBins;
+                inRange += w;
+                sz += w * z, sp += w * p, szz += w * z * z, spp += w * p * p, szp += w * z * p;
+            }
+    }
+    e.weight = inRange + beyond;
+    if (e.weight <= 0) return e;
+    e.beyondFraction = beyond / e.weight;
+    if (inRange <= 0) return e;
+    e.meanAxial = sz / inRange;
+    e.meanAround = sp / inRange;
+    const double vz = std::max(0.0, szz / inRange - sqr(e.meanAxial)),
+                 vp = std::max(0.0, spp / inRange - sqr(e.meanAround));
+    e.sdAxial = std::sqrt(vz);
+    e.sdAround = std::sqrt(vp);
+    if (vz > 0 && vp > 0)
+        e.correlation = (szp / inRange - e.meanAxial * e.meanAround) / (e.sdAxial * e.sdAround);
+    return e;
+}
+
 ExitDistanceSummary summarizeExitDistance(const std::vector<double>& histogram, int channel) {
     ExitDistanceSummary e;
     if (histogram.size() != static_cast<size_t>(kExitDistanceBins + 1) * 3) return e;
@@ -512,6 +580,35 @@ nlohmann::json gatherMetadata(const GatherResult& r, const GatherOptions& o) {
             exit["beyond_fraction"].push_back(e.beyondFraction);
         }
         meta["exit_distance"] = exit;
+    }
+    if (!r.exitOffset.empty()) {
+        meta["arrays"]["exit_offset"] =
+            "float64 (" + std::to_string(kExitOffsetTheta) + "," + std::to_string(kExitOffsetPhi) +
+            "," + std::to_string(kExitOffsetSlots) +
+            ",3): M weight per path by signed exit offset (dz, dpsi) per incident cell "
+            "(theta_i band, phi_i band); last slot: beyond the axial range (gather.h)";
+        nlohmann::json offset = {
+            {"unit", "ply radii along the axis (dz), radians around it (dpsi)"},
+            {"axial_bins", kExitOffsetAxialBins},
+            {"axial_bin_width", kExitOffsetAxialWidth},
+            {"around_bins", kExitOffsetAroundBins},
+            {"theta_bands", kExitOffsetTheta},
+            {"phi_bands", kExitOffsetPhi}};
+        for (int a = 0; a < kExitOffsetTheta; ++a) {
+            nlohmann::json band;
+            for (int c = 0; c < 3; ++c) {
+                const ExitOffsetSummary e = summarizeExitOffset(r.exitOffset, a, c);
+                band["m_weight"].push_back(e.weight);
+                band["beyond_fraction"].push_back(e.beyondFraction);
+                band["mean_dz"].push_back(e.meanAxial);
+                band["mean_dpsi"].push_back(e.meanAround);
+                band["sd_dz"].push_back(e.sdAxial);
+                band["sd_dpsi"].push_back(e.sdAround);
+                band["correlation"].push_back(e.correlation);
+            }
+            offset["theta_bands_summary"].push_back(band);
+        }
+        meta["exit_offset"] = offset;
     }
     if (o.anyColour) {
         meta["colour_paths"] = static_cast<int64_t>(r.colourPaths.size());

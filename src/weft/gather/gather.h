@@ -98,6 +98,42 @@ inline int exitDistanceBin(double d) {
                : kExitDistanceBins;
 }
 
+// M paths by where they leave the ply relative to where they entered, signed
+// (issue 47, docs/exit-point.md): the offset along the axis dz (ply radii, z
+// unwrapped across twist periods, positive along the entry frame's t) and the
+// angle around it dpsi (in [-pi, pi), positive from n towards b: on the unit
+// cylinder the arc length in ply radii), for each incident cell of the entry
+// frame: kExitOffsetTheta equal bands of theta_i (from n) times kExitOffsetPhi
+// of phi_i (from t towards b, [-pi, pi)). Per cell kExitOffsetSlots slots:
+// kExitOffsetAxialBins bins of dz (kExitOffsetAxialWidth wide, centred on 0)
+// times kExitOffsetAroundBins of dpsi, row-major, then one for paths farther
+// along the axis (and those that ran along it). A ply-level model that moves
+// the exit point (paper 8, "Limitations") samples from these.
+inline constexpr int kExitOffsetTheta = 4, kExitOffsetPhi = 8;
+inline constexpr int kExitOffsetAxialBins = 128, kExitOffsetAroundBins = 64;
+inline constexpr double kExitOffsetAxialWidth = 0.125;
+inline constexpr size_t kExitOffsetCells = static_cast<size_t>(kExitOffsetTheta) * kExitOffsetPhi;
+inline constexpr size_t kExitOffsetSlots =
+    static_cast<size_t>(kExitOffsetAxialBins) * kExitOffsetAroundBins + 1;
+
+// The incident cell of an entry-frame direction (upper hemisphere), and the
+// slot of an offset in a cell (kExitOffsetSlots - 1: beyond the axial range).
+size_t exitOffsetCell(const Vec3& wiLocal);
+size_t exitOffsetSlot(double dz, double dpsi);
+// The shape of the histogram's arrays: {theta, phi, slots, 3}.
+std::vector<size_t> exitOffsetShape();
+
+// One channel of the M paths of a band of theta_i (all its phi_i cells) in
+// GatherResult::exitOffset: their weight, the share beyond the axial range,
+// and over the rest (bin centres) the means, standard deviations and the
+// correlation of dz and dpsi.
+struct ExitOffsetSummary {
+    double weight = 0, beyondFraction = 0;
+    double meanAxial = 0, meanAround = 0, sdAxial = 0, sdAround = 0, correlation = 0;
+};
+ExitOffsetSummary summarizeExitOffset(const std::vector<double>& histogram, int thetaBand,
+                                      int channel);
+
 // One channel of GatherResult::exitDistance: the M weight, the weighted
 // mean distance of the paths within the binned range, the median and 90th
 // percentile (linear within a bin), and the share of weight beyond it.
@@ -132,6 +168,9 @@ struct GatherResult {
     // (kExitDistanceBins + 1, 3): M weight per path exiting at each distance
     // (their sum is the M albedo averaged over the gather's incident directions).
     std::vector<double> exitDistance;
+    // (kExitOffsetTheta, kExitOffsetPhi, kExitOffsetSlots, 3): M weight per
+    // path by signed exit offset, per incident cell; empty where not recorded.
+    std::vector<double> exitOffset;
     std::vector<std::vector<Vec3>> plyLines;  // traced fiber centre lines
     double fiberRadius = 0;
     std::vector<ColourPath> colourPaths;   // any-colour gathers (colour_paths.h)
@@ -148,6 +187,10 @@ struct GatherSums {
     std::vector<int64_t> sumR, sumM;      // (TI, PI, TO, PO, 3): weights in 2^-32 units
     std::vector<int64_t> sumTruncated;    // (TI, PI, 3): weights in 2^-32 units
     std::vector<int64_t> sumExitDistance;  // (kExitDistanceBins + 1, 3): M weights, 2^-32 units
+    // (kExitOffsetTheta, kExitOffsetPhi, kExitOffsetSlots, 3): M weights,
+    // 2^-32 units; empty where not recorded (recoloured gathers, parts written
+    // before it existed).
+    std::vector<int64_t> sumExitOffset;
     std::vector<int64_t> depth;           // depth histogram, 0..maxDepth, then truncated
     int64_t rays = 0, axialPaths = 0, depthSum = 0;
     double seconds = 0, walkSeconds = 0;  // of the walks and their set-up

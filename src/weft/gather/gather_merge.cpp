@@ -51,6 +51,8 @@ void writeGatherPart(const GatherSums& s, const GatherOptions& o, TempDirCommit&
     writeNpy(file("sum_m.npy"), s.sumM.data(), {ti, pi, to, po, 3});
     writeNpy(file("sum_truncated.npy"), s.sumTruncated.data(), {ti, pi, 3});
     writeNpy(file("sum_exit_distance.npy"), s.sumExitDistance.data(), {kExitDistance, 3});
+    if (!s.sumExitOffset.empty())
+        writeNpy(file("sum_exit_offset.npy"), s.sumExitOffset.data(), exitOffsetShape());
     writeNpy(file("depth.npy"), s.depth.data(), {s.depth.size()});
     writePlyLines(file("ply.txt"), s.plyLines, s.fiberRadius);
     if (o.anyColour) writeColourPaths(out.path(), s.colourPaths);
@@ -71,14 +73,22 @@ void writeGatherPart(const GatherSums& s, const GatherOptions& o, TempDirCommit&
         {"threads", s.threads},
         {"arrays",
          {{"count", "int64 (TI,PI): this shard's paths per incident bin"},
-          {"count_t", "int64 (TI,PI): this shard's T paths (no fiber interaction) per incident bin"},
+          {"count_t",
+           "int64 (TI,PI): this shard's T paths (no fiber interaction) per incident bin"},
           {"sum_r", "int64 (TI,PI,TO,PO,3): summed R path weights, in units of 2^-32"},
           {"sum_m", "int64 (TI,PI,TO,PO,3): summed M path weights, in units of 2^-32"},
-          {"sum_truncated", "int64 (TI,PI,3): summed weight of paths cut at max_depth, 2^-32 units"},
+          {"sum_truncated",
+           "int64 (TI,PI,3): summed weight of paths cut at max_depth, 2^-32 units"},
           {"sum_exit_distance",
            "int64 (" + std::to_string(kExitDistance) +
                ",3): summed M path weights by entry-to-exit distance (gather.h), 2^-32 units"},
-          {"depth", "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}},
+          {"sum_exit_offset",
+           "int64 (" + std::to_string(kExitOffsetTheta) + "," + std::to_string(kExitOffsetPhi) +
+               "," + std::to_string(kExitOffsetSlots) +
+               ",3): summed M path weights by signed exit offset per incident cell (gather.h), "
+               "2^-32 units"},
+          {"depth",
+           "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}},
     });
     if (o.anyColour) meta["arrays"].update(colourPathArrayDescriptions());
     writeFileAtomic(file("meta.json"), meta.dump(2) + "\n");
@@ -142,6 +152,15 @@ MergedGather mergeGatherParts(const std::vector<std::string>& partDirs) {
         addInt64Npy(file("sum_m.npy"), {ti, pi, to, po, 3}, sums.sumM);
         addInt64Npy(file("sum_truncated.npy"), {ti, pi, 3}, sums.sumTruncated);
         addInt64Npy(file("sum_exit_distance.npy"), {kExitDistance, 3}, sums.sumExitDistance);
+        // Parts written before the exit offsets were recorded have none: the
+        // merge then has none either.
+        if (!sums.sumExitOffset.empty()) {
+            std::error_code ec;
+            if (std::filesystem::exists(file("sum_exit_offset.npy"), ec))
+                addInt64Npy(file("sum_exit_offset.npy"), exitOffsetShape(), sums.sumExitOffset);
+            else
+                sums.sumExitOffset.clear();
+        }
         if (m.options.anyColour) {
             const std::vector<ColourPath> recorded = readColourPaths(p, counts);
             sums.colourPaths.insert(sums.colourPaths.end(), recorded.begin(), recorded.end());

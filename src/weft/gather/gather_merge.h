@@ -15,7 +15,11 @@
 //   count.npy, count_t.npy int64 (TI,PI): paths, and T paths, per incident bin
 //   sum_r.npy, sum_m.npy   int64 (TI,PI,TO,PO,3): summed R / M path weights, in units of 2^-32
 //   sum_truncated.npy      int64 (TI,PI,3): summed weight of paths cut at max_depth, 2^-32 units
-//   sum_exit_distance.npy  int64 (129,3): summed M path weights by entry-to-exit distance (gather.h)
+//   sum_exit_distance.npy  int64 (129,3): summed M path weights by entry-to-exit distance
+//   (gather.h) sum_exit_offset.npy    int64 (4,8,8193,3): the same by signed exit offset per
+//   incident
+//                          cell (gather.h); parts written before it have none, and a
+//                          merge with such a part has none either
 //   depth.npy              int64 (max_depth+2): paths by number of fiber interactions
 //   ply.txt                the traced fiber centre lines, as a gather's
 // `weft gather merge` adds the parts' integers and normalises once, with the

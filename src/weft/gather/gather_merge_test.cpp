@@ -118,6 +118,9 @@ TEST_F(GatherMergeTest, MergedShardsEqualTheUnshardedGatherBitForBit) {
         EXPECT_EQ(r.rdmR, whole.rdmR) << n;
         EXPECT_EQ(r.rdmM, whole.rdmM) << n;
         EXPECT_EQ(r.truncated, whole.truncated) << n;
+        EXPECT_EQ(r.exitDistance, whole.exitDistance) << n;
+        EXPECT_EQ(r.exitOffset, whole.exitOffset) << n;
+        EXPECT_FALSE(r.exitOffset.empty());
         EXPECT_EQ(r.plyLines.size(), whole.plyLines.size());
         EXPECT_EQ(r.stats.paths, whole.stats.paths);
         EXPECT_EQ(r.stats.rays, whole.stats.rays);
@@ -130,6 +133,19 @@ TEST_F(GatherMergeTest, MergedShardsEqualTheUnshardedGatherBitForBit) {
                                 "max_depth", "mean_depth", "truncated_energy"})
             EXPECT_EQ(a.at(key), b.at(key)) << key;
     }
+}
+
+TEST_F(GatherMergeTest, APartWithoutExitOffsetsLeavesTheMergeWithout) {
+    // A part written before the offsets were recorded: the merge has none
+    // (rather than the other parts' share of them); everything else is whole.
+    const GatherResult whole = gatherRdm(options());
+    const std::vector<std::string> dirs = writeParts(3, "old_");
+    std::filesystem::remove(dirs[1] + "/sum_exit_offset.npy");
+    const MergedGather m = mergeGatherParts(dirs);
+    const GatherResult r = normaliseGather(m.sums, m.options, m.shards);
+    EXPECT_TRUE(r.exitOffset.empty());
+    EXPECT_EQ(r.rdmM, whole.rdmM);
+    EXPECT_EQ(r.exitDistance, whole.exitDistance);
 }
 
 TEST_F(GatherMergeTest, PartsThatDoNotFormOneGatherAreRejected) {

@@ -182,6 +182,88 @@ TEST(Gather, ExitDistancesHoldTheMWeightAndCrossTwistPeriods) {
               0.8 * summarizeExitDistance(r.exitDistance, 0).mean);
 }
 
+TEST(Gather, ExitOffsetCellsSlotsAndSummaryOfAKnownHistogram) {
+    // Cells: theta_i from n in 4 bands, phi_i from t towards b in 8.
+    EXPECT_EQ(exitOffsetCell({0, 0, 1}), size_t{0} * kExitOffsetPhi + 4);  // phi 0: band 4
+    EXPECT_EQ(exitOffsetCell(normalize(Vec3{0, -1, 0.01})), size_t{3} * kExitOffsetPhi + 2);
+    EXPECT_EQ(exitOffsetCell(normalize(Vec3{-1, -1e-9, 2})), size_t{1} * kExitOffsetPhi + 0);
+    // Slots: dz centred on 0, dpsi over [-pi, pi), beyond the axial range last.
+    const int mid = kExitOffsetAxialBins / 2;
+    EXPECT_EQ(exitOffsetSlot(0.01, 0.01),
+              static_cast<size_t>(mid) * kExitOffsetAroundBins + kExitOffsetAroundBins / 2);
+    EXPECT_EQ(exitOffsetSlot(-0.01, -kPi), static_cast<size_t>(mid - 1) * kExitOffsetAroundBins);
+    EXPECT_EQ(exitOffsetSlot(mid * kExitOffsetAxialWidth, 0.0), kExitOffsetSlots - 1);
+    EXPECT_EQ(exitOffsetSlot(-mid * kExitOffsetAxialWidth, kPi),
+              static_cast<size_t>(kExitOffsetAroundBins) - 1);
+    EXPECT_EQ(exitOffsetSlot(std::numeric_limits<double>::infinity(), 0.0), kExitOffsetSlots - 1);
+    // Band 1, channel 2: weight 1 at (dz, dpsi) = (z0, p0) in one phi cell, 3
+    // at (z1, p1) in another, 1 beyond: moments over bin centres.
+    std::vector<double> h(kExitOffsetCells * kExitOffsetSlots * 3, 0.0);
+    const auto at = [&](size_t cell, size_t slot) -> double& {
+        return h[(cell * kExitOffsetSlots + slot) * 3 + 2];
+    };
+    const double w = kExitOffsetAxialWidth, dp = kTwoPi / kExitOffsetAroundBins;
+    const double z0 = (3 + 0.5) * w, p0 = -kPi + 10.5 * dp, z1 = -(1 + 0.5) * w,
+                 p1 = -kPi + 40.5 * dp;
+    at(kExitOffsetPhi + 2, static_cast<size_t>(mid + 3) * kExitOffsetAroundBins + 10) = 1;
+    at(kExitOffsetPhi + 6, static_cast<size_t>(mid - 2) * kExitOffsetAroundBins + 40) = 3;
+    at(kExitOffsetPhi + 7, kExitOffsetSlots - 1) = 1;
+    const ExitOffsetSummary e = summarizeExitOffset(h, 1, 2);
+    EXPECT_DOUBLE_EQ(e.weight, 5);
+    EXPECT_DOUBLE_EQ(e.beyondFraction, 0.2);
+    EXPECT_NEAR(e.meanAxial, (z0 + 3 * z1) / 4, 1e-12);
+    EXPECT_NEAR(e.meanAround, (p0 + 3 * p1) / 4, 1e-12);
+    // Two points: sd = |difference| sqrt(q (1 - q)), correlation -1 (z falls as psi rises).
+    EXPECT_NEAR(e.sdAxial, std::abs(z0 - z1) * std::sqrt(0.25 * 0.75), 1e-12);
+    EXPECT_NEAR(e.sdAround, std::abs(p0 - p1) * std::sqrt(0.25 * 0.75), 1e-12);
+    EXPECT_NEAR(e.correlation, -1.0, 1e-9);
+    EXPECT_EQ(summarizeExitOffset(h, 0, 2).weight, 0);
+    EXPECT_EQ(summarizeExitOffset(h, 1, 1).weight, 0);
+}
+
+TEST(Gather, ExitOffsetsHoldEachIncidentCellsMWeightAndMirrorWithoutTwist) {
+    // Incident bins that are the offset cells (4 x 8): each cell holds the M
+    // energy of its RDM bin (two accumulations of the same paths, binned by
+    // two routines), all cells the exit distances' total. Straight fibers
+    // (alpha = 0) make the ply its own mirror image in z, so the mean axial
+    // offset is 0 within its standard error.
+    GatherOptions o = smallGather(losslessFiber(), {40, 0.25, 0.0}, testing::scaled(20000));
+    o.bins = {kExitOffsetTheta, kExitOffsetPhi, 6, 12};
+    const GatherResult r = gatherRdm(o);
+    ASSERT_EQ(r.exitOffset.size(), kExitOffsetCells * kExitOffsetSlots * 3);
+    const size_t nOut = r.bins.outgoingCount();
+    for (int c = 0; c < 3; ++c) {
+        double total = 0, distances = 0;
+        for (size_t i = 0; i < kExitOffsetCells; ++i) {
+            double fromRdm = 0, fromOffsets = 0;
+            for (size_t j = 0; j < nOut; ++j)
+                fromRdm += static_cast<double>(r.rdmM[(i * nOut + j) * 3 + c]) *
+                           r.bins.outgoingSolidAngle(j) * r.count[i] / o.paths;
+            for (size_t k = 0; k < kExitOffsetSlots; ++k)
+                fromOffsets += r.exitOffset[(i * kExitOffsetSlots + k) * 3 + c];
+            EXPECT_NEAR(fromOffsets, fromRdm, 1e-5 * fromRdm + 1e-12)
+                << "cell " << i << " channel " << c;
+            total += fromOffsets;
+        }
+        for (int b = 0; b <= kExitDistanceBins; ++b) distances += r.exitDistance[b * 3 + c];
+        EXPECT_NEAR(total, distances, 1e-12 * distances);
+        EXPECT_GT(total, 0.1);
+    }
+    double weight = 0, moment = 0, square = 0, paths = 0;
+    for (int a = 0; a < kExitOffsetTheta; ++a) {
+        const ExitOffsetSummary e = summarizeExitOffset(r.exitOffset, a, 0);
+        const double inRange = e.weight * (1 - e.beyondFraction);
+        weight += inRange;
+        moment += inRange * e.meanAxial;
+        square += inRange * (sqr(e.sdAxial) + sqr(e.meanAxial));
+    }
+    // Lossless fibers: every M path has weight 1, so weight * paths counts them.
+    paths = weight * o.paths;
+    const double mean = moment / weight, sd = std::sqrt(square / weight - sqr(mean));
+    EXPECT_GT(sd, 0.2);
+    EXPECT_LT(std::abs(mean), 4 * sd / std::sqrt(paths)) << "mean " << mean << ", sd " << sd;
+}
+
 TEST(Gather, LosslessFiberConservesEnergyInEveryIncidentBin) {
     GatherOptions o = smallGather(losslessFiber(), {80, 0.3, 0.2}, testing::scaled(40000));
     o.maxDepth = 8;  // some truncation, to check its bookkeeping too

@@ -61,6 +61,10 @@ RdmData loadRdm(const std::string& dir) {
     if (std::filesystem::exists(exitPath, ec))
         readGatherArray<double>(exitPath, "<f8", {static_cast<size_t>(kExitDistanceBins) + 1, 3},
                                 weights);
+    // Nor one written before the exit offsets were recorded (gather.h).
+    const std::string offsetPath = f.file("exit_offset.npy");
+    if (std::filesystem::exists(offsetPath, ec))
+        d.exitOffset = readGatherArray<double>(offsetPath, "<f8", exitOffsetShape(), weights);
     return d;
 }
 

@@ -5,7 +5,8 @@
 // as written by `weft gather`, and checks every file of the gather through
 // gather_folder.h: meta.json's fields, the counts against each other
 // (count_t.npy and depth.npy too), p_t = count_t / count, every map finite
-// and >= 0, truncated.npy and exit_distance.npy, no file a link to another.
+// and >= 0, truncated.npy, exit_distance.npy and exit_offset.npy, no file a
+// link to another.
 // Any mismatch is an InputError naming the file and what was expected.
 #pragma once
 
@@ -26,6 +27,9 @@ struct RdmData {
     std::vector<int64_t> count;     // (TI, PI)
     std::vector<double> pT;         // (TI, PI)
     std::vector<float> rdmR, rdmM;  // (TI, PI, TO, PO, 3)
+    // exit_offset.npy (gather.h GatherResult::exitOffset); empty where the
+    // gather has none (recoloured, or written before it was recorded).
+    std::vector<double> exitOffset;
 };
 
 RdmData loadRdm(const std::string& dir);

@@ -366,7 +366,8 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
     if (!r.exitDistance.empty())
         writeNpy(file("exit_distance.npy"), r.exitDistance.data(),
                  {static_cast<size_t>(kExitDistanceBins) + 1, 3});
-    if (!r.exitOffset.empty())
+    // 6 MB: not in each node of a family's records-only gathers.
+    if (all && !r.exitOffset.empty())
         writeNpy(file("exit_offset.npy"), r.exitOffset.data(), exitOffsetShape());
     if (all) writePlyLines(file("ply.txt"), r.plyLines, r.fiberRadius);
     if (o.anyColour) writeColourPaths(out.path(), r.colourPaths);

@@ -229,7 +229,8 @@ enum class GatherFiles { All, Records };
 inline constexpr const char* kGatherRecordsOnly = "records";
 
 // Writes count.npy, count_t.npy, p_t.npy, rdm_r.npy, rdm_m.npy, truncated.npy,
-// depth.npy, ply.txt, the paths_*.npy of an any-colour gather and meta.json
+// depth.npy, exit_distance.npy, exit_offset.npy (not with Records), ply.txt,
+// the paths_*.npy of an any-colour gather and meta.json
 // (gatherMetadata updated with `extraMeta`) into the temporary directory and
 // renames it into place. Create `out` before gathering so that an
 // unwritable destination fails at once.

@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "weft/core/exit_offset.h"
 #include "weft/core/rgb.h"
 #include "weft/core/shard.h"
 #include "weft/fiber/fiber_params.h"
@@ -99,27 +100,10 @@ inline int exitDistanceBin(double d) {
 }
 
 // M paths by where they leave the ply relative to where they entered, signed
-// (issue 47, docs/exit-point.md): the offset along the axis dz (ply radii, z
-// unwrapped across twist periods, positive along the entry frame's t) and the
-// angle around it dpsi (in [-pi, pi), positive from n towards b: on the unit
-// cylinder the arc length in ply radii), for each incident cell of the entry
-// frame: kExitOffsetTheta equal bands of theta_i (from n) times kExitOffsetPhi
-// of phi_i (from t towards b, [-pi, pi)). Per cell kExitOffsetSlots slots:
-// kExitOffsetAxialBins bins of dz (kExitOffsetAxialWidth wide, centred on 0)
-// times kExitOffsetAroundBins of dpsi, row-major, then one for paths farther
-// along the axis (and those that ran along it). A ply-level model that moves
-// the exit point (paper 8, "Limitations") samples from these.
-inline constexpr int kExitOffsetTheta = 4, kExitOffsetPhi = 8;
-inline constexpr int kExitOffsetAxialBins = 128, kExitOffsetAroundBins = 64;
-inline constexpr double kExitOffsetAxialWidth = 0.125;
-inline constexpr size_t kExitOffsetCells = static_cast<size_t>(kExitOffsetTheta) * kExitOffsetPhi;
-inline constexpr size_t kExitOffsetSlots =
-    static_cast<size_t>(kExitOffsetAxialBins) * kExitOffsetAroundBins + 1;
-
-// The incident cell of an entry-frame direction (upper hemisphere), and the
-// slot of an offset in a cell (kExitOffsetSlots - 1: beyond the axial range).
-size_t exitOffsetCell(const Vec3& wiLocal);
-size_t exitOffsetSlot(double dz, double dpsi);
+// (issue 47, docs/exit-point.md): per incident cell of the entry frame, the
+// M weight per slot of the offset (dz along the axis, dpsi around it), the
+// layout of core/exit_offset.h. A ply-level model that moves the exit point
+// (paper 8, "Limitations") samples from these.
 // The shape of the histogram's arrays: {theta, phi, slots, 3}.
 std::vector<size_t> exitOffsetShape();
 

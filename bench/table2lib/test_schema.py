@@ -41,17 +41,25 @@ class RoundTrip(unittest.TestCase):
 
     def test_older_files_lack_keys_and_keep_lacking_them(self):
         # Chunks made before --ref-parts record neither settings.ref_parts nor the reference's
-        # parts and seconds: read as None, written without them.
-        older = []
-        for path in CHUNK_FILES:
-            with open(path) as f:
-                if "ref_parts" not in json.load(f)["settings"]:
-                    older.append(path)
-        self.assertTrue(older)
-        for path in older:
+        # parts and seconds: read as None, written without them. (Every committed chunk has
+        # been made again since: one of them with those keys taken out stands for the old ones.)
+        with open(CHUNK_FILES[0]) as f:
+            data = json.load(f)
+        data["settings"].pop("ref_parts", None)
+        for key in ("parts", "seconds"):
+            data["fiber_reference"].pop(key, None)
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "older.json")
+            with open(path, "w") as f:
+                json.dump(data, f)
             chunk = schema.load_chunk(path)
-            self.assertIsNone(chunk.settings.ref_parts)
-            self.assertNotIn("ref_parts", schema.to_dict(chunk)["settings"])
+        self.assertIsNone(chunk.settings.ref_parts)
+        self.assertIsNone(chunk.fiber_reference.parts)
+        self.assertIsNone(chunk.fiber_reference.seconds)
+        written = schema.to_dict(chunk)
+        self.assertNotIn("ref_parts", written["settings"])
+        self.assertNotIn("parts", written["fiber_reference"])
+        self.assertNotIn("seconds", written["fiber_reference"])
 
 
 class Errors(unittest.TestCase):

@@ -508,6 +508,12 @@ py::array_t<T> ndarray(const std::vector<T>& values, std::vector<py::ssize_t> sh
     return a;
 }
 
+// The exit-offset histograms' shape (gather.h exitOffsetShape) as NumPy takes it.
+std::vector<py::ssize_t> exitOffsetArrayShape() {
+    const std::vector<size_t> shape = exitOffsetShape();
+    return {shape.begin(), shape.end()};
+}
+
 // (k, n) -> shard k of n (core/shard.h).
 Shard shardOf(const py::object& shard) {
     const py::sequence kn = sequenceArg(shard, "shard", 2, "a pair (k, n) of integers, 0 <= k < n");
@@ -594,9 +600,7 @@ py::dict gatherPartDict(const GatherSums& s, const GatherOptions& o, const std::
     d["sum_m"] = ndarray(s.sumM, {ti, pi, to, po, 3});
     d["sum_truncated"] = ndarray(s.sumTruncated, {ti, pi, 3});
     d["sum_exit_distance"] = ndarray(s.sumExitDistance, {kExitDistanceBins + 1, 3});
-    d["sum_exit_offset"] =
-        ndarray(s.sumExitOffset,
-                {kExitOffsetTheta, kExitOffsetPhi, static_cast<py::ssize_t>(kExitOffsetSlots), 3});
+    d["sum_exit_offset"] = ndarray(s.sumExitOffset, exitOffsetArrayShape());
     d["depth"] = ndarray(s.depth, {static_cast<py::ssize_t>(s.depth.size())});
     json stats = gatherInputs(o, s.fiberRadius, s.period, s.segments);
     stats["shard"] = {{"index", o.shard.index},
@@ -743,11 +747,9 @@ py::dict gatherDict(const GatherResult& r, const GatherOptions& o, const std::st
     d["exit_distance"] = r.exitDistance.empty()
                              ? py::object(py::none())
                              : py::object(ndarray(r.exitDistance, {kExitDistanceBins + 1, 3}));
-    d["exit_offset"] =
-        r.exitOffset.empty()
-            ? py::object(py::none())
-            : py::object(ndarray(r.exitOffset, {kExitOffsetTheta, kExitOffsetPhi,
-                                                static_cast<py::ssize_t>(kExitOffsetSlots), 3}));
+    d["exit_offset"] = r.exitOffset.empty()
+                           ? py::object(py::none())
+                           : py::object(ndarray(r.exitOffset, exitOffsetArrayShape()));
     if (o.anyColour) {
         const ColourPathColumns c = colourPathColumns(r.colourPaths);
         const auto n = static_cast<py::ssize_t>(r.colourPaths.size());

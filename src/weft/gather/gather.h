@@ -103,8 +103,8 @@ inline int exitDistanceBin(double d) {
 // (issue 47, docs/exit-point.md): per incident cell of the entry frame, the
 // M weight per slot of the offset (dz along the axis, dpsi around it), the
 // layout of core/exit_offset.h. A ply-level model that moves the exit point
-// (paper 8, "Limitations") samples from these.
-// The shape of the histogram's arrays: {theta, phi, slots, 3}.
+// (paper 8, "Limitations") samples from these. The arrays' shape:
+// {kExitOffsetTheta, kExitOffsetPhi, kExitOffsetSlots, 3}.
 std::vector<size_t> exitOffsetShape();
 
 // One channel of the M paths of a band of theta_i (all its phi_i cells) in

@@ -3,23 +3,30 @@
 //
 // Per incident cell (core/exit_offset.h) and channel, a piecewise-constant
 // density q_c(dz, dpsi | cell) over the offset of the exit point from the
-// entry point: dz along the axis in [-axialRange, axialRange) ply radii,
-// dpsi around it in [-pi, pi). Its bins are the gather's, merged
-// `axialMerge` x `aroundMerge` at a time (fromHistogram); the mass the
-// gather put beyond the axial range (at most 0.3 % of a preset's M light,
-// bench/results/exit-distance.md) is left out and the rest renormalised. A
-// cell and channel without M light has no density (hasDensity false): its
-// light leaves where it entered.
+// entry point: dz along the axis in ply radii, dpsi around it in [-pi, pi).
+// Its bins have edges of their own (Edges): fine near no offset, wide in the
+// heavy axial tails, every edge on the gather's grid of finer bins, which
+// fromHistogram merges. The mass the gather put beyond the outermost axial
+// edges (at most 0.3 % of a preset's M light, bench/results/exit-distance.md)
+// is left out and the rest renormalised. A cell and channel without M light
+// has no density (hasDensity false): its light leaves where it entered.
 //
-// sample() inverts the cumulative masses (rows of dz by binary search, then
-// the dpsi bins of that row), uniform within a bin; pdf() is exactly the
-// density it draws from, per unit dz dpsi.
+// A bin's mass is an integer (kMassScale for a whole cell and channel when
+// the table is made from a histogram): model.json stores exactly these, so a
+// table read from a file samples and evaluates bit for bit as the one the
+// fit made. sample() inverts the running sums of the masses (binary search),
+// uniform within the bin; pdf() is exactly the density it draws from, per
+// unit dz dpsi.
 //
-// Step 2 of the design: built and tested here; not yet read from or written
-// to model.json, nor used by the renderer.
+// The file form (model.json "exit_offset", docs/model-format.md):
+//   {"incident": {"theta_bands": 4, "phi_bands": 8},
+//    "dz_edges": [...] (ply radii), "dpsi_edges_pi": [...] (units of pi, -1 to 1),
+//    "masses": [cell][channel][bin] (integers, bins dz-major)}
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -29,21 +36,40 @@ namespace weft {
 
 class ExitOffsetTable {
   public:
+    // The masses of one cell and channel sum to this when made from a histogram.
+    static constexpr uint32_t kMassScale = 1000000;
+
+    // Bin edges, strictly increasing: dz in ply radii, dpsi in units of pi
+    // from -1 to 1 (so that the file holds them exactly).
+    struct Edges {
+        std::vector<double> dz, dpsiPi;
+    };
+    // The fit's default: |dz| at 0, 1/8, 1/4, 1/2, 3/4, 1, 1.5, 2, 3, 4, 6, 8
+    // (22 bins: the measured spread is 0.3-1.9 R with a long tail) and |dpsi|
+    // at 0, 1/16, 1/8, 1/4, 3/8, 1/2, 3/4, 1 pi (14 bins).
+    static Edges defaultEdges();
+
     ExitOffsetTable() = default;
     // `histogram`: the gather's (kExitOffsetCells, kExitOffsetSlots, 3) M
     // weights (gather.h GatherResult::exitOffset), each finite and >= 0;
-    // the merges divide kExitOffsetAxialBins and kExitOffsetAroundBins.
+    // `edges` on its grid (dz multiples of kExitOffsetAxialWidth within its
+    // axial range, dpsi multiples of 2 / kExitOffsetAroundBins, -1 to 1).
     // InputError naming `what` otherwise.
-    static ExitOffsetTable fromHistogram(const std::vector<double>& histogram, int axialMerge,
-                                         int aroundMerge, const std::string& what);
+    static ExitOffsetTable fromHistogram(const std::vector<double>& histogram, const Edges& edges,
+                                         const std::string& what);
 
-    int axialBins() const { return axialBins_; }
-    int aroundBins() const { return aroundBins_; }
-    double axialWidth() const { return axialWidth_; }
-    double axialRange() const { return 0.5 * axialBins_ * axialWidth_; }
-    double aroundWidth() const;
+    // The file form above; the reader names `source` and the JSON path of a
+    // bad value (InputError).
+    nlohmann::json toJson() const;
+    static ExitOffsetTable fromJson(const nlohmann::json& j, const std::string& source,
+                                    const std::string& path);
 
+    const Edges& edges() const { return edges_; }
+    int axialBins() const { return static_cast<int>(edges_.dz.size()) - 1; }
+    int aroundBins() const { return static_cast<int>(edges_.dpsiPi.size()) - 1; }
     bool hasDensity(size_t cell, int channel) const;
+    // A bin's mass over its cell and channel's total (0 without density).
+    double probability(size_t cell, int channel, int axialBin, int aroundBin) const;
 
     struct Offset {
         double dz = 0, dpsi = 0;
@@ -56,16 +82,15 @@ class ExitOffsetTable {
     size_t memoryBytes() const;
 
   private:
-    // The bin of (dz, dpsi), or -1 outside the range.
-    long binOf(double dz, double dpsi) const;
-    const float* cdfOf(size_t cell, int channel) const;
+    static ExitOffsetTable fromMasses(Edges edges, const std::vector<uint32_t>& masses);
+    size_t bins() const { return static_cast<size_t>(axialBins()) * aroundBins(); }
+    // Running sums of the masses of a cell and channel: bins() + 1 numbers from 0.
+    const uint32_t* runningOf(size_t cell, int channel) const;
+    double binArea(int axialBin, int aroundBin) const;
 
-    int axialBins_ = 0, aroundBins_ = 0;
-    double axialWidth_ = 0;
-    // Per cell and channel: the running sum of the bins' probabilities in
-    // row-major order (bins + 1 numbers from 0; the last about 1, or 0 for no
-    // density); a bin's probability is the difference of two.
-    std::vector<float> cdf_;
+    Edges edges_;
+    std::vector<double> dpsiEdges_;  // edges_.dpsiPi in radians
+    std::vector<uint32_t> running_;
 };
 
 }  // namespace weft

@@ -2,6 +2,7 @@
 // and the report it writes, and the errors for bad input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -12,6 +13,7 @@
 #include "cli_test_util.h"
 #include "weft/core/file.h"
 #include "weft/core/image_io.h"
+#include "weft/core/npy.h"
 #include "weft/yarn/yarn_model.h"
 
 namespace weft {
@@ -28,22 +30,80 @@ const char* const kShortConfig =
         "m_net": {"hidden": [8, 8], "steps": 200, "batch": 64}, "appearance_nodes": 3})";
 
 class FitCliTest : public testing::CliTestBase {
-protected:
+  protected:
     void SetUp() override {
         CliTestBase::SetUp();
-        const RunResult g = run("gather --preset fleece --paths 4000 --bins 4,8,6,12 --seed 1 --quiet --out rdm");
+        const RunResult g =
+            run("gather --preset fleece --paths 4000 --bins 4,8,6,12 --seed 1 --quiet --out rdm");
         ASSERT_EQ(g.status, 0) << g.err;
         writeFileAtomic(path("short.json"), kShortConfig);
     }
 };
+
+// "exit_offset": true (docs/exit-point.md): the model carries the gather's
+// exit offsets, each merged bin with its fine bins' share of the M weight
+// within the table's range (summed here from exit_offset.npy itself).
+TEST_F(FitCliTest, ExitOffsetTableComesFromTheGather) {
+    writeFileAtomic(path("offsets.json"), R"({"t_net": {"steps": 100, "batch": 64},
+        "m_net": {"hidden": [8, 8], "steps": 100, "batch": 64}, "exit_offset": true})");
+    const RunResult r =
+        run("fit --rdm rdm --out model.json --config offsets.json --no-report "
+            "--quiet");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(readFile(path("model.json"))).at("version"), 5);
+    const YarnModel model = loadYarnModel(path("model.json"));
+    ASSERT_TRUE(model.exitOffset.has_value());
+    const ExitOffsetTable& table = *model.exitOffset;
+    const std::vector<double> h =
+        npyToDoubles(readNpy(path("rdm/exit_offset.npy")), "exit_offset.npy");
+    ASSERT_EQ(h.size(), kExitOffsetCells * kExitOffsetSlots * 3);
+    const std::vector<double>& dz = table.edges().dz;
+    int checked = 0;
+    for (size_t cell = 0; cell < kExitOffsetCells; ++cell)
+        for (int c = 0; c < 3; ++c) {
+            // Per merged row of dz: the fine rows' weight, all the way round.
+            std::vector<double> rows(dz.size() - 1, 0.0);
+            double total = 0;
+            for (int i = 0; i < kExitOffsetAxialBins; ++i) {
+                const double z = (i + 0.5 - 0.5 * kExitOffsetAxialBins) * kExitOffsetAxialWidth;
+                const size_t row = std::upper_bound(dz.begin(), dz.end(), z) - dz.begin() - 1;
+                for (int j = 0; j < kExitOffsetAroundBins; ++j) {
+                    const double w = h[(cell * kExitOffsetSlots +
+                                        static_cast<size_t>(i) * kExitOffsetAroundBins + j) *
+                                           3 +
+                                       c];
+                    rows[row] += w;
+                    total += w;
+                }
+            }
+            ASSERT_EQ(table.hasDensity(cell, c), total > 0) << cell << " " << c;
+            if (!(total > 0)) continue;
+            ++checked;
+            for (size_t row = 0; row < rows.size(); ++row) {
+                double p = 0;
+                for (int j = 0; j < table.aroundBins(); ++j)
+                    p += table.probability(cell, c, static_cast<int>(row), j);
+                ASSERT_NEAR(p, rows[row] / total, 2e-5) << cell << " " << c << " " << row;
+            }
+        }
+    EXPECT_GT(checked, 48);  // 4000 paths reach most cells in every channel
+    // Not for an ablation, nor from a gather without exit offsets.
+    expectUserError(run("fit --rdm rdm --out x.json --config offsets.json --ablation naive "
+                        "--no-report --quiet"),
+                    {"exit_offset", "ablation"});
+    std::filesystem::remove(path("rdm/exit_offset.npy"));
+    expectUserError(run("fit --rdm rdm --out x.json --config offsets.json --no-report --quiet"),
+                    {"rdm", "no exit_offset.npy", "gather again"});
+}
 
 TEST_F(FitCliTest, ColourRangeFitsAModelForAnyColour) {
     ASSERT_EQ(run("gather --preset fleece --paths 6000 --bins 4,8,6,12 --seed 1 --any-colour "
                   "--quiet --out ac")
                   .status,
               0);
-    const RunResult r = run("fit --rdm ac --out any.json --config short.json --colour-range "
-                            "0.3,0.999 --colour-functions 3 --seed 3 --quiet");
+    const RunResult r =
+        run("fit --rdm ac --out any.json --config short.json --colour-range "
+            "0.3,0.999 --colour-functions 3 --seed 3 --quiet");
     ASSERT_EQ(r.status, 0) << r.err;
     const nlohmann::json summary = nlohmann::json::parse(r.out);
     EXPECT_EQ(summary.at("colour").at("functions"), 3);
@@ -96,14 +156,14 @@ TEST_F(FitCliTest, ColourRangeFitsAModelForAnyColour) {
                   "--width 12 --height 8 --out striped")
                   .status,
               0);
-    ASSERT_EQ(run("render striped/scene.json --mode neural --spp 2 --quiet --out s.exr").status,
-              0);
+    ASSERT_EQ(run("render striped/scene.json --mode neural --spp 2 --quiet --out s.exr").status, 0);
 
     expectUserError(run("fit --rdm rdm --out x.json --config short.json --colour-range 0.3,0.999"),
                     {"rdm/meta.json", "not an any-colour gather", "--any-colour"});
     expectUserError(run("fit --rdm ac --out x.json --colour-range 0.5,0.4"),
                     {"--colour-range", "0 < LO < HI <= 1"});
-    expectUserError(run("fit --rdm ac --out x.json --colour-range 0.5"), {"--colour-range", "LO,HI"});
+    expectUserError(run("fit --rdm ac --out x.json --colour-range 0.5"),
+                    {"--colour-range", "LO,HI"});
     expectUserError(run("fit --rdm ac --out x.json --colour-range 0.3,0.9 --colour-functions 20"),
                     {"--colour-functions = 20"});
     expectUserError(run("fit --rdm ac --out x.json --colour-functions 4"),
@@ -112,16 +172,17 @@ TEST_F(FitCliTest, ColourRangeFitsAModelForAnyColour) {
                     {"--colour-range", "--ablation"});
     // --recalibrate refits the calibration by colour from the recorded paths,
     // keeping the networks; an ordinary gather has none.
-    const RunResult re = run("fit --recalibrate any.json --rdm ac --out re.json --config short.json "
-                             "--no-report --quiet");
+    const RunResult re =
+        run("fit --recalibrate any.json --rdm ac --out re.json --config short.json "
+            "--no-report --quiet");
     ASSERT_EQ(re.status, 0) << re.err;
     const YarnModel again = loadYarnModel(path("re.json"));
     EXPECT_TRUE(again.mNet == model.mNet);
     ASSERT_EQ(again.colourCalibration.nodes.size(), 7u);
     EXPECT_EQ(again.colourCalibration.nodes[3].m, model.colourCalibration.nodes[3].m);
     EXPECT_TRUE(again.fit.contains("recalibrated"));
-    EXPECT_EQ(nlohmann::json::parse(re.out).at("colour").at("energy_calibration").at("nodes").size(),
-              7u);
+    EXPECT_EQ(
+        nlohmann::json::parse(re.out).at("colour").at("energy_calibration").at("nodes").size(), 7u);
     expectUserError(run("fit --rdm rdm --out x.json --recalibrate any.json"),
                     {"rdm/meta.json", "--any-colour"});
     EXPECT_FALSE(std::filesystem::exists(path("x.json")));
@@ -139,8 +200,8 @@ TEST_F(FitCliTest, WritesAValidModelAndItsReport) {
     EXPECT_NEAR(model.rLobe.tiltDeg, 37.01, 0.01);  // atan(pi * 0.24)
     EXPECT_EQ(model.rLobe.masking.size(), 4u);
     EXPECT_EQ(model.fit.at("rdm").at("paths"), 4000);
-    for (const char* file : {"errors.json", "loss.png", "slice-m-theta45-phi000.png",
-                             "slice-r-theta75-phi090.png"})
+    for (const char* file :
+         {"errors.json", "loss.png", "slice-m-theta45-phi000.png", "slice-r-theta75-phi090.png"})
         EXPECT_TRUE(std::filesystem::exists(path("model-report/") + file)) << file;
     const nlohmann::json errors = nlohmann::json::parse(readFile(path("model-report/errors.json")));
     EXPECT_DOUBLE_EQ(errors.at("m_rel_l2").get<double>(), model.fit.at("m_rel_l2").get<double>());
@@ -160,8 +221,9 @@ TEST_F(FitCliTest, WritesAValidModelAndItsReport) {
 
     // --recalibrate keeps the networks and R lobe and redoes steps 4-5 only;
     // on the same RDM and configuration that is the same calibration again.
-    const RunResult re = run("fit --recalibrate again.json --rdm rdm --out re.json --config short.json "
-                             "--no-report --quiet");
+    const RunResult re =
+        run("fit --recalibrate again.json --rdm rdm --out re.json --config short.json "
+            "--no-report --quiet");
     ASSERT_EQ(re.status, 0) << re.err;
     const YarnModel recalibrated = loadYarnModel(path("re.json"));
     EXPECT_TRUE(recalibrated.mNet == model.mNet);
@@ -199,8 +261,11 @@ TEST_F(FitCliTest, WritesAValidModelAndItsReport) {
 }
 
 TEST_F(FitCliTest, ReferenceAddsNoiseFloor) {
-    ASSERT_EQ(run("gather --preset fleece --paths 4000 --bins 4,8,6,12 --seed 2 --quiet --out ref").status, 0);
-    const RunResult r = run("fit --rdm rdm --reference ref --out m.json --config short.json --quiet");
+    ASSERT_EQ(run("gather --preset fleece --paths 4000 --bins 4,8,6,12 --seed 2 --quiet --out ref")
+                  .status,
+              0);
+    const RunResult r =
+        run("fit --rdm rdm --reference ref --out m.json --config short.json --quiet");
     ASSERT_EQ(r.status, 0) << r.err;
     const nlohmann::json errors = nlohmann::json::parse(readFile(path("m-report/errors.json")));
     const auto& floor = errors.at("reference").at("noise_floor");
@@ -223,7 +288,8 @@ TEST_F(FitCliTest, BadInputIsAClearError) {
     writeFileAtomic(path("bad.json"), R"({"m_net": {"stepz": 3}})");
     expectUserError(run("fit --rdm rdm --out m.json --config bad.json"), {"bad.json", "stepz"});
     writeFileAtomic(path("broken.json"), R"({"m_net": )");
-    expectUserError(run("fit --rdm rdm --out m.json --config broken.json"), {"broken.json", "malformed"});
+    expectUserError(run("fit --rdm rdm --out m.json --config broken.json"),
+                    {"broken.json", "malformed"});
     expectUserError(run("fit --out m.json"), {"--rdm"});
     std::filesystem::remove(path("rdm/rdm_m.npy"));
     expectUserError(run("fit --rdm rdm --out m.json --config short.json"), {"rdm_m.npy"});
@@ -263,8 +329,9 @@ TEST_F(FitCliTest, RefusesANetworkTheRendererCannotRunBeforeTraining) {
         EXPECT_FALSE(std::filesystem::exists(path("wide-model-report"))) << config;
     }
     // --recalibrate reads the configuration the same way.
-    expectUserError(run("fit --recalibrate missing.json --rdm rdm --out re.json --config wide.json"),
-                    {"energy_calibration_degree = 13"});
+    expectUserError(
+        run("fit --recalibrate missing.json --rdm rdm --out re.json --config wide.json"),
+        {"energy_calibration_degree = 13"});
 }
 
 // Networks at the evaluators' limits train, and the renderer loads the model:

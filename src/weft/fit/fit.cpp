@@ -134,6 +134,22 @@ NetworkWeights zeroTransmissionNetwork() {
     return net;
 }
 
+// Step 7: the exit-offset table of a full model of one colour (a
+// conditioned model's offsets would be those of one colour; an ablated
+// model's M lobe holds light that does not travel as M light does).
+ExitOffsetTable fitExitOffset(const RdmData& rdm, YarnAblation ablation, bool conditioned) {
+    if (conditioned || ablation != YarnAblation::None)
+        throw InputError("fit configuration: exit_offset is for a full model of one colour, not " +
+                         std::string(conditioned ? "a colour-conditioned one" : "an ablation"));
+    if (rdm.exitOffset.empty())
+        throw InputError(rdm.dir +
+                         ": no exit_offset.npy (a gather made before exit offsets were "
+                         "recorded, or a merge with such a part): gather again, or "
+                         "fit with \"exit_offset\": false");
+    return ExitOffsetTable::fromHistogram(rdm.exitOffset, ExitOffsetTable::defaultEdges(),
+                                          rdm.dir + "/exit_offset.npy");
+}
+
 }  // namespace
 
 size_t transmissionOutgoingBin(const RdmBins& bins, size_t incidentBin) {
@@ -308,6 +324,8 @@ FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_
     }
     if (!model.hasReflectionLobe())
         report.rRelL2 = report.rRelL2Uncalibrated = std::numeric_limits<double>::quiet_NaN();
+    // 7. Where M light leaves the ply: the gather's histogram, merged.
+    if (config.exitOffset) model.exitOffset = fitExitOffset(rdm, ablation, colour != nullptr);
 
     report.seconds = secondsSince(t0);
     model.fit = fitRecord(report, config, seed, rdm, ablation);

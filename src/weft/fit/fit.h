@@ -23,6 +23,9 @@
 //   5. Sampling: kappa_R = R energy / (R + M energy) of the model; beta_M,
 //      gamma_M, kappa_M minimise the second moment sum f_M^2 / pdf_M (the
 //      variance of the M estimator) over the RDM grid, by Nelder-Mead.
+//   6. (colour models) the appearance table; 7. (optional, config
+//      "exit_offset") where M light leaves the ply: the gather's exit offsets
+//      merged into ExitOffsetTable::defaultEdges() (docs/exit-point.md).
 // Errors use the one coarse-grid metric (metrics.h). The steps live in
 // train.h (1, 3), masking_fit.h (2), calibration.h (4), sampling_fit.h (5);
 // the configuration in fit_config.h, the model's maps in model_maps.h. This

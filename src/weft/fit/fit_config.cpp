@@ -44,7 +44,7 @@ NetworkTraining trainingFromJson(JsonObjectReader r, NetworkTraining t) {
 FitConfig FitConfig::fromJson(const nlohmann::json& j, const std::string& source) {
     JsonObjectReader r(j, source);
     r.allowKeys({"t_net", "m_net", "jitter", "masking", "threads", "energy_calibration_degree",
-                 "appearance_nodes"});
+                 "appearance_nodes", "exit_offset"});
     FitConfig c;
     if (r.has("t_net")) c.t = trainingFromJson(r.object("t_net"), c.t);
     if (r.has("m_net")) c.m = trainingFromJson(r.object("m_net"), c.m);
@@ -56,6 +56,7 @@ FitConfig FitConfig::fromJson(const nlohmann::json& j, const std::string& source
     if (r.has("appearance_nodes"))
         c.appearanceNodes =
             static_cast<int>(r.integer("appearance_nodes", {2, AppearanceTable::kMaxNodes}));
+    if (r.has("exit_offset")) c.exitOffset = r.boolean("exit_offset");
     if (r.has("threads"))
         c.threads = static_cast<int>(r.integer("threads", {0, 1024, "(0: all cores)"}));
     c.validate(source);
@@ -80,6 +81,7 @@ nlohmann::json FitConfig::toJson() const {
             {"masking", masking},
             {"energy_calibration_degree", calibrationDegree},
             {"appearance_nodes", appearanceNodes},
+            {"exit_offset", exitOffset},
             {"threads", threads}};
 }
 

@@ -34,6 +34,10 @@ struct FitConfig {
     int calibrationDegree = 8;  // energy calibration polynomial degree; -1: none
     // A colour model's appearance table: greys over the colour range (step 6).
     int appearanceNodes = AppearanceTable::kDefaultNodes;
+    // Where M light leaves the ply (model.json "exit_offset", version 5;
+    // docs/exit-point.md), from the gather's exit_offset.npy, for a full model
+    // of one colour. Off by default until the renderer uses it (issue 47).
+    bool exitOffset = false;
     int threads = 0;        // 0: all cores; never changes the result
 
     // Strict reading (unknown keys are errors naming the key); missing keys

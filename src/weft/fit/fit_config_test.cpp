@@ -30,7 +30,10 @@ TEST(FitConfig, DefaultsRoundTripAndStrictKeys) {
     EXPECT_EQ(partial.m.steps, defaults.m.steps);
     expectConfigError({{"epochs", 3}},
                       "fit.json: unknown key \"epochs\" (allowed: t_net, m_net, jitter, masking, "
-                      "threads, energy_calibration_degree, appearance_nodes)");
+                      "threads, energy_calibration_degree, appearance_nodes, exit_offset)");
+    EXPECT_FALSE(defaults.exitOffset);
+    EXPECT_TRUE(FitConfig::fromJson({{"exit_offset", true}}, "test").exitOffset);
+    expectConfigError({{"exit_offset", 1}}, "fit.json: exit_offset: expected");
     expectConfigError(
         {{"t_net", {{"epoch", 3}}}},
         "fit.json: t_net: unknown key \"epoch\" (allowed: hidden, steps, restarts, batch, "

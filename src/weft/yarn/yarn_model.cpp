@@ -491,9 +491,12 @@ nlohmann::json yarnModelToJson(const YarnModel& model) {
                        {"m", m}};
     }
     // Version 1 for a model of one colour, 2 for a conditioned one, 3 when it
-    // has an energy calibration by colour, 4 with an appearance table: older
-    // readers refuse what they cannot read.
-    const int version = model.appearance ? 4 : model.colour ? (byColour.empty() ? 2 : 3) : 1;
+    // has an energy calibration by colour, 4 with an appearance table, 5 with
+    // an exit-offset table: older readers refuse what they cannot read.
+    const int version = model.exitOffset   ? 5
+                        : model.appearance ? 4
+                        : model.colour     ? (byColour.empty() ? 2 : 3)
+                                           : 1;
     json document = {{"format", kYarnModelFormat},
                      {"version", version},
                      {"fiber", model.fiber.toJson()},
@@ -512,6 +515,7 @@ nlohmann::json yarnModelToJson(const YarnModel& model) {
         document["ablation"] = yarnAblationName(model.ablation);
     if (model.colour) document["colour"] = model.colour->toJson();
     if (model.appearance) document["appearance"] = model.appearance->toJson();
+    if (model.exitOffset) document["exit_offset"] = model.exitOffset->toJson();
     return document;
 }
 
@@ -533,7 +537,11 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
                               " (supported: 1 to " + std::to_string(kYarnModelVersion) + ")");
     // energy_calibration may be absent (files written before it existed);
     // ablation is absent for the full model; colour needs version 2.
-    if (version >= 4)
+    if (version >= 5)
+        r.allowKeys({"format", "version", "ablation", "fiber", "ply", "t_net", "m_net", "r_lobe",
+                     "sampling", "energy_calibration", "fit", "colour", "appearance",
+                     "exit_offset"});
+    else if (version >= 4)
         r.allowKeys({"format", "version", "ablation", "fiber", "ply", "t_net", "m_net", "r_lobe",
                      "sampling", "energy_calibration", "fit", "colour", "appearance"});
     else if (version >= 2)
@@ -547,9 +555,11 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
     model.fiber = FiberParams::fromJson(r.value("fiber"), source, "fiber");
     model.ply = readPly(r);
     model.tNet = readModelNetwork(r, "t_net", 3, 1);
-    // Version 3 exists for a conditioned model's calibration by colour: the
-    // writer writes it only with a colour block, which it requires.
-    if (version >= 3 && !r.has("colour"))
+    // Versions 3 and 4 exist for a conditioned model's calibration by colour
+    // and appearance table: the writer writes them only with a colour block,
+    // which they require (version 5 is for the exit-offset table, of a model
+    // of one colour).
+    if ((version == 3 || version == 4) && !r.has("colour"))
         r.fail("colour", "missing: a version " + std::to_string(version) +
                              " model is a colour-conditioned one (its energy_calibration by "
                              "colour); a model of one colour is version 1");
@@ -567,6 +577,16 @@ YarnModel yarnModelFromJson(const nlohmann::json& j, const std::string& source) 
         model.appearance = AppearanceTable::fromJson(r.value("appearance"), source);
         checkAppearanceSpansRange(*model.appearance, model.colour->range(),
                                   source + ": appearance");
+    }
+    if (version >= 5 && r.has("exit_offset")) {
+        // Its densities are those of the gathered colour: a conditioned
+        // model, drawn at any colour, has none yet (docs/exit-point.md).
+        if (model.colour)
+            r.fail("exit_offset",
+                   "a colour-conditioned model cannot hold one (its offsets are "
+                   "those of one colour)");
+        model.exitOffset =
+            ExitOffsetTable::fromJson(r.value("exit_offset"), source, r.pathOf("exit_offset"));
     }
     return model;
 }

@@ -24,9 +24,12 @@
 //   appearance  version 4, optional, conditioned models only: the colour the
 //             yarn looks at greys across the colour range (appearance_table.h),
 //             which "appearance" in a scene inverts to a C_TT.
-// Version 1 to 3 files still load; the writer writes version 1 unless the
+//   exit_offset  version 5, optional, models of one colour only: where the
+//             ply's multiply scattered light leaves it relative to where it
+//             entered (exit_offset_table.h; docs/exit-point.md).
+// Version 1 to 4 files still load; the writer writes version 1 unless the
 // model is conditioned, 2 for a conditioned model without a calibration, 3
-// with one, 4 with an appearance table.
+// with one, 4 with an appearance table, 5 with an exit-offset table.
 // Networks: {"layers": [{"weight": [[in numbers] x out rows], "bias": [out],
 // "prelu": [out] or null}, ...], "output": "sigmoid" | "exp" | "identity"};
 // layer l computes y = W x + b, then the PReLU when present. Network inputs
@@ -44,12 +47,13 @@
 #include "weft/yarn/appearance_table.h"
 #include "weft/yarn/colour_basis.h"
 #include "weft/yarn/energy_calibration.h"
+#include "weft/yarn/exit_offset_table.h"
 #include "weft/yarn/network.h"
 
 namespace weft {
 
 inline constexpr const char* kYarnModelFormat = "weft-yarn-model";
-inline constexpr int kYarnModelVersion = 4;  // the newest; 1 to 3 are read too
+inline constexpr int kYarnModelVersion = 5;  // the newest; 1 to 4 are read too
 
 // The R lobe (paper eq. 8): (1 - P(T|wi)) S_f(wi~, wo~) in the surface fiber
 // frame (tangent tilted by tiltDeg = atan(pi alpha) about n), zero unless both
@@ -108,6 +112,10 @@ struct YarnModel {
     // A conditioned model's appearance at greys spanning its colour range
     // (version 4; computeAppearanceTable in yarn_appearance.h makes it).
     std::optional<AppearanceTable> appearance;
+    // Where M light leaves the ply (version 5; `weft fit` makes it from the
+    // gather's exit offsets when its configuration asks). None: it leaves
+    // where it entered, as in the paper.
+    std::optional<ExitOffsetTable> exitOffset;
 
     // What the renderer needs beyond the file's syntax (InputError naming the
     // key): the networks' shapes (t_net 3 -> 1, m_net 6 -> 3) and output

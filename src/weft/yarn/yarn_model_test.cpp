@@ -13,6 +13,7 @@
 
 #include "weft/core/error.h"
 #include "weft/core/file.h"
+#include "weft/core/json_file.h"
 #include "weft/core/rng.h"
 #include "weft/core/test_util.h"
 #include "weft/yarn/material_preset.h"
@@ -67,9 +68,9 @@ void expectSameNetwork(const NetworkWeights& a, const NetworkWeights& b) {
     for (size_t l = 0; l < a.layers.size(); ++l) {
         const NetworkLayer &la = a.layers[l], &lb = b.layers[l];
         EXPECT_EQ(la.hasPrelu(), lb.hasPrelu()) << "layer " << l;
-        for (const auto& [va, vb] : {std::pair{&la.weight, &lb.weight},
-                                     std::pair{&la.bias, &lb.bias},
-                                     std::pair{&la.prelu, &lb.prelu}}) {
+        for (const auto& [va, vb] :
+             {std::pair{&la.weight, &lb.weight}, std::pair{&la.bias, &lb.bias},
+              std::pair{&la.prelu, &lb.prelu}}) {
             ASSERT_EQ(va->size(), vb->size()) << "layer " << l;
             for (size_t k = 0; k < va->size(); ++k)
                 ASSERT_EQ(std::bit_cast<uint32_t>((*va)[k]), std::bit_cast<uint32_t>((*vb)[k]))
@@ -347,8 +348,8 @@ TEST(YarnModel, NetworksMustStayFiniteOverTheirDomain) {
 
 TEST(YarnModel, VersionAndFormat) {
     json j = yarnModelToJson(sampleModel());
-    j["version"] = 5;
-    expectModelError(j, {"version: unsupported version 5 (supported: 1 to 4)"});
+    j["version"] = 6;
+    expectModelError(j, {"version: unsupported version 6 (supported: 1 to 5)"});
     j["version"] = 0;
     expectModelError(j, {"version: unsupported version 0"});
     // Version 2 adds the optional "colour" block; without it a file reads the same.
@@ -370,6 +371,54 @@ TEST(YarnModel, Version3NeedsItsColourBlock) {
     EXPECT_NO_THROW(yarnModelFromJson(j, "model.json"));
     EXPECT_NO_THROW(
         loadYarnModel(std::string(WEFT_SOURCE_DIR) + "/fuzz/seeds/model/conditioned-v3.json"));
+}
+
+// Version 5's exit-offset table (docs/exit-point.md): written only with the
+// table, read back bit for bit; refused in an older version's file and in a
+// colour-conditioned model.
+TEST_F(YarnModelFile, ExitOffsetTableRoundTrips) {
+    // One cell and channel with mass: a blob around dz = 0.5 in cell 9, red.
+    std::vector<double> histogram(kExitOffsetCells * kExitOffsetSlots * 3, 0.0);
+    for (int i = 60; i < 72; ++i)
+        for (int j = 20; j < 40; ++j)
+            histogram[(9 * kExitOffsetSlots + static_cast<size_t>(i) * kExitOffsetAroundBins + j) *
+                      3] = 1.0 + (i + j) % 5;
+    YarnModel model = sampleModel();
+    model.exitOffset =
+        ExitOffsetTable::fromHistogram(histogram, ExitOffsetTable::defaultEdges(), "test");
+    saveYarnModel(model, path("model.json"));
+    const json j = readJsonFile(path("model.json"));
+    EXPECT_EQ(j.at("version"), 5);
+    EXPECT_EQ(j.at("exit_offset").at("masses").size(), kExitOffsetCells);
+    const YarnModel back = loadYarnModel(path("model.json"));
+    expectSameModel(model, back);
+    ASSERT_TRUE(back.exitOffset.has_value());
+    EXPECT_EQ(back.exitOffset->toJson(), model.exitOffset->toJson());
+    EXPECT_TRUE(back.exitOffset->hasDensity(9, 0));
+    EXPECT_FALSE(back.exitOffset->hasDensity(9, 1));
+    saveYarnModel(back, path("again.json"));
+    EXPECT_EQ(readFile(path("model.json")), readFile(path("again.json")));
+    // Without the table the writer stays at version 1.
+    EXPECT_EQ(yarnModelToJson(sampleModel()).at("version"), 1);
+
+    json older = j;
+    older["version"] = 4;
+    expectModelError(older, {"unknown key \"exit_offset\""});
+    json bad = j;
+    bad["exit_offset"]["masses"][9][0][3] = -1;
+    expectModelError(bad, {"exit_offset.masses[9][0][3]", "integer in [0, 4294967295]"});
+    json conditioned =
+        readJsonFile(std::string(WEFT_SOURCE_DIR) + "/fuzz/seeds/model/conditioned-v3.json");
+    conditioned["version"] = 5;
+    conditioned["exit_offset"] = j.at("exit_offset");
+    expectModelError(conditioned, {"exit_offset", "colour-conditioned"});
+    // The fuzzer's seed of a version 5 file (4 x 2 bins) reads.
+    const YarnModel seed =
+        loadYarnModel(std::string(WEFT_SOURCE_DIR) + "/fuzz/seeds/model/exit-offset-v5.json");
+    ASSERT_TRUE(seed.exitOffset.has_value());
+    EXPECT_EQ(seed.exitOffset->axialBins(), 4);
+    EXPECT_FALSE(seed.exitOffset->hasDensity(0, 0));
+    EXPECT_TRUE(seed.exitOffset->hasDensity(0, 1));
 }
 
 TEST(YarnModel, OutOfRange) {

@@ -601,6 +601,7 @@ py::dict gatherPartDict(const GatherSums& s, const GatherOptions& o, const std::
     d["sum_truncated"] = ndarray(s.sumTruncated, {ti, pi, 3});
     d["sum_exit_distance"] = ndarray(s.sumExitDistance, {kExitDistanceBins + 1, 3});
     d["sum_exit_offset"] = ndarray(s.sumExitOffset, exitOffsetArrayShape());
+    d["sum_m_exit"] = ndarray(s.sumMExit, {ti, pi, to, po, 3});
     d["depth"] = ndarray(s.depth, {static_cast<py::ssize_t>(s.depth.size())});
     json stats = gatherInputs(o, s.fiberRadius, s.period, s.segments);
     stats["shard"] = {{"index", o.shard.index},
@@ -750,6 +751,8 @@ py::dict gatherDict(const GatherResult& r, const GatherOptions& o, const std::st
     d["exit_offset"] = r.exitOffset.empty()
                            ? py::object(py::none())
                            : py::object(ndarray(r.exitOffset, exitOffsetArrayShape()));
+    d["rdm_m_exit"] = r.rdmMExit.empty() ? py::object(py::none())
+                                         : py::object(ndarray(r.rdmMExit, {ti, pi, to, po, 3}));
     if (o.anyColour) {
         const ColourPathColumns c = colourPathColumns(r.colourPaths);
         const auto n = static_cast<py::ssize_t>(r.colourPaths.size());

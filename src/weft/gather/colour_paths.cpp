@@ -245,6 +245,7 @@ RecolouredGather recolourGather(const std::string& dir, const Rgb& cTT) {
     // The records do not keep where paths left the ply: no exit distances.
     sums.sumExitDistance.clear();
     sums.sumExitOffset.clear();
+    sums.sumMExit.clear();
     const GatherCounts counts = readGatherCounts(f);
     sums.count = counts.count;
     sums.countT = counts.countT;

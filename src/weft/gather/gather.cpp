@@ -61,6 +61,7 @@ GatherSums zeroSums(const GatherOptions& o, const PlyGeometry& ply,
     s.sumExitOffset.assign(kExitOffsetCells * kExitOffsetSlots * 3, 0);
     s.sumR.assign(nIn * nOut * 3, 0);
     s.sumM.assign(nIn * nOut * 3, 0);
+    s.sumMExit.assign(nIn * nOut * 3, 0);
     s.depth.assign(static_cast<size_t>(o.maxDepth) + 2, 0);
     s.plyLines = tracer.centreLines();
     s.period = tracer.period();
@@ -115,6 +116,7 @@ GatherSums gatherSums(const GatherOptions& o) {
     const PlyGeometry ply = gatherPly(o);
     const PeriodicPlyTracer tracer(ply, o.segmentsPerTwist);
     const RdmBins& bins = o.bins;
+    const size_t nOut = bins.outgoingCount();
     GatherSums sums = zeroSums(o, ply, tracer);
     sums.firstPath = o.shard.begin(o.paths);
     sums.endPath = o.shard.end(o.paths);
@@ -213,10 +215,11 @@ GatherSums gatherSums(const GatherOptions& o) {
                     ColourPath path;
                     path.incidentBin = static_cast<int32_t>(binIn);
                     path.ttEvents = ttEvents;
+                    Vec3 woLocal;  // in the entry frame
                     if (truncatedPath) {
                         path.kind = ColourPath::Truncated;
                     } else {
-                        const Vec3 woLocal = entry.toLocal(dir);
+                        woLocal = entry.toLocal(dir);
                         path.kind = depth == 1 && woLocal.z > 0 ? ColourPath::R : ColourPath::M;
                         path.outgoingBin = static_cast<int32_t>(bins.outgoingBin(woLocal));
                     }
@@ -231,6 +234,14 @@ GatherSums gatherSums(const GatherOptions& o) {
                             static_cast<size_t>(exitDistanceBin(std::hypot(dz, dpsi))) * 3;
                         const size_t slot =
                             (offsetCell * kExitOffsetSlots + exitOffsetSlot(dz, dpsi)) * 3;
+                        // wo in the exit frame: the entry frame turned by dpsi
+                        // about the axis (an axial exit, without a point on
+                        // the side, keeps the entry frame).
+                        const double psiExit = std::isfinite(exitPoint.z) ? psi + dpsi : psi;
+                        const Frame exit =
+                            yarnFrame(t, Vec3{std::cos(psiExit), std::sin(psiExit), 0.0});
+                        const size_t cellExit =
+                            (binIn * nOut + bins.outgoingBin(exit.toLocal(dir))) * 3;
                         // The weight for the gather's own colour (any colour: W0 C_TT^k,
                         // as addColourPath gives the RDM).
                         for (int c = 0; c < 3; ++c) {
@@ -238,6 +249,7 @@ GatherSums gatherSums(const GatherOptions& o) {
                                 o.anyColour ? path.weightFor(o.fiber.cTT, c) : weight[c]);
                             atomicAdd(sums.sumExitDistance[bin + c], w);
                             atomicAdd(sums.sumExitOffset[slot + c], w);
+                            atomicAdd(sums.sumMExit[cellExit + c], w);
                         }
                     }
                     if (!o.anyColour) {
@@ -290,6 +302,7 @@ GatherResult normaliseGather(GatherSums sums, const GatherOptions& o, int64_t sh
     r.truncated.assign(nIn * 3, 0.0);
     r.rdmR.assign(sums.sumR.size(), 0.0f);
     r.rdmM.assign(sums.sumM.size(), 0.0f);
+    r.rdmMExit.assign(sums.sumMExit.size(), 0.0f);
     double truncatedTotal[3] = {0, 0, 0};
     for (size_t i = 0; i < nIn; ++i) {
         const int64_t count = sums.count[i];
@@ -305,6 +318,8 @@ GatherResult normaliseGather(GatherSums sums, const GatherOptions& o, int64_t sh
                 const size_t cell = (i * nOut + j) * 3 + c;
                 r.rdmR[cell] = static_cast<float>(sums.sumR[cell] * norm);
                 r.rdmM[cell] = static_cast<float>(sums.sumM[cell] * norm);
+                if (!r.rdmMExit.empty())
+                    r.rdmMExit[cell] = static_cast<float>(sums.sumMExit[cell] * norm);
             }
         }
     }
@@ -369,6 +384,8 @@ void writeGather(const GatherResult& r, const GatherOptions& o, TempDirCommit& o
     // 6 MB: not in each node of a family's records-only gathers.
     if (all && !r.exitOffset.empty())
         writeNpy(file("exit_offset.npy"), r.exitOffset.data(), exitOffsetShape());
+    if (all && !r.rdmMExit.empty())
+        writeNpy(file("rdm_m_exit.npy"), r.rdmMExit.data(), {ti, pi, to, po, 3});
     if (all) writePlyLines(file("ply.txt"), r.plyLines, r.fiberRadius);
     if (o.anyColour) writeColourPaths(out.path(), r.colourPaths);
     nlohmann::json meta = gatherMetadata(r, o);
@@ -547,6 +564,10 @@ nlohmann::json gatherMetadata(const GatherResult& r, const GatherOptions& o) {
           {"truncated", "float64 (TI,PI,3): weight of paths cut at max_depth / count"},
           {"depth",
            "int64 (max_depth+2): paths by number of fiber interactions; last: truncated"}}}});
+    if (!r.rdmMExit.empty())
+        meta["arrays"]["rdm_m_exit"] =
+            "float32 (TI,PI,TO,PO,3): rdm_m with wo in the exit frame, the yarn frame where "
+            "the path left the ply (gather.h)";
     if (!r.exitDistance.empty()) {
         meta["arrays"]["exit_distance"] =
             "float64 (" + std::to_string(kExitDistanceBins + 1) +

@@ -147,6 +147,10 @@ struct GatherResult {
     std::vector<int64_t> count, countT;   // (TI, PI)
     std::vector<double> pT;                // (TI, PI), 0 where count == 0
     std::vector<float> rdmR, rdmM;         // (TI, PI, TO, PO, 3)
+    // (TI, PI, TO, PO, 3): RDM_M with wo in the exit frame (the yarn frame
+    // where the path left the ply, docs/exit-point.md) instead of the entry
+    // frame; empty where not recorded.
+    std::vector<float> rdmMExit;
     std::vector<double> truncated;         // (TI, PI, 3): truncated weight / count
     std::vector<int64_t> depth;            // depth histogram, 0..maxDepth, then truncated
     // (kExitDistanceBins + 1, 3): M weight per path exiting at each distance
@@ -175,6 +179,9 @@ struct GatherSums {
     // 2^-32 units; empty where not recorded (recoloured gathers, parts written
     // before it existed).
     std::vector<int64_t> sumExitOffset;
+    // (TI, PI, TO, PO, 3): sumM binned by wo in the exit frame; empty where
+    // not recorded (as sumExitOffset).
+    std::vector<int64_t> sumMExit;
     std::vector<int64_t> depth;           // depth histogram, 0..maxDepth, then truncated
     int64_t rays = 0, axialPaths = 0, depthSum = 0;
     double seconds = 0, walkSeconds = 0;  // of the walks and their set-up
@@ -213,7 +220,8 @@ enum class GatherFiles { All, Records };
 inline constexpr const char* kGatherRecordsOnly = "records";
 
 // Writes count.npy, count_t.npy, p_t.npy, rdm_r.npy, rdm_m.npy, truncated.npy,
-// depth.npy, exit_distance.npy, exit_offset.npy (not with Records), ply.txt,
+// depth.npy, exit_distance.npy, exit_offset.npy and rdm_m_exit.npy (not with
+// Records), ply.txt,
 // the paths_*.npy of an any-colour gather and meta.json
 // (gatherMetadata updated with `extraMeta`) into the temporary directory and
 // renames it into place. Create `out` before gathering so that an

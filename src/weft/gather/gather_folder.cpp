@@ -78,10 +78,11 @@ std::vector<std::string> GatherFolder::files() const {
                                       "ply.txt"};
     if (kind == GatherFolderKind::Gather)
         names.insert(names.end(), {"p_t.npy", "rdm_r.npy", "rdm_m.npy", "truncated.npy",
-                                   "exit_distance.npy", "exit_offset.npy"});
+                                   "exit_distance.npy", "exit_offset.npy", "rdm_m_exit.npy"});
     else
-        names.insert(names.end(), {"sum_r.npy", "sum_m.npy", "sum_truncated.npy",
-                                   "sum_exit_distance.npy", "sum_exit_offset.npy"});
+        names.insert(names.end(),
+                     {"sum_r.npy", "sum_m.npy", "sum_truncated.npy", "sum_exit_distance.npy",
+                      "sum_exit_offset.npy", "sum_m_exit.npy"});
     if (options.anyColour)
         names.insert(names.end(), {"paths_bins.npy", "paths_kind.npy", "paths_weight.npy"});
     std::vector<std::string> paths;

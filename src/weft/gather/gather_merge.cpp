@@ -53,6 +53,8 @@ void writeGatherPart(const GatherSums& s, const GatherOptions& o, TempDirCommit&
     writeNpy(file("sum_exit_distance.npy"), s.sumExitDistance.data(), {kExitDistance, 3});
     if (!s.sumExitOffset.empty())
         writeNpy(file("sum_exit_offset.npy"), s.sumExitOffset.data(), exitOffsetShape());
+    if (!s.sumMExit.empty())
+        writeNpy(file("sum_m_exit.npy"), s.sumMExit.data(), {ti, pi, to, po, 3});
     writeNpy(file("depth.npy"), s.depth.data(), {s.depth.size()});
     writePlyLines(file("ply.txt"), s.plyLines, s.fiberRadius);
     if (o.anyColour) writeColourPaths(out.path(), s.colourPaths);
@@ -77,6 +79,8 @@ void writeGatherPart(const GatherSums& s, const GatherOptions& o, TempDirCommit&
            "int64 (TI,PI): this shard's T paths (no fiber interaction) per incident bin"},
           {"sum_r", "int64 (TI,PI,TO,PO,3): summed R path weights, in units of 2^-32"},
           {"sum_m", "int64 (TI,PI,TO,PO,3): summed M path weights, in units of 2^-32"},
+          {"sum_m_exit",
+           "int64 (TI,PI,TO,PO,3): sum_m with wo in the exit frame (gather.h), 2^-32 units"},
           {"sum_truncated",
            "int64 (TI,PI,3): summed weight of paths cut at max_depth, 2^-32 units"},
           {"sum_exit_distance",
@@ -154,13 +158,17 @@ MergedGather mergeGatherParts(const std::vector<std::string>& partDirs) {
         addInt64Npy(file("sum_exit_distance.npy"), {kExitDistance, 3}, sums.sumExitDistance);
         // Parts written before the exit offsets were recorded have none: the
         // merge then has none either.
-        if (!sums.sumExitOffset.empty()) {
+        const auto addOptional = [&](const char* name, const std::vector<size_t>& shape,
+                                     std::vector<int64_t>& into) {
             std::error_code ec;
-            if (std::filesystem::exists(file("sum_exit_offset.npy"), ec))
-                addInt64Npy(file("sum_exit_offset.npy"), exitOffsetShape(), sums.sumExitOffset);
+            if (into.empty()) return;
+            if (std::filesystem::exists(file(name), ec))
+                addInt64Npy(file(name), shape, into);
             else
-                sums.sumExitOffset.clear();
-        }
+                into.clear();
+        };
+        addOptional("sum_exit_offset.npy", exitOffsetShape(), sums.sumExitOffset);
+        addOptional("sum_m_exit.npy", {ti, pi, to, po, 3}, sums.sumMExit);
         if (m.options.anyColour) {
             const std::vector<ColourPath> recorded = readColourPaths(p, counts);
             sums.colourPaths.insert(sums.colourPaths.end(), recorded.begin(), recorded.end());

@@ -130,8 +130,7 @@ TEST(PlyTracer, FindsFibersSkipsTheExcludedOneAndWrapsPeriodically) {
     // Downwards, the same line backwards: the shift counts down.
     const PlyTraceHit back = empty.trace(start, -steep, 0, 10000);
     const double tBack = (qb + std::sqrt(qb * qb - qa * qc)) / qa;
-    EXPECT_NEAR(back.point.z + back.periodShift * empty.period(), start.z - steep.z * tBack,
-                1e-6);
+    EXPECT_NEAR(back.point.z + back.periodShift * empty.period(), start.z - steep.z * tBack, 1e-6);
     EXPECT_LT(back.periodShift, -5);
 }
 
@@ -145,7 +144,7 @@ TEST(Gather, ExitDistanceSummaryOfAKnownHistogram) {
     EXPECT_DOUBLE_EQ(e.weight, 5);
     EXPECT_DOUBLE_EQ(e.mean, (1 * 3.5 + 3 * 5.5) / 4 * w);
     EXPECT_DOUBLE_EQ(e.beyondFraction, 0.2);
-    EXPECT_DOUBLE_EQ(e.median, (5 + 1.5 / 3) * w);  // 2.5 of 5: 1.5 into bin 5's 3
+    EXPECT_DOUBLE_EQ(e.median, (5 + 1.5 / 3) * w);   // 2.5 of 5: 1.5 into bin 5's 3
     EXPECT_DOUBLE_EQ(e.p90, kExitDistanceBins * w);  // 4.5 of 5: the last bin
     EXPECT_EQ(summarizeExitDistance(h, 0).weight, 0);
     EXPECT_EQ(exitDistanceBin(0.0), 0);
@@ -169,7 +168,8 @@ TEST(Gather, ExitDistancesHoldTheMWeightAndCrossTwistPeriods) {
                            r.bins.outgoingSolidAngle(j) * r.count[i] / o.paths;
         for (int b = 0; b <= kExitDistanceBins; ++b) {
             fromHistogram += r.exitDistance[b * 3 + c];
-            if (b * kExitDistanceBinWidth > r.stats.period) beyondPeriod += r.exitDistance[b * 3 + c];
+            if (b * kExitDistanceBinWidth > r.stats.period)
+                beyondPeriod += r.exitDistance[b * 3 + c];
         }
         EXPECT_NEAR(fromHistogram, fromRdm, 1e-5 * fromRdm) << "channel " << c;
         EXPECT_GT(fromRdm, 0.1);
@@ -252,6 +252,45 @@ TEST(Gather, ExitOffsetsHoldEachIncidentCellsMWeightAndMirrorWithoutTwist) {
     EXPECT_LT(std::abs(mean), 4 * sd / std::sqrt(paths)) << "mean " << mean << ", sd " << sd;
 }
 
+// RDM_M binned by wo in the exit frame (docs/exit-point.md): the same paths'
+// energy per incident bin as RDM_M in the entry frame, and none of it below
+// the exit point's horizon (a path leaves through the cylinder's side,
+// outwards), where the entry frame sees a good part of it (light that
+// crossed the ply and left on its far side).
+TEST(Gather, ExitFrameMHoldsTheSameEnergyAndLeavesOutwards) {
+    GatherOptions o =
+        smallGather(testing::table3Fiber("fleece"), {80, 0.3, 0.25}, testing::scaled(20000));
+    o.bins = {3, 8, 6, 12};  // theta_o bins of 30 degrees: the horizon is an edge
+    const GatherResult r = gatherRdm(o);
+    const size_t nIn = r.bins.incidentCount(), nOut = r.bins.outgoingCount();
+    ASSERT_EQ(r.rdmMExit.size(), r.rdmM.size());
+    for (int c = 0; c < 3; ++c) {
+        double total = 0, belowEntry = 0, belowExit = 0;
+        for (size_t i = 0; i < nIn; ++i) {
+            double entry = 0, exit = 0;
+            for (size_t j = 0; j < nOut; ++j) {
+                const size_t cell = (i * nOut + j) * 3 + c;
+                const double omega = r.bins.outgoingSolidAngle(j);
+                entry += r.rdmM[cell] * omega;
+                exit += r.rdmMExit[cell] * omega;
+                if (r.bins.outgoingCentre(j).z < 0) {
+                    belowEntry += r.rdmM[cell] * omega * r.count[i];
+                    belowExit += r.rdmMExit[cell] * omega * r.count[i];
+                }
+            }
+            EXPECT_NEAR(exit, entry, 1e-5 * entry + 1e-12) << "incident bin " << i;
+            total += entry * r.count[i];
+        }
+        ASSERT_GT(total, 0.0);
+        EXPECT_GT(belowEntry / total, 0.05) << "channel " << c;
+        // Only paths that ran out along the axis keep the entry frame.
+        EXPECT_LE(belowExit / total, static_cast<double>(r.stats.axialPaths) / o.paths + 1e-9)
+            << "channel " << c;
+        std::printf("channel %d: M below the horizon, entry frame %.3f, exit frame %.2g\n", c,
+                    belowEntry / total, belowExit / total);
+    }
+}
+
 TEST(Gather, LosslessFiberConservesEnergyInEveryIncidentBin) {
     GatherOptions o = smallGather(losslessFiber(), {80, 0.3, 0.2}, testing::scaled(40000));
     o.maxDepth = 8;  // some truncation, to check its bookkeeping too
@@ -303,7 +342,8 @@ TEST(Gather, StraightPlyTransmissionMatchesTwoDimensionalGeometry) {
             const double tExit = -2 * (ex * dx + ey * dy) / len2;
             bool hit = false;
             for (const auto& c : ply.centres) {
-                const double s = std::clamp(((c[0] - ex) * dx + (c[1] - ey) * dy) / len2, 0.0, tExit);
+                const double s =
+                    std::clamp(((c[0] - ex) * dx + (c[1] - ey) * dy) / len2, 0.0, tExit);
                 if (std::hypot(ex + s * dx - c[0], ey + s * dy - c[1]) < rf) {
                     hit = true;
                     break;
@@ -313,7 +353,8 @@ TEST(Gather, StraightPlyTransmissionMatchesTwoDimensionalGeometry) {
         }
         const double pTest = static_cast<double>(missed) / perBin;
         const double p = 0.5 * (pTest + r.pT[i]);
-        const double se = std::sqrt(std::max(p * (1 - p), 1e-4) * (1.0 / perBin + 1.0 / r.count[i]));
+        const double se =
+            std::sqrt(std::max(p * (1 - p), 1e-4) * (1.0 / perBin + 1.0 / r.count[i]));
         const double z = std::fabs(r.pT[i] - pTest) / se;
         worstZ = std::max(worstZ, z);
         EXPECT_LT(z, 4.5) << "incident bin " << i << ": gather " << r.pT[i] << " vs 2D " << pTest;
@@ -346,7 +387,8 @@ TEST(Gather, SingleFiberFirstBounceEnergyIsTheFiberAlbedo) {
             const double cosTheta = c1 + (c0 - c1) * rng.uniform();
             const double sinTheta = std::sqrt(1 - cosTheta * cosTheta);
             const double phi = -kPi + (pi + rng.uniform()) * kTwoPi / bins.phiI;
-            const double wt = sinTheta * std::cos(phi), wb = sinTheta * std::sin(phi), wn = cosTheta;
+            const double wt = sinTheta * std::cos(phi), wb = sinTheta * std::sin(phi),
+                         wn = cosTheta;
             const double dx = -(wn * std::cos(psi) - wb * std::sin(psi));
             const double dy = -(wn * std::sin(psi) + wb * std::cos(psi));
             const double ex = std::cos(psi), ey = std::sin(psi), len2 = dx * dx + dy * dy;
@@ -367,8 +409,8 @@ TEST(Gather, SingleFiberFirstBounceEnergyIsTheFiberAlbedo) {
             double gathered = 0;
             for (size_t j = 0; j < nOut; ++j) {
                 const size_t cell = (i * nOut + j) * 3 + c;
-                gathered += (static_cast<double>(r.rdmR[cell]) + r.rdmM[cell]) *
-                            bins.outgoingSolidAngle(j);
+                gathered +=
+                    (static_cast<double>(r.rdmR[cell]) + r.rdmM[cell]) * bins.outgoingSolidAngle(j);
                 // R is the upper hemisphere only (docs/design.md 5).
                 if (static_cast<int>(j) / bins.phiO >= bins.thetaO / 2) {
                     EXPECT_EQ(r.rdmR[cell], 0.f);
@@ -399,6 +441,8 @@ TEST(Gather, ResultDoesNotDependOnThreadCountButOnSeed) {
     EXPECT_EQ(0, std::memcmp(one.rdmM.data(), two.rdmM.data(), one.rdmM.size() * sizeof(float)));
     EXPECT_EQ(0, std::memcmp(one.rdmR.data(), two.rdmR.data(), one.rdmR.size() * sizeof(float)));
     EXPECT_EQ(one.truncated, two.truncated);
+    EXPECT_EQ(0, std::memcmp(one.rdmMExit.data(), two.rdmMExit.data(),
+                             one.rdmMExit.size() * sizeof(float)));
     o.seed = 12;
     const GatherResult other = gatherRdm(o);
     EXPECT_NE(0, std::memcmp(one.rdmM.data(), other.rdmM.data(), one.rdmM.size() * sizeof(float)));
@@ -407,7 +451,8 @@ TEST(Gather, ResultDoesNotDependOnThreadCountButOnSeed) {
     o.plySeed = 11;
     const GatherResult samePly = gatherRdm(o);
     EXPECT_EQ(one.plyLines, samePly.plyLines);
-    EXPECT_NE(0, std::memcmp(one.rdmM.data(), samePly.rdmM.data(), one.rdmM.size() * sizeof(float)));
+    EXPECT_NE(0,
+              std::memcmp(one.rdmM.data(), samePly.rdmM.data(), one.rdmM.size() * sizeof(float)));
 }
 
 TEST(Gather, InvalidOptionsAreRejected) {

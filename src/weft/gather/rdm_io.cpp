@@ -65,6 +65,9 @@ RdmData loadRdm(const std::string& dir) {
     const std::string offsetPath = f.file("exit_offset.npy");
     if (std::filesystem::exists(offsetPath, ec))
         d.exitOffset = readGatherArray<double>(offsetPath, "<f8", exitOffsetShape(), weights);
+    const std::string exitFramePath = f.file("rdm_m_exit.npy");
+    if (std::filesystem::exists(exitFramePath, ec))
+        d.rdmMExit = readGatherArray<float>(exitFramePath, "<f4", {ti, pi, to, po, 3}, weights);
     return d;
 }
 

@@ -30,6 +30,8 @@ struct RdmData {
     // exit_offset.npy (gather.h GatherResult::exitOffset); empty where the
     // gather has none (recoloured, or written before it was recorded).
     std::vector<double> exitOffset;
+    // rdm_m_exit.npy (GatherResult::rdmMExit); empty where the gather has none.
+    std::vector<float> rdmMExit;
 };
 
 RdmData loadRdm(const std::string& dir);

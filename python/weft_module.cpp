@@ -847,13 +847,10 @@ py::dict pyFit(const py::object& rdmArg, const py::object& out, const py::object
         result = fitYarnModel(rdm, c, seed, quiet, ablation, colour.get());
         if (!outPath.empty()) saveYarnModel(result->model, outPath);
         if (!reportDir.empty()) {
-            if (result->model.ablation == YarnAblation::None) {
-                writeFitReport(*result, rdm, ref.get(), reportDir);
-            } else {
-                std::unique_ptr<RdmData> refTarget;
-                if (ref) refTarget = std::make_unique<RdmData>(ablationTarget(*ref, ablation));
-                writeFitReport(*result, ablationTarget(rdm, ablation), refTarget.get(), reportDir);
-            }
+            // Measured against what it was fitted to (fit.h, fitTarget).
+            std::unique_ptr<RdmData> refTarget;
+            if (ref) refTarget = std::make_unique<RdmData>(fitTarget(*ref, result->model));
+            writeFitReport(*result, fitTarget(rdm, result->model), refTarget.get(), reportDir);
         }
     }
     const FitReport& r = result->report;

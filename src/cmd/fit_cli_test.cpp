@@ -42,13 +42,12 @@ class FitCliTest : public testing::CliTestBase {
 
 // "exit_offset": true (docs/exit-point.md): the model carries the gather's
 // exit offsets, each merged bin with its fine bins' share of the M weight
-// within the table's range (summed here from exit_offset.npy itself).
+// within the table's range (summed here from exit_offset.npy itself); its M
+// lobe is fitted in the exit frame (Fit.ExitOffsetModelsFitMInTheExitFrame).
 TEST_F(FitCliTest, ExitOffsetTableComesFromTheGather) {
     writeFileAtomic(path("offsets.json"), R"({"t_net": {"steps": 100, "batch": 64},
         "m_net": {"hidden": [8, 8], "steps": 100, "batch": 64}, "exit_offset": true})");
-    const RunResult r =
-        run("fit --rdm rdm --out model.json --config offsets.json --no-report "
-            "--quiet");
+    const RunResult r = run("fit --rdm rdm --out model.json --config offsets.json --quiet");
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_EQ(nlohmann::json::parse(readFile(path("model.json"))).at("version"), 5);
     const YarnModel model = loadYarnModel(path("model.json"));
@@ -87,6 +86,8 @@ TEST_F(FitCliTest, ExitOffsetTableComesFromTheGather) {
             }
         }
     EXPECT_GT(checked, 48);  // 4000 paths reach most cells in every channel
+    // yarn check measures it against M in the exit frame too.
+    ASSERT_EQ(run("yarn check --model model.json --rdm rdm --out check").status, 0);
     // Not for an ablation, nor from a gather without exit offsets.
     expectUserError(run("fit --rdm rdm --out x.json --config offsets.json --ablation naive "
                         "--no-report --quiet"),

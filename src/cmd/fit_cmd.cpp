@@ -105,16 +105,11 @@ void runFit(const FitCliOptions& c) {
                                    recalibrated->colour ? &colourPaths : nullptr);
     saveYarnModel(fit.model, c.out);
     if (!c.noReport) {
-        // An ablated model is measured against what it was fitted to (fit.h, ablationTarget).
-        const YarnAblation fitted = fit.model.ablation;
-        if (fitted == YarnAblation::None) {
-            writeFitReport(fit, rdm, reference.get(), reportDir);
-        } else {
-            std::unique_ptr<RdmData> referenceTarget;
-            if (reference)
-                referenceTarget = std::make_unique<RdmData>(ablationTarget(*reference, fitted));
-            writeFitReport(fit, ablationTarget(rdm, fitted), referenceTarget.get(), reportDir);
-        }
+        // The model is measured against what it was fitted to (fit.h, fitTarget).
+        std::unique_ptr<RdmData> referenceTarget;
+        if (reference)
+            referenceTarget = std::make_unique<RdmData>(fitTarget(*reference, fit.model));
+        writeFitReport(fit, fitTarget(rdm, fit.model), referenceTarget.get(), reportDir);
     }
     const FitReport& r = fit.report;
     nlohmann::ordered_json summary = {

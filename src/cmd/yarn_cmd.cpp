@@ -15,6 +15,7 @@
 #include "weft/core/json_message.h"
 #include "weft/core/npy.h"
 #include "weft/core/text_parse.h"
+#include "weft/fit/fit.h"
 #include "weft/fit/model_check.h"
 #include "weft/gather/rdm_io.h"
 #include "weft/yarn/family_model.h"
@@ -81,7 +82,8 @@ void runCheck(const CheckOptions& o) {
     if (!o.cTT.empty()) model = model.forColour(parseColour(o.cTT, "--c-tt"), "--c-tt");
     const RdmData rdm = loadRdm(o.rdm);
     const nlohmann::json s =
-        checkYarnModel(model, o.model, rdm, {o.minPaths, o.threads, o.dual}, o.out);
+        checkYarnModel(model, o.model, model.exitOffset ? exitFrameTarget(rdm) : rdm,
+                       {o.minPaths, o.threads, o.dual}, o.out);
     // One line on stdout: the headline numbers (the full summary is in check.json).
     nlohmann::json line = {
         {"out", o.out},

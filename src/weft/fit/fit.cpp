@@ -152,6 +152,22 @@ ExitOffsetTable fitExitOffset(const RdmData& rdm, YarnAblation ablation, bool co
 
 }  // namespace
 
+RdmData exitFrameTarget(const RdmData& rdm) {
+    if (rdm.rdmMExit.empty())
+        throw InputError(rdm.dir +
+                         ": no rdm_m_exit.npy (a gather made before M was binned in the "
+                         "exit frame, or a merge with such a part): gather again");
+    RdmData target = rdm;
+    target.rdmM = rdm.rdmMExit;
+    return target;
+}
+
+RdmData fitTarget(const RdmData& rdm, const YarnModel& model) {
+    if (model.ablation != YarnAblation::None) return ablationTarget(rdm, model.ablation);
+    if (model.exitOffset) return exitFrameTarget(rdm);
+    return rdm;
+}
+
 size_t transmissionOutgoingBin(const RdmBins& bins, size_t incidentBin) {
     return bins.outgoingBin(-bins.incidentCentre(incidentBin));
 }
@@ -190,10 +206,16 @@ FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_
     // Before any training: networks and a calibration that the renderer runs.
     config.validate("fit configuration");
     const auto t0 = Clock::now();
-    // Every step below sees the ablated model's target; the full model's is the gather itself.
-    RdmData ablated;
-    if (ablation != YarnAblation::None) ablated = ablationTarget(gathered, ablation);
-    const RdmData& rdm = ablation != YarnAblation::None ? ablated : gathered;
+    // Where M light leaves the ply (step 7), first: a gather without its
+    // offsets fails before the training.
+    std::optional<ExitOffsetTable> exitOffset;
+    if (config.exitOffset) exitOffset = fitExitOffset(gathered, ablation, colour != nullptr);
+    // Every step below sees the model's target: the ablated model's, or M in
+    // the exit frame for a model with exit offsets; else the gather itself.
+    RdmData target;
+    if (ablation != YarnAblation::None) target = ablationTarget(gathered, ablation);
+    if (exitOffset) target = exitFrameTarget(gathered);
+    const RdmData& rdm = ablation != YarnAblation::None || exitOffset ? target : gathered;
     const RdmBins& bins = rdm.bins;
     const int threads = config.threads > 0 ? config.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
@@ -325,7 +347,7 @@ FitResult fitYarnModel(const RdmData& gathered, const FitConfig& config, uint64_
     if (!model.hasReflectionLobe())
         report.rRelL2 = report.rRelL2Uncalibrated = std::numeric_limits<double>::quiet_NaN();
     // 7. Where M light leaves the ply: the gather's histogram, merged.
-    if (config.exitOffset) model.exitOffset = fitExitOffset(rdm, ablation, colour != nullptr);
+    model.exitOffset = std::move(exitOffset);
 
     report.seconds = secondsSince(t0);
     model.fit = fitRecord(report, config, seed, rdm, ablation);
@@ -424,9 +446,8 @@ FitResult recalibrateYarnModel(const YarnModel& fitted, const RdmData& gathered,
     config.validate("fit configuration");
     if (fitted.colour) return recalibrateConditioned(fitted, gathered, config, quiet, paths);
     const auto t0 = Clock::now();
-    RdmData ablated;
-    if (fitted.ablation != YarnAblation::None) ablated = ablationTarget(gathered, fitted.ablation);
-    const RdmData& rdm = fitted.ablation != YarnAblation::None ? ablated : gathered;
+    // What it was fitted to: its ablation's target, or M in the exit frame.
+    const RdmData rdm = fitTarget(gathered, fitted);
     const int threads = config.threads > 0 ? config.threads : tbb::this_task_arena::max_concurrency();
     FitResult result;
     result.model = fitted;

@@ -109,6 +109,15 @@ std::vector<Rgb> colourFitTestColours(const ColourRange& range);
 // docs/design.md 7); so for every incident bin the target's integral over wo,
 // sum_o rdmM dOmega_o, is P(T) + E_R + E_M of the gather.
 RdmData ablationTarget(const RdmData& rdm, YarnAblation ablation);
+// The RDM as a model with an exit-offset table sees it (docs/exit-point.md):
+// RDM_M with wo in the exit frame (the gather's rdm_m_exit.npy), so that its M
+// lobe does not spread the light around the ply a second time. InputError
+// naming the gather when it has none.
+RdmData exitFrameTarget(const RdmData& rdm);
+// What `model` was fitted to and is measured against: ablationTarget() for an
+// ablated model, exitFrameTarget() for one with an exit-offset table, else
+// `rdm` itself.
+RdmData fitTarget(const RdmData& rdm, const YarnModel& model);
 // The outgoing bin of -wi for wi at the centre of incident bin i.
 size_t transmissionOutgoingBin(const RdmBins& bins, size_t incidentBin);
 
@@ -116,7 +125,8 @@ size_t transmissionOutgoingBin(const RdmBins& bins, size_t incidentBin);
 // calibration replaced): for models fitted before the calibration existed or
 // with another configuration. The fit record keeps the original entries and
 // gets the new errors and a "recalibrated" entry. An ablated model is
-// recalibrated against its ablationTarget(rdm). A colour-conditioned model
+// recalibrated against fitTarget(rdm, fitted) (its ablation's target, or M
+// in the exit frame). A colour-conditioned model
 // gets its calibration by colour again (fitColourCalibration) from `paths`,
 // the recorded paths of the any-colour gather `rdm` (InputError without
 // them), and the sampling lobe of its gathered colour.

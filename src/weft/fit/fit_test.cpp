@@ -25,9 +25,10 @@ RdmData syntheticRdm(const RdmBins& bins = kBins) {
     rdm.dir = "synthetic";
     rdm.bins = bins;
     rdm.meta = {{"fiber", fleece().fiber.toJson()},
-                {"ply", {{"fibers", fleece().ply.fibers},
-                         {"density", fleece().ply.density},
-                         {"twist", fleece().ply.twist}}},
+                {"ply",
+                 {{"fibers", fleece().ply.fibers},
+                  {"density", fleece().ply.density},
+                  {"twist", fleece().ply.twist}}},
                 {"paths", 0}};
     const size_t nIn = bins.incidentCount(), nOut = bins.outgoingCount();
     rdm.count.assign(nIn, 1000);
@@ -63,7 +64,38 @@ TEST(Fit, RecoversKnownNetworks) {
     // Far from the starting point: the untrained student is way off.
     YarnModel untrained;
     untrained.mNet = Mlp<float>({6, 16, 16, 3}, OutputFunction::Exp, 3).weights();
-    EXPECT_GT(coarseRelativeL2(modelMultipleScatteringMap(untrained, kBins), rdm.rdmM, kBins), 0.15);
+    EXPECT_GT(coarseRelativeL2(modelMultipleScatteringMap(untrained, kBins), rdm.rdmM, kBins),
+              0.15);
+}
+
+// A model with exit offsets (docs/exit-point.md) fits its M lobe to M in the
+// exit frame (rdm_m_exit.npy), not the entry frame's RDM_M: two teachers,
+// one per frame; the student follows the exit frame's.
+TEST(Fit, ExitOffsetModelsFitMInTheExitFrame) {
+    RdmData rdm = syntheticRdm();
+    YarnModel entry, exit;
+    entry.mNet = Mlp<float>({6, 6, 3}, OutputFunction::Exp, 12).weights();
+    exit.mNet = Mlp<float>({6, 6, 3}, OutputFunction::Exp, 13).weights();
+    rdm.rdmM = modelMultipleScatteringMap(entry, kBins);
+    rdm.rdmMExit = modelMultipleScatteringMap(exit, kBins);
+    rdm.exitOffset.assign(kExitOffsetCells * kExitOffsetSlots * 3, 0.0);
+    for (size_t cell = 0; cell < kExitOffsetCells; ++cell)
+        for (int c = 0; c < 3; ++c) rdm.exitOffset[(cell * kExitOffsetSlots + 4160) * 3 + c] = 0.1;
+    FitConfig config = smallConfig();
+    config.exitOffset = true;
+    const FitResult fit = fitYarnModel(rdm, config, 3, true);
+    ASSERT_TRUE(fit.model.exitOffset.has_value());
+    const std::vector<float> student = modelMultipleScatteringMap(fit.model, kBins);
+    EXPECT_LT(coarseRelativeL2(student, rdm.rdmMExit, kBins), 0.03);
+    EXPECT_GT(coarseRelativeL2(student, rdm.rdmM, kBins), 0.15);
+    EXPECT_EQ(fit.report.mRelL2, coarseRelativeL2(student, rdm.rdmMExit, kBins));
+    // fitTarget: what each model is measured against.
+    EXPECT_EQ(fitTarget(rdm, fit.model).rdmM, rdm.rdmMExit);
+    EXPECT_EQ(fitTarget(rdm, YarnModel{}).rdmM, rdm.rdmM);
+    // Without the exit frame's RDM: an error before any training.
+    rdm.rdmMExit.clear();
+    testing::expectInputError([&] { fitYarnModel(rdm, config, 3, true); },
+                              {"synthetic", "rdm_m_exit.npy", "gather again"});
 }
 
 // A target that is exactly eq. 8 times a masking term of the model's form:

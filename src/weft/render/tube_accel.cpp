@@ -266,6 +266,8 @@ bool TubeAccel::intersect(const Vec3& org, const Vec3& dir, double tMax, const T
         return true;
     }
     hit->surface = false;
+    hit->segment = rh.hit.primID;
+    hit->u = rh.hit.u;
     hit->id = {rh.hit.geomID, info.tubeOf(rh.hit.primID)};
     hit->material = info.materialAlong.empty()
                         ? info.material
@@ -285,6 +287,72 @@ bool TubeAccel::intersect(const Vec3& org, const Vec3& dir, double tMax, const T
         coordinateSystem(hit->tangent, &hit->normal, &b);
     }
     return true;
+}
+
+TubeHit TubeAccel::exitPoint(const TubeHit& hit, double axial, double around) const {
+    const GeometryInfo& info = geometries_.at(hit.id.geometry);
+    if (info.surface) throw std::logic_error("TubeAccel::exitPoint on a triangle");
+    const uint32_t first = info.tubeFirstSegment[hit.id.tube];
+    const uint32_t end = hit.id.tube + 1 < info.tubeFirstSegment.size()
+                             ? info.tubeFirstSegment[hit.id.tube + 1]
+                             : info.segmentCount;
+    // A closed tube's first segment has a neighbour before it (addGeometry).
+    const bool closed = info.flags[first] & RTC_CURVE_FLAG_NEIGHBOR_LEFT;
+    const auto vertex = [&](uint32_t segment, int k) {
+        const float* v = info.vertices + 4 * (static_cast<size_t>(info.indices[segment]) + k);
+        return std::pair{Vec3{v[0], v[1], v[2]}, static_cast<double>(v[3])};
+    };
+    const auto centre = [&](uint32_t segment, double u, double* radius) {
+        const auto [p0, r0] = vertex(segment, 0);
+        const auto [p1, r1] = vertex(segment, 1);
+        *radius = r0 + (r1 - r0) * u;
+        return p0 + (p1 - p0) * u;
+    };
+    // Carries the normal onto the cross-section at (segment, u): projected
+    // onto the plane orthogonal to the smooth tangent there.
+    const auto carry = [&](const Vec3& n, uint32_t segment, double u) {
+        const Vec3 t = smoothTangent(info, segment, static_cast<float>(u));
+        const Vec3 projected = n - t * dot(n, t);
+        return dot(projected, projected) > 1e-12 ? normalize(projected) : n;
+    };
+
+    double radius = 0;
+    centre(hit.segment, hit.u, &radius);
+    Vec3 normal = hit.normal * std::cos(around) + cross(hit.tangent, hit.normal) * std::sin(around);
+    uint32_t segment = hit.segment;
+    double u = std::clamp(static_cast<double>(hit.u), 0.0, 1.0);
+    double remaining = axial * radius;  // world units, signed
+    // Segment by segment; a bound on the steps keeps a degenerate tube finite.
+    for (uint32_t step = 0; remaining != 0 && step <= 4 * (end - first) + 4; ++step) {
+        const double length = ::weft::length(vertex(segment, 1).first - vertex(segment, 0).first);
+        const double available = remaining > 0 ? (1 - u) * length : u * length;
+        if (std::abs(remaining) <= available && length > 0) {
+            u += remaining / length;
+            break;
+        }
+        remaining -= remaining > 0 ? available : -available;
+        const bool forward = remaining > 0;
+        if (forward ? segment + 1 < end : segment > first) {
+            segment = forward ? segment + 1 : segment - 1;
+        } else if (closed) {
+            segment = forward ? first : end - 1;
+        } else {
+            u = forward ? 1.0 : 0.0;  // the end of an open tube
+            break;
+        }
+        u = forward ? 0.0 : 1.0;
+        normal = carry(normal, segment, u);
+    }
+    u = std::clamp(u, 0.0, 1.0);
+
+    TubeHit exit = hit;
+    exit.segment = segment;
+    exit.u = static_cast<float>(u);
+    exit.tangent = smoothTangent(info, segment, exit.u);
+    exit.normal = carry(normal, segment, u);
+    exit.point = centre(segment, u, &radius) + exit.normal * radius;
+    if (!info.materialAlong.empty()) exit.material = info.materialAlong[segment - first];
+    return exit;
 }
 
 bool TubeAccel::occluded(const Vec3& org, const Vec3& dir, double tMax,

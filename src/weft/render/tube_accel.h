@@ -63,6 +63,10 @@ struct TubeHit {
     TubeId id;
     int material = -1;     // as given to addGeometry or addTriangles
     bool surface = false;  // a triangle of an object, not a tube
+    // Where on the tube: the segment (Embree's primID within the geometry)
+    // and the curve parameter along it, in [0, 1] (exitPoint walks from them).
+    uint32_t segment = 0;
+    float u = 0;
 };
 
 class TubeAccel {
@@ -106,6 +110,21 @@ class TubeAccel {
                    TubeHit* hit) const;
     // Whether anything blocks the ray in (0, tMax).
     bool occluded(const Vec3& org, const Vec3& dir, double tMax, const TubeId& origin) const;
+
+    // Where light that entered the tube at `hit` leaves it when it moved
+    // `axial` tube radii along the tube (positive along hit.tangent) and
+    // turned `around` radians about it (positive from hit.normal towards
+    // hit.tangent x hit.normal) (issue 47, docs/exit-point.md): the centre
+    // line is walked segment by segment by axial x the tube's radius at the
+    // hit, the hit's normal turned by `around` and carried along without
+    // twisting (projected onto each new cross-section, a discrete
+    // rotation-minimising frame), and the point put on the tube's surface
+    // there. An open tube's walk stops at its end (the light leaves at the
+    // last cross-section: a short tube or the end of one gives a finite
+    // point); a closed tube's wraps round. The result is a hit on the same
+    // tube (with the material there, for a tube coloured along its length):
+    // point, smooth tangent, normal, segment and u.
+    TubeHit exitPoint(const TubeHit& hit, double axial, double around) const;
 
     int64_t tubeCount() const { return tubes_; }
     int64_t segmentCount() const { return segments_; }

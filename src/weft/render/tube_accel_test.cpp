@@ -224,6 +224,60 @@ TEST(TubeAccel, ShadingTangentFollowsTheCurveNotTheSegment) {
     }
 }
 
+// Where light leaves a tube (issue 47): walked along the centre line by tube
+// radii, turned about it, carried along without twisting, stopped at an open
+// end, wrapped round a closed loop.
+TEST(TubeAccel, ExitPointWalksAlongTurnsAroundAndStopsAtAnOpenEnd) {
+    TubeAccel accel;
+    accel.addGeometry({straightTube(0.0, 0.5)}, 0);  // along +x, segments of length 1
+    accel.commit();
+    TubeHit hit;
+    ASSERT_TRUE(accel.intersect({0.3, 0.0, 5.0}, {0.0, 0.0, -1.0}, kInf, {}, &hit));
+    EXPECT_NEAR(hit.normal.z, 1.0, 1e-6);
+    EXPECT_EQ(hit.segment, 4u);
+    EXPECT_NEAR(hit.u, 0.3, 1e-6);
+    // 1.5 radii (0.75) along +x, a quarter turn from n = +z towards t x n = -y.
+    TubeHit exit = accel.exitPoint(hit, 1.5, kHalfPi);
+    EXPECT_NEAR(exit.point.x, 1.05, 1e-6);
+    EXPECT_NEAR(exit.point.y, -0.5, 1e-6);
+    EXPECT_NEAR(exit.point.z, 0.0, 1e-6);
+    EXPECT_NEAR(exit.normal.y, -1.0, 1e-6);
+    EXPECT_NEAR(exit.tangent.x, 1.0, 1e-6);
+    EXPECT_EQ(exit.segment, 5u);
+    EXPECT_EQ(exit.id, hit.id);
+    // Backwards across three segments, half a turn.
+    exit = accel.exitPoint(hit, -5.0, kPi);
+    EXPECT_NEAR(exit.point.x, -2.2, 1e-6);
+    EXPECT_NEAR(exit.point.z, -0.5, 1e-6);
+    EXPECT_EQ(exit.segment, 1u);
+    // No offset: the hit itself (on the tube's surface).
+    exit = accel.exitPoint(hit, 0.0, 0.0);
+    EXPECT_NEAR(length(exit.point - hit.point), 0.0, 1e-6);
+    // Past an open end: its last cross-section, finite.
+    for (const double axial : {100.0, -1e9}) {
+        exit = accel.exitPoint(hit, axial, 0.3);
+        EXPECT_NEAR(exit.point.x, axial > 0 ? 4.0 : -4.0, 1e-6) << axial;
+        EXPECT_NEAR(length(Vec3{0, exit.point.y, exit.point.z}), 0.5, 1e-6);
+    }
+
+    // A closed ring of 64 segments: a quarter of its length round from the
+    // outermost point lands a quarter round, the normal still pointing
+    // outwards (carried without twisting in the ring's plane); the whole
+    // length comes back.
+    TubeAccel ring;
+    ring.addGeometry({ringTube(3.0, 0.25, 64)}, 0);
+    ring.commit();
+    ASSERT_TRUE(ring.intersect({8.0, 0.0, 0.0}, {-1.0, 0.0, 0.0}, kInf, {}, &hit));
+    const double chord = 2 * 3.0 * std::sin(kPi / 64), circumference = 64 * chord;
+    const double direction = hit.tangent.y > 0 ? 1.0 : -1.0;  // towards +y
+    exit = ring.exitPoint(hit, direction * 0.25 * circumference / 0.25, 0.0);
+    EXPECT_NEAR(exit.point.x, 0.0, 1e-5);
+    EXPECT_NEAR(exit.point.y, 3.25, 1e-5);
+    EXPECT_NEAR(exit.normal.y, 1.0, 1e-6);
+    exit = ring.exitPoint(hit, direction * 2.0 * circumference / 0.25, 0.0);
+    EXPECT_NEAR(length(exit.point - hit.point), 0.0, 1e-4);
+}
+
 TEST(TubeAccel, TubesWithinOneGeometryAreTold) {
     TubeAccel accel;
     accel.addGeometry(

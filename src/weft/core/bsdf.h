@@ -64,9 +64,9 @@ struct BsdfEval {
 
 struct BsdfSample {
     Vec3 wo;
-    Rgb weight;        // eval(wi, wo) / pdf(wi, wo); for a delta lobe the lobe's weight
-    double pdf = 0;    // solid-angle density; 0 for a delta lobe or an invalid sample
-    int lobe = -1;     // model-specific lobe id, -1 when invalid
+    Rgb weight;      // eval(wi, wo) / pdf(wi, wo); for a delta lobe the lobe's weight
+    double pdf = 0;  // solid-angle density; 0 for a delta lobe or an invalid sample
+    int lobe = -1;   // model-specific lobe id, -1 when invalid
     bool isDelta = false;
 
     bool valid() const { return lobe >= 0; }
@@ -117,7 +117,8 @@ class BsdfIncident {
   private:
     template <typename T>
     static constexpr void checkState() {
-        static_assert(std::is_trivially_copyable_v<T>, "a BSDF's incident state is copied as bytes");
+        static_assert(std::is_trivially_copyable_v<T>,
+                      "a BSDF's incident state is copied as bytes");
         static_assert(sizeof(T) <= kStateBytes, "raise BsdfIncident::kStateBytes");
         static_assert(alignof(T) <= alignof(double), "the state is aligned as a double");
     }
@@ -128,6 +129,7 @@ class BsdfIncident {
 };
 
 class BsdfSlice;
+class ExitSpread;
 
 class Bsdf {
   public:
@@ -141,8 +143,7 @@ class Bsdf {
     virtual Rgb eval(const BsdfIncident& in, const Vec3& wo) const { return evalPdf(in, wo).value; }
     virtual double pdf(const BsdfIncident& in, const Vec3& wo) const { return evalPdf(in, wo).pdf; }
     // `rng` feeds the rejection steps (e.g. a random walk's own generator).
-    virtual BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u,
-                              Rng& rng) const = 0;
+    virtual BsdfSample sample(const BsdfIncident& in, const BsdfSampleInput& u, Rng& rng) const = 0;
 
     // Batches (issue 45): the calls above for `count` queries at once, each
     // result bit for bit the single call's; every in[k] was (or is being)
@@ -163,6 +164,9 @@ class Bsdf {
     // True where the batches above are faster than their single calls (the
     // renderer then advances paths together by default).
     virtual bool batchesFaster() const { return false; }
+    // A BSDF whose multiply scattered part leaves the surface away from where
+    // the light entered (below), or nullptr: every part leaves at the hit.
+    virtual const ExitSpread* exitSpread() const { return nullptr; }
     // The same for one (wi, wo): prepare, then the call above.
     Rgb eval(const Vec3& wi, const Vec3& wo) const { return eval(prepared(wi), wo); }
     virtual double pdf(const Vec3& wi, const Vec3& wo) const { return pdf(prepared(wi), wo); }
@@ -227,5 +231,49 @@ class BsdfSlice {
 };
 
 inline BsdfSlice Bsdf::slice(const Vec3& wi) const { return BsdfSlice(*this, wi); }
+
+// A BSDF whose multiply scattered ("spread") part leaves the surface at
+// another point than the one the light entered, as a BSSRDF's does (the
+// yarn model with exit offsets, issue 47, docs/exit-point.md). The path
+// tracer splits such an event in two (render/path_tracer.h):
+//   - the surface part at the hit: next-event estimation with evalSurface,
+//     and with probability 1 - spreadProbability a continuation from the
+//     hit (sampleEvent's `surface` sample);
+//   - otherwise the spread part: sampleEvent gives an exit offset (along the
+//     tube dz radii, around it dpsi radians, tube_accel.h exitPoint) and a
+//     weight per channel (the offset density's channel MIS over the branch
+//     probability); at the exit point, in its own frame, next-event
+//     estimation with evalSpread and the continuation from sampleSpread.
+// Each branch's density is the one its continuation reports, so MIS between
+// next-event estimation and BSDF sampling stays within the branch. Every
+// call takes an incident this BSDF prepared, with wi at the hit.
+struct SpreadEvent {
+    bool spread = false;      // false: `surface` continues the path from the hit
+    BsdfSample surface;       // the surface part's sample (weight and pdf of its branch)
+    double dz = 0, dpsi = 0;  // spread: the exit offset (tube radii, radians)
+    Rgb weight;               // spread: per channel, to multiply the path throughput by
+};
+
+class ExitSpread {
+  public:
+    virtual ~ExitSpread() = default;
+    // The probability of the spread branch at `in`; 0 where the event is not
+    // split (the BSDF's eval, pdf and sample then hold as they are).
+    virtual double spreadProbability(const BsdfIncident& in) const = 0;
+    // The surface part at wo (the hit's frame): its value, and the density
+    // with which sampleEvent's surface branch reaches wo.
+    virtual BsdfEval evalSurface(const BsdfIncident& in, const Vec3& wo) const = 0;
+    // The event: `u` as for Bsdf::sample, `uSpread` three more numbers (the
+    // channel and the offset) used by the spread branch only.
+    virtual SpreadEvent sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
+                                    const BsdfSampleInput& uSpread, Rng& rng) const = 0;
+    // The spread part at the exit point, wo in the exit point's frame: its
+    // value, and the density of sampleSpread given the spread branch.
+    virtual BsdfEval evalSpread(const BsdfIncident& in, const Vec3& woExit) const = 0;
+    // The continuation from the exit point for the event's `u` (which chose
+    // the spread branch): wo in the exit frame, weight = evalSpread / pdf.
+    virtual BsdfSample sampleSpread(const BsdfIncident& in, const BsdfSampleInput& u,
+                                    Rng& rng) const = 0;
+};
 
 }  // namespace weft

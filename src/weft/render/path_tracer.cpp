@@ -23,6 +23,8 @@ class ShadingPoint {
     ShadingPoint(const Scene& scene, const TubeHit& hit, const Vec3& wiWorld, const Rgb& throughput)
         : frame_(scene.shadingFrame(hit)),
           slice_(scene.bsdf(hit.material), frame_.toLocal(wiWorld), throughput) {}
+    const Frame& frame() const { return frame_; }
+    const BsdfSlice& slice() const { return slice_; }
     // eval and pdf at wo in one call.
     BsdfEval evalPdf(const Vec3& wo) const { return slice_.evalPdf(frame_.toLocal(wo)); }
     // A sample with wo in world space.
@@ -177,6 +179,50 @@ bool continuePath(PathState& p, const TubeHit& hit, const BsdfSample& s, int dep
     return true;
 }
 
+// The event at `hit` of a BSDF whose spread part leaves elsewhere
+// (ExitSpread, core/bsdf.h), after the light sample at the hit (`light`,
+// evaluated here with the surface part): the event's sample input `u` and
+// three more numbers, then either the surface part's continuation from the
+// hit, or the exit point (next-event estimation there with the spread part)
+// and the continuation from it. False when the path ends.
+bool splitEvent(const Scene& scene, const ExitSpread& spread, const BsdfIncident& in,
+                const Frame& frame, const TubeHit& hit, const LightSampleAtHit& light,
+                const BsdfSampleInput& u, PathState& p, int depth, bool nee, SampleStream& stream,
+                const PathTracerOptions& options, PathCounters& counters, FirstHit* first) {
+    if (light.pending)
+        p.radiance +=
+            p.throughput * directLight(light, spread.evalSurface(in, frame.toLocal(light.wi)));
+    const double uChannel = stream.get1D();
+    const std::array<double, 2> uOffset = stream.get2D();
+    const SpreadEvent event =
+        spread.sampleEvent(in, u, {uChannel, uOffset[0], uOffset[1]}, stream.rng());
+    if (!event.spread) {
+        BsdfSample s = event.surface;
+        s.wo = normalize(frame.fromLocal(s.wo));
+        return continuePath(p, hit, s, depth, stream, options, first);
+    }
+    const TubeHit exit = scene.accel().exitPoint(hit, event.dz, event.dpsi);
+    const Frame exitFrame = scene.shadingFrame(exit);
+    p.throughput *= event.weight;
+    if (p.throughput.isBlack()) return false;
+    if (nee) {
+        const LightSampleAtHit atExit = sampleLightAtHit(scene, exit, stream, counters);
+        if (atExit.pending)
+            p.radiance += p.throughput *
+                          directLight(atExit, spread.evalSpread(in, exitFrame.toLocal(atExit.wi)));
+    }
+    BsdfSample s = spread.sampleSpread(in, u, stream.rng());
+    s.wo = normalize(exitFrame.fromLocal(s.wo));
+    if (depth == 0 && first && s.valid()) first->albedo = event.weight * s.weight;
+    return continuePath(p, exit, s, depth, stream, options, nullptr);
+}
+
+// Whether the event at a prepared incident splits (ExitSpread), and how.
+const ExitSpread* splitting(const Bsdf& bsdf, const BsdfIncident& in) {
+    const ExitSpread* spread = bsdf.exitSpread();
+    return spread && spread->spreadProbability(in) > 0 ? spread : nullptr;
+}
+
 }  // namespace
 
 Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, SampleStream& stream,
@@ -191,10 +237,19 @@ Rgb pathRadiance(const Scene& scene, const Vec3& orgIn, const Vec3& dirIn, Sampl
         if (!traceToNextHit(scene, p, depth, nee, options, counters, &hit)) break;
         const ShadingPoint bsdf(scene, hit, -p.dir, p.throughput);
         if (depth == 0 && first) recordFirstHit(hit, p.dir, first);
+        const ExitSpread* spread = splitting(bsdf.slice().bsdf(), bsdf.slice().incident());
+        LightSampleAtHit light;
         if (nee) {
-            const LightSampleAtHit light = sampleLightAtHit(scene, hit, stream, counters);
-            if (light.pending)
+            light = sampleLightAtHit(scene, hit, stream, counters);
+            if (light.pending && !spread)
                 p.radiance += p.throughput * directLight(light, bsdf.evalPdf(light.wi));
+        }
+        if (spread) {
+            if (!splitEvent(scene, *spread, bsdf.slice().incident(), bsdf.frame(), hit, light,
+                            bsdfSampleInput(stream), p, depth, nee, stream, options, counters,
+                            first))
+                break;
+            continue;
         }
         const BsdfSample s = bsdf.sample(bsdfSampleInput(stream), stream.rng());
         if (!continuePath(p, hit, s, depth, stream, options, first)) break;
@@ -215,6 +270,7 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
         BsdfEval eval;
         BsdfSampleInput u;
         BsdfSample sample;
+        const ExitSpread* spread = nullptr;  // the event splits (ExitSpread): done per path
     };
     const size_t n = queries.size();
     std::vector<PathState> paths(n);
@@ -270,6 +326,7 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
                 incidents.push_back(&events[k].incident);
             }
             bsdf.prepareBatch(vecs.data(), incidents.data(), members.size());
+            for (const size_t k : members) events[k].spread = splitting(bsdf, events[k].incident);
         });
         if (nee) {
             for (const size_t k : alive) {
@@ -282,7 +339,7 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
                 constIncidents.clear();
                 pending.clear();
                 for (const size_t k : members) {
-                    if (!events[k].light.pending) continue;
+                    if (!events[k].light.pending || events[k].spread) continue;
                     pending.push_back(k);
                     vecs.push_back(events[k].woLocal);
                     constIncidents.push_back(&events[k].incident);
@@ -293,7 +350,7 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
             });
             for (const size_t k : alive) {
                 const Event& e = events[k];
-                if (e.light.pending)
+                if (e.light.pending && !e.spread)
                     paths[k].radiance += paths[k].throughput * directLight(e.light, e.eval);
             }
         }
@@ -302,19 +359,29 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
             constIncidents.clear();
             inputs.clear();
             rngs.clear();
+            pending.clear();
             for (const size_t k : members) {
+                if (events[k].spread) continue;
+                pending.push_back(k);
                 constIncidents.push_back(&events[k].incident);
                 inputs.push_back(events[k].u);
                 rngs.push_back(&queries[k].stream->rng());
             }
-            samples.resize(members.size());
-            bsdf.sampleBatch(constIncidents.data(), inputs.data(), rngs.data(), members.size(),
+            samples.resize(pending.size());
+            bsdf.sampleBatch(constIncidents.data(), inputs.data(), rngs.data(), pending.size(),
                              samples.data());
-            for (size_t j = 0; j < members.size(); ++j) events[members[j]].sample = samples[j];
+            for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].sample = samples[j];
         });
         kept = 0;
         for (const size_t k : alive) {
             Event& e = events[k];
+            if (e.spread) {
+                if (splitEvent(scene, *e.spread, e.incident, e.frame, e.hit,
+                               nee ? e.light : LightSampleAtHit{}, e.u, paths[k], depth, nee,
+                               *queries[k].stream, options, counters, queries[k].first))
+                    alive[kept++] = k;
+                continue;
+            }
             e.sample.wo = normalize(e.frame.fromLocal(e.sample.wo));
             if (continuePath(paths[k], e.hit, e.sample, depth, *queries[k].stream, options,
                              queries[k].first))

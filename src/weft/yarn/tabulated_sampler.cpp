@@ -129,6 +129,9 @@ void TabulatedYarnSampler::prepare(const SurfaceFiberAngles& surface, YarnIncide
                                            1.0 - kMinimumShare)
                               : 0.0;
     in.pickT = pT > 0 ? std::min(pT / (pT + continuous), 1.0 - kMinimumShare) : 0.0;
+    in.surfaceShare = continuous > 0
+                          ? (peak + (1.0 - pT) * table_.blend(in.table, tableEnergyR_)) / continuous
+                          : 0.5;
 }
 
 double TabulatedYarnSampler::pdf(const YarnIncident& in, const Vec3& wo,

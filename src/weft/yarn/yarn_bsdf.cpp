@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "weft/core/math.h"
 #include "weft/yarn/tabulated_sampler.h"
 #include "weft/yarn/yarn_lobes.h"
 
@@ -38,7 +39,9 @@ YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
                    const YarnBsdfOptions& options, OneColour)
     // `new`, not make_shared: the evaluator's networks are over-aligned (FixedMlp).
     : model_(new YarnEvaluator(model, source, options.energyGuard)),
-      sampler_(makeYarnSampler(options.sampling, model, model_)) {}
+      sampler_(makeYarnSampler(options.sampling, model, model_)),
+      exitOffset_(model.exitOffset ? std::make_shared<const ExitOffsetTable>(*model.exitOffset)
+                                   : nullptr) {}
 
 std::unique_ptr<YarnBsdf> YarnBsdf::withTabulatedSampling() const {
     auto bsdf = std::make_unique<YarnBsdf>(*this);
@@ -51,7 +54,8 @@ YarnBsdf YarnBsdf::load(const std::string& path, const YarnBsdfOptions& options)
 }
 
 size_t YarnBsdf::memoryBytes() const {
-    return sizeof(*this) + model_->memoryBytes() + sampler_->memoryBytes();
+    return sizeof(*this) + model_->memoryBytes() + sampler_->memoryBytes() +
+           (exitOffset_ ? exitOffset_->memoryBytes() : 0);
 }
 
 double YarnBsdf::transmission(const Vec3& wi) const {
@@ -68,13 +72,14 @@ YarnIncident YarnBsdf::incident(const Vec3& wi, double pT) const {
     const SurfaceFiberAngles surface = model_->surfaceAngles(in.wi);
     model_->prepare(surface, in);
     sampler_->prepare(surface, in);
+    sampler_->prepareSurfaceShare(in);
     return in;
 }
 
 void YarnBsdf::evalAndPdf(const YarnIncident& in, const Vec3& wo, Rgb* value, double* density,
                           const Rgb* m) const {
-    const FiberBcsdf::Angles out = value || sampler_->pdfNeedsOutAngles() ? model_->outAngles(wo)
-                                                                         : FiberBcsdf::Angles{};
+    const FiberBcsdf::Angles out =
+        value || sampler_->pdfNeedsOutAngles() ? model_->outAngles(wo) : FiberBcsdf::Angles{};
     if (value) {
         const YarnComponents parts =
             m ? model_->components(in, wo, out, *m) : model_->components(wo, in, out);
@@ -203,6 +208,116 @@ void YarnBsdf::sampleBatch(const BsdfIncident* const* in, const BsdfSampleInput*
                 BsdfSample::fromEval(yarn.mirrored ? mirrored(woUpper[c]) : woUpper[c], e, lobe[c]);
         }
     }
+}
+
+// The exit spread (yarn_bsdf.h, "Exit offsets").
+
+namespace {
+
+// Both branches keep a share, so that each part's weight stays bounded.
+constexpr double kMinimumBranch = 0.05;
+
+double surfaceBranch(const YarnIncident& in) {
+    return std::clamp(in.surfaceShare, kMinimumBranch, 1.0 - kMinimumBranch);
+}
+
+}  // namespace
+
+void YarnBsdf::evalParts(const YarnIncident& in, const Vec3& wo, Rgb* r, Rgb* m,
+                         double* density) const {
+    const FiberBcsdf::Angles out = model_->outAngles(wo);
+    const YarnComponents parts = model_->components(wo, in, out);
+    *r = model_->hasReflection() ? parts.r : Rgb(0.0);
+    *m = parts.m;
+    *density = sampler_->pdf(in, wo, out);
+}
+
+Rgb YarnBsdf::spreadChannelProbabilities(const BsdfIncident& in) const {
+    const YarnIncident& yarn = in.get<YarnIncident>();
+    if (!exitOffset_ || yarn.mirrored || !(yarn.pickT < 1)) return Rgb(0.0);
+    const size_t cell = exitOffsetCell(yarn.wi);
+    Rgb p;
+    for (int c = 0; c < 3; ++c) p[c] = exitOffset_->hasDensity(cell, c) ? in.importance()[c] : 0.0;
+    const double sum = p.r + p.g + p.b;
+    return sum > 0 ? p / sum : Rgb(0.0);
+}
+
+double YarnBsdf::spreadProbability(const BsdfIncident& in) const {
+    if (spreadChannelProbabilities(in).maxComponent() == 0) return 0.0;
+    const YarnIncident& yarn = in.get<YarnIncident>();
+    return (1.0 - yarn.pickT) * (1.0 - surfaceBranch(yarn));
+}
+
+BsdfSampleInput YarnBsdf::branchInput(const YarnIncident& in, const BsdfSampleInput& u,
+                                      bool spread) const {
+    const double rhoS = surfaceBranch(in);
+    const double v = std::clamp((u[0] - in.pickT) / (1.0 - in.pickT), 0.0, kOneMinusEpsilon);
+    const double w = spread ? (v - rhoS) / (1.0 - rhoS) : v / rhoS;
+    return {in.pickT + (1.0 - in.pickT) * std::clamp(w, 0.0, kOneMinusEpsilon), u[1], u[2]};
+}
+
+BsdfEval YarnBsdf::evalSurface(const BsdfIncident& in, const Vec3& wo) const {
+    const YarnIncident& yarn = in.get<YarnIncident>();
+    Rgb r, m;
+    double density;
+    evalParts(yarn, wo, &r, &m, &density);
+    return {r, surfaceBranch(yarn) * density};
+}
+
+SpreadEvent YarnBsdf::sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
+                                  const BsdfSampleInput& uSpread, Rng& rng) const {
+    const YarnIncident& yarn = in.get<YarnIncident>();
+    SpreadEvent event;
+    if (u[0] < yarn.pickT) {
+        event.surface = transmissionSample(in);
+        return event;
+    }
+    const double rhoS = surfaceBranch(yarn);
+    const double v = (u[0] - yarn.pickT) / (1.0 - yarn.pickT);
+    if (v < rhoS) {
+        const YarnDirectionSample d = sampler_->sample(yarn, branchInput(yarn, u, false), rng);
+        Rgb r, m;
+        double density;
+        evalParts(yarn, d.wo, &r, &m, &density);
+        event.surface = BsdfSample::fromEval(d.wo, {r, rhoS * density}, kLobeR);
+        return event;
+    }
+    // The offset: a channel by the path's importance, then q_c; each
+    // channel's weight over the mixture of the channels' densities.
+    const Rgb p = spreadChannelProbabilities(in);
+    const size_t cell = exitOffsetCell(yarn.wi);
+    const int channel = uSpread[0] < p.r ? 0 : uSpread[0] < p.r + p.g ? 1 : 2;
+    const ExitOffsetTable::Offset o = exitOffset_->sample(cell, channel, uSpread[1], uSpread[2]);
+    Rgb q;
+    double mixture = 0;
+    for (int c = 0; c < 3; ++c) {
+        q[c] = c == channel ? o.pdf : exitOffset_->pdf(cell, c, o.dz, o.dpsi);
+        mixture += p[c] * q[c];
+    }
+    if (!(mixture > 0)) return event;  // cannot happen: the picked channel's q is positive
+    event.spread = true;
+    event.dz = o.dz;
+    event.dpsi = o.dpsi;
+    event.weight = q / (mixture * (1.0 - yarn.pickT) * (1.0 - rhoS));
+    return event;
+}
+
+BsdfEval YarnBsdf::evalSpread(const BsdfIncident& in, const Vec3& woExit) const {
+    const YarnIncident& yarn = in.get<YarnIncident>();
+    Rgb r, m;
+    double density;
+    evalParts(yarn, woExit, &r, &m, &density);
+    return {m, density / (1.0 - yarn.pickT)};
+}
+
+BsdfSample YarnBsdf::sampleSpread(const BsdfIncident& in, const BsdfSampleInput& u,
+                                  Rng& rng) const {
+    const YarnIncident& yarn = in.get<YarnIncident>();
+    const YarnDirectionSample d = sampler_->sample(yarn, branchInput(yarn, u, true), rng);
+    Rgb r, m;
+    double density;
+    evalParts(yarn, d.wo, &r, &m, &density);
+    return BsdfSample::fromEval(d.wo, {m, density / (1.0 - yarn.pickT)}, kLobeM);
 }
 
 }  // namespace weft

@@ -21,6 +21,22 @@
 // +x (ply tangent), b = +y, n = +z (outward normal), docs/design.md 2; the
 // caller converts world directions with Frame(t, b, n).
 //
+// Exit offsets (a model with an "exit_offset" table, docs/exit-point.md):
+// the BSDF is also an ExitSpread (core/bsdf.h). At an incident from above
+// whose cell has M light in some channel, the event splits: the surface
+// part S_T + S_R at the hit, the M part S_M at an exit point drawn from the
+// table, S_M(wi, wo) with wo in the exit point's frame (the model's M lobe
+// was fitted so). The branches: T with P_T as sample() picks it; of the
+// continuous rest, the surface one with rho_S = YarnIncident::surfaceShare
+// (clamped to [0.05, 0.95]), drawing wo from the sampler and weighting S_R;
+// the spread one with 1 - rho_S, the offset's channel c picked in proportion
+// to the path's importance among the channels with M light there, the
+// offset from q_c, each channel weighted by q_c / sum_c' p_c' q_c' (one-sample
+// MIS over channels), and wo at the exit from the sampler, weighting S_M.
+// Either branch's sampler density is the whole continuous one: each weight is
+// that part's value over it. Mirrored incidents (from inside), cells without
+// M light and models without the table keep today's event.
+//
 // Incident directions below the surface (wi.z < 0): the networks were trained
 // on the upper hemisphere only and a ply is never lit from inside, so the BSDF
 // is made two-sided the way Mitsuba's `twosided` adapter does it: wi and wo are
@@ -46,7 +62,7 @@ struct YarnBsdfOptions {
     YarnSampling sampling = YarnSampling::Tabulated;
 };
 
-class YarnBsdf final : public Bsdf {
+class YarnBsdf final : public Bsdf, public ExitSpread {
   public:
     static constexpr int kLobeT = kYarnLobeT;
     static constexpr int kLobeR = kYarnLobeR;
@@ -85,6 +101,18 @@ class YarnBsdf final : public Bsdf {
     void sampleBatch(const BsdfIncident* const* in, const BsdfSampleInput* u, Rng* const* rng,
                      size_t count, BsdfSample* out) const override;
     bool batchesFaster() const override { return true; }
+    const ExitSpread* exitSpread() const override { return exitOffset_ ? this : nullptr; }
+
+    // ExitSpread (above; core/bsdf.h).
+    double spreadProbability(const BsdfIncident& in) const override;
+    BsdfEval evalSurface(const BsdfIncident& in, const Vec3& wo) const override;
+    SpreadEvent sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
+                            const BsdfSampleInput& uSpread, Rng& rng) const override;
+    BsdfEval evalSpread(const BsdfIncident& in, const Vec3& woExit) const override;
+    BsdfSample sampleSpread(const BsdfIncident& in, const BsdfSampleInput& u,
+                            Rng& rng) const override;
+    // The model's exit-offset table, or nullptr.
+    const ExitOffsetTable* exitOffsets() const { return exitOffset_.get(); }
 
     // The networks, the energy guard's and the sampler's tables.
     size_t memoryBytes() const override;
@@ -123,11 +151,20 @@ class YarnBsdf final : public Bsdf {
     // both are computed. `m`: S_M at (in.wi, wo) when a batch computed it.
     void evalAndPdf(const YarnIncident& in, const Vec3& wo, Rgb* value, double* density,
                     const Rgb* m = nullptr) const;
+    // S_R and S_M apart at wo (upper side), and the continuous density.
+    void evalParts(const YarnIncident& in, const Vec3& wo, Rgb* r, Rgb* m, double* density) const;
+    // The spread branch's channel probabilities at `in` (all 0: not split).
+    Rgb spreadChannelProbabilities(const BsdfIncident& in) const;
+    // The sampler's input for a branch: u[0] rescaled from the branch's part
+    // of [pickT, 1) onto all of it.
+    BsdfSampleInput branchInput(const YarnIncident& in, const BsdfSampleInput& u,
+                                bool spread) const;
 
     // Immutable once built, so copies of the BSDF share them (the tabulated
     // sampler keeps the evaluator too).
     std::shared_ptr<const YarnEvaluator> model_;
     std::shared_ptr<const YarnSampler> sampler_;
+    std::shared_ptr<const ExitOffsetTable> exitOffset_;  // the model's, or none
 };
 
 }  // namespace weft

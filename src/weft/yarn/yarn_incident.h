@@ -44,6 +44,10 @@ struct YarnIncident {
     // table laid out at wi.
     double pickT = 0, pickR = 0, thetaI = 0;
     SamplingTable::Layout table;
+    // S_R's estimated share of the continuous part's energy: with exit
+    // offsets (yarn_bsdf.h, ExitSpread), the probability of the surface
+    // branch among the continuous ones.
+    double surfaceShare = 0.5;
 };
 
 }  // namespace weft

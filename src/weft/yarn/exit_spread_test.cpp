@@ -1,0 +1,204 @@
+// The yarn BSDF's exit spread (yarn_bsdf.h, "Exit offsets"; issue 47): the
+// split event is another estimator of the same BSDF. Its parts sum to eval
+// and pdf, its event weights average to the albedo that sample()'s weights
+// average to, each channel's offset weight averages to that channel's offset
+// density (the channel MIS), and the spread branch's directions follow its
+// density (chi-square).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "weft/core/chi2.h"
+#include "weft/core/math.h"
+#include "weft/core/rng.h"
+#include "weft/core/sampling.h"
+#include "weft/core/test_util.h"
+#include "weft/yarn/yarn_bsdf.h"
+#include "weft/yarn/yarn_test_util.h"
+
+namespace weft {
+namespace {
+
+using weft::testing::scaled;
+
+// Per cell and channel a different blob of offsets: centred on dz = 0.5 (c -
+// 1), dpsi = 0.3 c - 0.3, wider in blue; every cell has all three channels.
+ExitOffsetTable spreadTable() {
+    std::vector<double> h(kExitOffsetCells * kExitOffsetSlots * 3, 0.0);
+    for (size_t cell = 0; cell < kExitOffsetCells; ++cell)
+        for (int c = 0; c < 3; ++c)
+            for (int i = 0; i < kExitOffsetAxialBins; ++i)
+                for (int j = 0; j < kExitOffsetAroundBins; ++j) {
+                    const double z = (i + 0.5 - 0.5 * kExitOffsetAxialBins) * kExitOffsetAxialWidth;
+                    const double p = -kPi + (j + 0.5) * kTwoPi / kExitOffsetAroundBins;
+                    const double width = 0.4 + 0.5 * c;
+                    const double r2 = sqr((z - 0.5 * (c - 1)) / width) + sqr(p - 0.3 * c + 0.3);
+                    h[(cell * kExitOffsetSlots + static_cast<size_t>(i) * kExitOffsetAroundBins +
+                       j) *
+                          3 +
+                      c] = std::exp(-r2) * (1 + 0.1 * static_cast<double>(cell % 5));
+                }
+    return ExitOffsetTable::fromHistogram(h, ExitOffsetTable::defaultEdges(), "test");
+}
+
+YarnModel spreadModel() {
+    YarnModel model = loadYarnModel(testing::testModelPath("fleece-small"));
+    model.exitOffset = spreadTable();
+    return model;
+}
+
+// Incident directions from above, and a channel importance (the path
+// throughput) far from grey, so that the channel pick matters.
+const Vec3 kIncident[] = {normalize(Vec3{0.3, 0.2, 0.9}), normalize(Vec3{-0.6, 0.5, 0.4}),
+                          normalize(Vec3{0.9, -0.1, 0.2})};
+const Rgb kImportance{1.0, 0.3, 0.08};
+
+BsdfIncident prepared(const YarnBsdf& bsdf, const Vec3& wi) {
+    BsdfIncident in;
+    in.setImportance(kImportance);
+    bsdf.prepare(wi, in);
+    return in;
+}
+
+TEST(ExitSpread, OnlyModelsWithTheTableSplitAndOnlyFromAbove) {
+    const YarnBsdf plain(loadYarnModel(testing::testModelPath("fleece-small")));
+    EXPECT_EQ(plain.exitSpread(), nullptr);
+    const YarnBsdf bsdf(spreadModel());
+    ASSERT_NE(bsdf.exitSpread(), nullptr);
+    const YarnIncident& yarn = prepared(bsdf, kIncident[0]).get<YarnIncident>();
+    const double p = bsdf.spreadProbability(prepared(bsdf, kIncident[0]));
+    EXPECT_GT(p, 0.0);
+    EXPECT_LT(p, 1.0 - yarn.pickT);
+    // From inside the tube (mirrored): today's event.
+    EXPECT_EQ(bsdf.spreadProbability(prepared(bsdf, mirrored(kIncident[0]))), 0.0);
+}
+
+TEST(ExitSpread, PartsSumToTheBsdfAndItsDensity) {
+    const YarnBsdf bsdf(spreadModel());
+    Rng rng(5, 7);
+    for (const Vec3& wi : kIncident) {
+        const BsdfIncident in = prepared(bsdf, wi);
+        const double spread = bsdf.spreadProbability(in);
+        for (int k = 0; k < 200; ++k) {
+            const Vec3 wo = sampleUniformSphere(rng.uniform(), rng.uniform());
+            const BsdfEval whole = bsdf.evalPdf(in, wo);
+            const BsdfEval surface = bsdf.evalSurface(in, wo), m = bsdf.evalSpread(in, wo);
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(surface.value[c] + m.value[c], whole.value[c],
+                            1e-12 * (1 + whole.value[c]));
+            ASSERT_NEAR(surface.pdf + spread * m.pdf, whole.pdf, 1e-12 * (1 + whole.pdf));
+        }
+    }
+}
+
+TEST(ExitSpread, EventWeightsAverageToTheAlbedoOfSample) {
+    // Two estimators of the albedo at wi: sample()'s weight, and the split
+    // event's (the surface sample's weight, or the offset weight times the
+    // exit's continuation weight).
+    const YarnBsdf bsdf(spreadModel());
+    const int n = static_cast<int>(scaled(200000));
+    for (const Vec3& wi : kIncident) {
+        const BsdfIncident in = prepared(bsdf, wi);
+        Rng rng(11, static_cast<uint64_t>(1e6 * (wi.x + 2 * wi.y + 3 * wi.z)) + 1000000);
+        Rgb sum[2], sum2[2];
+        int spreads = 0;
+        for (int k = 0; k < n; ++k) {
+            const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
+            const BsdfSampleInput uSpread = {rng.uniform(), rng.uniform(), rng.uniform()};
+            const BsdfSample s = bsdf.sample(in, u, rng);
+            const Rgb plain = s.valid() ? s.weight : Rgb(0.0);
+            const SpreadEvent e = bsdf.sampleEvent(in, u, uSpread, rng);
+            Rgb split = e.surface.valid() ? e.surface.weight : Rgb(0.0);
+            if (e.spread) {
+                ++spreads;
+                const BsdfSample exit = bsdf.sampleSpread(in, u, rng);
+                split = exit.valid() ? e.weight * exit.weight : Rgb(0.0);
+            }
+            sum[0] += plain, sum2[0] += plain * plain;
+            sum[1] += split, sum2[1] += split * split;
+        }
+        for (int c = 0; c < 3; ++c) {
+            double mean[2], variance[2];
+            for (int a = 0; a < 2; ++a) {
+                mean[a] = sum[a][c] / n;
+                variance[a] = std::max(0.0, sum2[a][c] / n - sqr(mean[a])) / n;
+            }
+            EXPECT_NEAR(mean[1], mean[0], 4 * std::sqrt(variance[0] + variance[1]) + 1e-4)
+                << "wi " << wi << " channel " << c;
+        }
+        const double p = bsdf.spreadProbability(in);
+        EXPECT_NEAR(static_cast<double>(spreads) / n, p, 4 * std::sqrt(p * (1 - p) / n));
+    }
+}
+
+TEST(ExitSpread, ChannelWeightsAverageToEachChannelsOffsetDensity) {
+    // The offset weight carries 1 / P(spread branch), so over all events
+    // E[weight_c 1(spread) 1(offset in B)] = q_c(B) for a row B of dz bins,
+    // whichever channel the events picked.
+    const YarnModel model = spreadModel();
+    const YarnBsdf bsdf(model);
+    const ExitOffsetTable& table = *model.exitOffset;
+    const std::vector<double>& dz = table.edges().dz;
+    const int n = static_cast<int>(scaled(300000));
+    const Vec3 wi = kIncident[1];
+    const BsdfIncident in = prepared(bsdf, wi);
+    const size_t cell = exitOffsetCell(wi);
+    std::vector<Rgb> sum(dz.size() - 1), sum2(dz.size() - 1);
+    Rng rng(17, 19);
+    for (int k = 0; k < n; ++k) {
+        const BsdfSampleInput u = {rng.uniform(), rng.uniform(), rng.uniform()};
+        const SpreadEvent e =
+            bsdf.sampleEvent(in, u, {rng.uniform(), rng.uniform(), rng.uniform()}, rng);
+        if (!e.spread) continue;
+        const size_t row = std::upper_bound(dz.begin(), dz.end(), e.dz) - dz.begin() - 1;
+        const Rgb& w = e.weight;
+        sum[row] += w, sum2[row] += w * w;
+    }
+    for (int c = 0; c < 3; ++c) {
+        double total = 0;
+        for (size_t row = 0; row + 1 < dz.size(); ++row) {
+            double expected = 0;
+            for (int j = 0; j < table.aroundBins(); ++j)
+                expected += table.probability(cell, c, static_cast<int>(row), j);
+            const double mean = sum[row][c] / n;
+            const double se = std::sqrt(std::max(0.0, sum2[row][c] / n - mean * mean) / n);
+            // (+ 5e-4: a row that rare events never reached has no spread of its own)
+            EXPECT_NEAR(mean, expected, 4 * se + 5e-4) << "channel " << c << " row " << row;
+            total += mean;
+        }
+        EXPECT_NEAR(total, 1.0, 0.02) << "channel " << c;
+    }
+}
+
+TEST(ExitSpread, SpreadDirectionsFollowTheirDensity) {
+    // Given the spread branch (u[0] in its part of [0, 1)), sampleSpread's
+    // directions against evalSpread's density (Pearson chi-square).
+    const YarnBsdf bsdf(spreadModel());
+    const SphereGrid grid{10, 20};
+    const int64_t n = scaled(200000);
+    for (const Vec3& wi : kIncident) {
+        const BsdfIncident in = prepared(bsdf, wi);
+        const YarnIncident& yarn = in.get<YarnIncident>();
+        const double spread = bsdf.spreadProbability(in);
+        std::vector<double> observed(grid.cells(), 0.0);
+        Rng rng(23, static_cast<uint64_t>(1e6 * (wi.x + 2 * wi.y + 3 * wi.z)) + 1000000);
+        for (int64_t k = 0; k < n; ++k) {
+            // u[0] uniform over the spread branch: the top `spread` of [pickT, 1).
+            const double u0 = 1.0 - spread * rng.uniform();
+            const BsdfSample s = bsdf.sampleSpread(
+                in, {std::min(u0, kOneMinusEpsilon), rng.uniform(), rng.uniform()}, rng);
+            ASSERT_TRUE(s.valid());
+            ASSERT_NEAR(s.pdf, bsdf.evalSpread(in, s.wo).pdf, 1e-12 * s.pdf);
+            observed[grid.cellOf(s.wo)] += 1;
+        }
+        const std::vector<double> expected = grid.expectedCounts(
+            [&](const Vec3& wo) { return bsdf.evalSpread(in, wo).pdf; }, static_cast<double>(n));
+        const Chi2Result r = chi2Test(observed, expected);
+        EXPECT_GT(r.pValue, 1e-3) << "wi " << wi << " chi2 " << r.statistic << " dof " << r.dof
+                                  << " pickT " << yarn.pickT;
+    }
+}
+
+}  // namespace
+}  // namespace weft

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "weft/core/exit_offset.h"
 #include "weft/core/file.h"
 #include "weft/core/image_io.h"
 #include "weft/core/math.h"
@@ -58,6 +59,36 @@ class RenderTest : public weft::testing::TempDirTest {
         const std::string p = path("lossless.json");
         writeFileAtomic(p, model.dump());
         return p;
+    }
+    // `model` (a file) with an exit-offset table (model.json version 5,
+    // docs/model-format.md) of the given bin edges, every cell and channel
+    // with the masses `masses` (one per bin, dz-major), written as `name`.
+    std::string writeSpreadModel(const std::string& model, const std::string& name,
+                                 const std::vector<double>& dzEdges,
+                                 const std::vector<double>& dpsiEdgesPi,
+                                 const std::vector<int>& masses) {
+        nlohmann::json j = nlohmann::json::parse(readFile(model));
+        j["version"] = 5;
+        nlohmann::json cells = nlohmann::json::array();
+        for (size_t cell = 0; cell < kExitOffsetCells; ++cell)
+            cells.push_back({masses, masses, masses});
+        j["exit_offset"] = {{"incident", {{"theta_bands", 4}, {"phi_bands", 8}}},
+                            {"dz_edges", dzEdges},
+                            {"dpsi_edges_pi", dpsiEdgesPi},
+                            {"masses", cells}};
+        const std::string p = path(name);
+        writeFileAtomic(p, j.dump());
+        return p;
+    }
+    // Light leaving up to 3 ply radii along the ply and all the way round.
+    std::string writeWideSpreadModel(const std::string& model) {
+        return writeSpreadModel(model, "wide.json", {-3, -1, -0.25, 0.25, 1, 3},
+                                {-1, -0.5, 0, 0.5, 1},
+                                {1, 2, 1, 1, 3, 5, 4, 2, 9, 20, 18, 8, 2, 6, 5, 4, 1, 1, 2, 1});
+    }
+    // Light leaving within 1e-7 ply radii of where it entered.
+    std::string writeZeroSpreadModel(const std::string& model) {
+        return writeSpreadModel(model, "zero.json", {-1e-7, 1e-7}, {-1, -1e-7, 1e-7, 1}, {0, 1, 0});
     }
     // `extra`: more top-level keys, each followed by a comma ("\"light_sampler\": \"power\",").
     SceneDesc scene(const std::string& model, const std::string& lights, int width = 12,
@@ -603,6 +634,106 @@ TEST_F(RenderTest, BatchedPathsAreThePerPathRendersBitForBit) {
     EXPECT_EQ(render(s, options).image.pixels,
               (options.integrator = PathIntegrator::Batched, render(s, options).image.pixels));
     EXPECT_FALSE(Scene(scene(kFleece, R"([{"type": "sky"}])"), inMode("fiber")).batchesFaster());
+}
+
+// The exit spread (issue 47, docs/exit-point.md): a model whose M light
+// leaves elsewhere on the ply is still rendered without bias, the same by
+// both integrators, and with no spread it is today's model.
+TEST_F(RenderTest, ExitSpreadKeepsNextEventEstimationUnbiased) {
+    const std::string lights = R"([{"type": "sphere", "center": [0.3, 0.4, 0.5], "radius": 0.25,
+                                     "radiance": [4, 3, 2]},
+                                    {"type": "constant", "radiance": [0.2, 0.25, 0.3]}])";
+    const Scene s(scene(writeWideSpreadModel(kFleece), lights), inMode("neural"));
+    ASSERT_NE(s.bsdf(0).exitSpread(), nullptr);
+    expectNeeMatchesBsdfSampling(s, "neural", SamplerKind::Independent);
+}
+
+TEST_F(RenderTest, ExitSpreadOfZeroIsTodaysModel) {
+    // Another estimator of the same integral: the split event with every
+    // offset within 1e-7 ply radii against the model without the table,
+    // along the same rays.
+    const std::string lights = R"([{"type": "sky"},
+                                    {"type": "sphere", "center": [0.3, 0.4, 0.5], "radius": 0.2,
+                                     "radiance": [6, 5, 4]}])";
+    const Scene plain(scene(kFleece, lights), inMode("neural"));
+    const Scene zero(scene(writeZeroSpreadModel(kFleece), lights), inMode("neural"));
+    const Scene wide(scene(writeWideSpreadModel(kFleece), lights), inMode("neural"));
+    const auto rays = raysOnYarn(plain, 5);
+    ASSERT_EQ(rays.size(), 5u);
+    const int samples = static_cast<int>(scaled(20000));
+    double moved = 0;
+    for (size_t r = 0; r < rays.size(); ++r) {
+        const Estimate a = estimate(plain, rays[r].first, rays[r].second, samples, true, r);
+        const Estimate b = estimate(zero, rays[r].first, rays[r].second, samples, true, r + 10);
+        const Estimate c = estimate(wide, rays[r].first, rays[r].second, samples, true, r + 20);
+        const double se = std::hypot(a.standardError, b.standardError);
+        EXPECT_NEAR(b.mean, a.mean, 4.5 * se + 1e-4) << "ray " << r;
+        moved = std::max(moved,
+                         std::abs(c.mean - a.mean) / std::hypot(a.standardError, c.standardError));
+    }
+    // The wide spread does move the light (else the split would do nothing).
+    EXPECT_GT(moved, 5.0);
+}
+
+TEST_F(RenderTest, ExitSpreadBatchedIsPerPathBitForBitAndFiniteAtShortCurves) {
+    // A 0.02 long open yarn (shorter than its radius) and light leaving 4 to
+    // 8 ply radii away: every exit point stops at an end of its ply.
+    const std::string far =
+        writeSpreadModel(kFleece, "far.json", {-8, -4, 4, 8}, {-1, 1}, {1, 0, 1});
+    writeFileAtomic(path("short.txt"), "-0.01 0 0\n0.01 0 0\n");
+    for (const auto& [model, curves] :
+         {std::pair{writeWideSpreadModel(kFleece), std::string("yarn.txt")},
+          std::pair{far, std::string("short.txt")}}) {
+        SceneDesc desc = scene(model, R"([{"type": "sky"},
+            {"type": "sphere", "center": [0.3, 0.4, 0.5], "radius": 0.2, "radiance": [6, 5, 4]}])");
+        desc.yarns[0].curves = path(curves);
+        const Scene s(desc, inMode("neural"));
+        RenderOptions options;
+        options.spp = 4;
+        options.seed = 5;
+        options.quiet = true;
+        options.threads = 2;
+        options.integrator = PathIntegrator::PerPath;
+        const RenderResult want = render(s, options);
+        options.integrator = PathIntegrator::Batched;
+        const RenderResult got = render(s, options);
+        EXPECT_EQ(got.image.pixels, want.image.pixels) << curves;
+        EXPECT_EQ(got.stats.rays, want.stats.rays);
+        double sum = 0;
+        for (const float v : got.image.pixels) {
+            ASSERT_TRUE(std::isfinite(v));
+            sum += v;
+        }
+        EXPECT_GT(sum, 0.0) << curves;
+    }
+}
+
+TEST_F(RenderTest, ExitSpreadKeepsTheEnergyOfALonePly) {
+    // One straight ply under a constant environment of radiance 1: light
+    // leaving it never meets it again (it is convex), so along a camera ray
+    // the radiance's expectation is the BSDF's albedo at that wi, whether the
+    // M light leaves where it entered or up to 3 radii away (an event's
+    // weights average to its albedo, exit_spread_test.cpp): the two agree
+    // within their noise. A spread that lost or made energy would not.
+    writeFileAtomic(path("straight.txt"), "-1 0 0\n-0.5 0 0\n0 0 0\n0.5 0 0\n1 0 0\n");
+    const auto loneScene = [&](const std::string& model) {
+        SceneDesc desc = scene(model, R"([{"type": "constant", "radiance": [1, 1, 1]}])");
+        desc.yarns[0].curves = path("straight.txt");
+        desc.yarns[0].plies = 1;
+        return desc;
+    };
+    const Scene plain(loneScene(kFleece), inMode("neural"));
+    const Scene spread(loneScene(writeWideSpreadModel(kFleece)), inMode("neural"));
+    const auto rays = raysOnYarn(plain, 5);
+    ASSERT_EQ(rays.size(), 5u);
+    const int samples = static_cast<int>(scaled(20000));
+    for (size_t r = 0; r < rays.size(); ++r) {
+        const Estimate a = estimate(plain, rays[r].first, rays[r].second, samples, true, r);
+        const Estimate b = estimate(spread, rays[r].first, rays[r].second, samples, true, r);
+        EXPECT_NEAR(b.mean, a.mean, 4.5 * std::hypot(a.standardError, b.standardError) + 1e-4)
+            << "ray " << r;
+        EXPECT_GT(b.mean, 0.1);
+    }
 }
 
 TEST_F(RenderTest, FiberGeometryBeyondTheLimitIsRefusedBeforeItIsBuilt) {

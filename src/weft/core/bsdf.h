@@ -235,45 +235,46 @@ inline BsdfSlice Bsdf::slice(const Vec3& wi) const { return BsdfSlice(*this, wi)
 // A BSDF whose multiply scattered ("spread") part leaves the surface at
 // another point than the one the light entered, as a BSSRDF's does (the
 // yarn model with exit offsets, issue 47, docs/exit-point.md). The path
-// tracer splits such an event in two (render/path_tracer.h):
-//   - the surface part at the hit: next-event estimation with evalSurface,
-//     and with probability 1 - spreadProbability a continuation from the
-//     hit (sampleEvent's `surface` sample);
-//   - otherwise the spread part: sampleEvent gives an exit offset (along the
-//     tube dz radii, around it dpsi radians, tube_accel.h exitPoint) and a
-//     weight per channel (the offset density's channel MIS over the branch
-//     probability); at the exit point, in its own frame, next-event
-//     estimation with evalSpread and the continuation from sampleSpread.
-// Each branch's density is the one its continuation reports, so MIS between
-// next-event estimation and BSDF sampling stays within the branch. Every
-// call takes an incident this BSDF prepared, with wi at the hit.
-struct SpreadEvent {
-    bool spread = false;      // false: `surface` continues the path from the hit
-    BsdfSample surface;       // the surface part's sample (weight and pdf of its branch)
-    double dz = 0, dpsi = 0;  // spread: the exit offset (tube radii, radians)
-    Rgb weight;               // spread: per channel, to multiply the path throughput by
+// tracer splits such an event (render/path_tracer.h):
+//   - an exit point at every event: sampleOffset gives the offset (along
+//     the tube dz radii, around it dpsi radians, tube_accel.h exitPoint)
+//     and a weight per channel (the offset density's channel MIS);
+//   - next-event estimation at the hit with evalSurface, and at the exit
+//     point, in its own frame, with evalSpread times the offset weight;
+//   - sampleEvent's one continuation: the surface part's from the hit, or
+//     the spread part's from the exit point (times the offset weight).
+// evalSurface's and evalSpread's densities are those with which
+// sampleEvent reaches wo from the hit and from the exit point, so MIS
+// between next-event estimation and BSDF sampling holds at either point.
+// Every call takes an incident this BSDF prepared, with wi at the hit.
+struct SpreadOffset {
+    double dz = 0, dpsi = 0;  // the exit offset (tube radii, radians)
+    Rgb weight;               // per channel, to multiply the spread part by
+};
+
+struct SpreadSample {
+    bool spread = false;  // the path continues from the exit point
+    BsdfSample sample;    // wo in the frame of where it continues from
 };
 
 class ExitSpread {
   public:
     virtual ~ExitSpread() = default;
-    // The probability of the spread branch at `in`; 0 where the event is not
-    // split (the BSDF's eval, pdf and sample then hold as they are).
-    virtual double spreadProbability(const BsdfIncident& in) const = 0;
-    // The surface part at wo (the hit's frame): its value, and the density
-    // with which sampleEvent's surface branch reaches wo.
+    // Whether the event at `in` splits; where not, the BSDF's eval, pdf and
+    // sample hold as they are.
+    virtual bool splits(const BsdfIncident& in) const = 0;
+    // The exit offset from three uniform numbers (the channel, the offset).
+    virtual SpreadOffset sampleOffset(const BsdfIncident& in, const BsdfSampleInput& u) const = 0;
+    // The surface part at wo (the hit's frame), and sampleEvent's density of
+    // reaching wo from the hit.
     virtual BsdfEval evalSurface(const BsdfIncident& in, const Vec3& wo) const = 0;
-    // The event: `u` as for Bsdf::sample, `uSpread` three more numbers (the
-    // channel and the offset) used by the spread branch only.
-    virtual SpreadEvent sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
-                                    const BsdfSampleInput& uSpread, Rng& rng) const = 0;
-    // The spread part at the exit point, wo in the exit point's frame: its
-    // value, and the density of sampleSpread given the spread branch.
+    // The spread part at wo (the exit point's frame), and sampleEvent's
+    // density of reaching wo from the exit point.
     virtual BsdfEval evalSpread(const BsdfIncident& in, const Vec3& woExit) const = 0;
-    // The continuation from the exit point for the event's `u` (which chose
-    // the spread branch): wo in the exit frame, weight = evalSpread / pdf.
-    virtual BsdfSample sampleSpread(const BsdfIncident& in, const BsdfSampleInput& u,
-                                    Rng& rng) const = 0;
+    // The continuation: `u` as for Bsdf::sample; weight = that part's value
+    // over its density (a delta's weight for the T lobe).
+    virtual SpreadSample sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
+                                     Rng& rng) const = 0;
 };
 
 }  // namespace weft

@@ -180,11 +180,12 @@ bool continuePath(PathState& p, const TubeHit& hit, const BsdfSample& s, int dep
 }
 
 // The event at `hit` of a BSDF whose spread part leaves elsewhere
-// (ExitSpread, core/bsdf.h), after the light sample at the hit (`light`,
-// evaluated here with the surface part): the event's sample input `u` and
-// three more numbers, then either the surface part's continuation from the
-// hit, or the exit point (next-event estimation there with the spread part)
-// and the continuation from it. False when the path ends.
+// (ExitSpread, core/bsdf.h), after the light sample at the hit (`light`)
+// and the event's sample input `u`: three more numbers give the exit point;
+// next-event estimation at the hit with the surface part, and at the exit
+// point (one more light pick and light sample) with the spread part; then
+// the one continuation, from the hit or from the exit point. False when the
+// path ends.
 bool splitEvent(const Scene& scene, const ExitSpread& spread, const BsdfIncident& in,
                 const Frame& frame, const TubeHit& hit, const LightSampleAtHit& light,
                 const BsdfSampleInput& u, PathState& p, int depth, bool nee, SampleStream& stream,
@@ -194,33 +195,26 @@ bool splitEvent(const Scene& scene, const ExitSpread& spread, const BsdfIncident
             p.throughput * directLight(light, spread.evalSurface(in, frame.toLocal(light.wi)));
     const double uChannel = stream.get1D();
     const std::array<double, 2> uOffset = stream.get2D();
-    const SpreadEvent event =
-        spread.sampleEvent(in, u, {uChannel, uOffset[0], uOffset[1]}, stream.rng());
-    if (!event.spread) {
-        BsdfSample s = event.surface;
-        s.wo = normalize(frame.fromLocal(s.wo));
-        return continuePath(p, hit, s, depth, stream, options, first);
-    }
-    const TubeHit exit = scene.accel().exitPoint(hit, event.dz, event.dpsi);
+    const SpreadOffset offset = spread.sampleOffset(in, {uChannel, uOffset[0], uOffset[1]});
+    const TubeHit exit = scene.accel().exitPoint(hit, offset.dz, offset.dpsi);
     const Frame exitFrame = scene.shadingFrame(exit);
-    p.throughput *= event.weight;
-    if (p.throughput.isBlack()) return false;
     if (nee) {
         const LightSampleAtHit atExit = sampleLightAtHit(scene, exit, stream, counters);
         if (atExit.pending)
-            p.radiance += p.throughput *
+            p.radiance += p.throughput * offset.weight *
                           directLight(atExit, spread.evalSpread(in, exitFrame.toLocal(atExit.wi)));
     }
-    BsdfSample s = spread.sampleSpread(in, u, stream.rng());
-    s.wo = normalize(exitFrame.fromLocal(s.wo));
-    if (depth == 0 && first && s.valid()) first->albedo = event.weight * s.weight;
-    return continuePath(p, exit, s, depth, stream, options, nullptr);
+    SpreadSample next = spread.sampleEvent(in, u, stream.rng());
+    next.sample.wo = normalize((next.spread ? exitFrame : frame).fromLocal(next.sample.wo));
+    if (!next.spread) return continuePath(p, hit, next.sample, depth, stream, options, first);
+    next.sample.weight *= offset.weight;
+    return continuePath(p, exit, next.sample, depth, stream, options, first);
 }
 
-// Whether the event at a prepared incident splits (ExitSpread), and how.
+// The ExitSpread of a prepared incident's BSDF where its event splits, else null.
 const ExitSpread* splitting(const Bsdf& bsdf, const BsdfIncident& in) {
     const ExitSpread* spread = bsdf.exitSpread();
-    return spread && spread->spreadProbability(in) > 0 ? spread : nullptr;
+    return spread && spread->splits(in) ? spread : nullptr;
 }
 
 }  // namespace

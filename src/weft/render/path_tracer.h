@@ -17,13 +17,12 @@
 //     sampling: the same expectation, used by the consistency test);
 //   - a BSDF whose multiply scattered part leaves elsewhere (ExitSpread,
 //     core/bsdf.h: a yarn model with exit offsets, docs/exit-point.md)
-//     splits its event: next-event estimation at the hit with the surface
-//     part; then either the surface part's continuation from the hit, or
-//     (three more numbers: the offset's channel and the offset) the exit
-//     point on the same tube (TubeAccel::exitPoint), next-event estimation
-//     there with the spread part in the exit point's frame (one more light
-//     pick and 2D light sample) and the continuation from it. A model
-//     without the table draws and computes exactly as before;
+//     splits its event: an exit point on the same tube from three more
+//     numbers (TubeAccel::exitPoint), next-event estimation at the hit with
+//     the surface part and at the exit point with the spread part in the
+//     exit point's frame (one more light pick and 2D light sample), then one
+//     continuation, from the hit or from the exit point. A model without
+//     the table draws and computes exactly as before;
 //   - the yarn BSDF's T lobe (a delta, wo = -wi) continues straight through
 //     the ply it hit: the continuation ray leaves that ply (tube_accel.h drops
 //     its interior);

@@ -223,12 +223,15 @@ double surfaceBranch(const YarnIncident& in) {
 
 }  // namespace
 
-void YarnBsdf::evalParts(const YarnIncident& in, const Vec3& wo, Rgb* r, Rgb* m,
-                         double* density) const {
+void YarnBsdf::evalPart(const YarnIncident& in, const Vec3& wo, bool spread, Rgb* value,
+                        double* density) const {
     const FiberBcsdf::Angles out = model_->outAngles(wo);
-    const YarnComponents parts = model_->components(wo, in, out);
-    *r = model_->hasReflection() ? parts.r : Rgb(0.0);
-    *m = parts.m;
+    if (spread) {
+        *value = model_->components(wo, in, out).m;
+    } else {
+        // S_M given as 0: the M network is not run.
+        *value = model_->hasReflection() ? model_->components(in, wo, out, Rgb(0.0)).r : Rgb(0.0);
+    }
     *density = sampler_->pdf(in, wo, out);
 }
 
@@ -242,82 +245,69 @@ Rgb YarnBsdf::spreadChannelProbabilities(const BsdfIncident& in) const {
     return sum > 0 ? p / sum : Rgb(0.0);
 }
 
-double YarnBsdf::spreadProbability(const BsdfIncident& in) const {
-    if (spreadChannelProbabilities(in).maxComponent() == 0) return 0.0;
-    const YarnIncident& yarn = in.get<YarnIncident>();
-    return (1.0 - yarn.pickT) * (1.0 - surfaceBranch(yarn));
+bool YarnBsdf::splits(const BsdfIncident& in) const {
+    return spreadChannelProbabilities(in).maxComponent() > 0;
 }
 
-BsdfSampleInput YarnBsdf::branchInput(const YarnIncident& in, const BsdfSampleInput& u,
-                                      bool spread) const {
-    const double rhoS = surfaceBranch(in);
-    const double v = std::clamp((u[0] - in.pickT) / (1.0 - in.pickT), 0.0, kOneMinusEpsilon);
-    const double w = spread ? (v - rhoS) / (1.0 - rhoS) : v / rhoS;
-    return {in.pickT + (1.0 - in.pickT) * std::clamp(w, 0.0, kOneMinusEpsilon), u[1], u[2]};
-}
-
-BsdfEval YarnBsdf::evalSurface(const BsdfIncident& in, const Vec3& wo) const {
+SpreadOffset YarnBsdf::sampleOffset(const BsdfIncident& in, const BsdfSampleInput& u) const {
+    // A channel by the path's importance, then q_c; each channel's weight
+    // over the mixture of the channels' densities.
     const YarnIncident& yarn = in.get<YarnIncident>();
-    Rgb r, m;
-    double density;
-    evalParts(yarn, wo, &r, &m, &density);
-    return {r, surfaceBranch(yarn) * density};
-}
-
-SpreadEvent YarnBsdf::sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
-                                  const BsdfSampleInput& uSpread, Rng& rng) const {
-    const YarnIncident& yarn = in.get<YarnIncident>();
-    SpreadEvent event;
-    if (u[0] < yarn.pickT) {
-        event.surface = transmissionSample(in);
-        return event;
-    }
-    const double rhoS = surfaceBranch(yarn);
-    const double v = (u[0] - yarn.pickT) / (1.0 - yarn.pickT);
-    if (v < rhoS) {
-        const YarnDirectionSample d = sampler_->sample(yarn, branchInput(yarn, u, false), rng);
-        Rgb r, m;
-        double density;
-        evalParts(yarn, d.wo, &r, &m, &density);
-        event.surface = BsdfSample::fromEval(d.wo, {r, rhoS * density}, kLobeR);
-        return event;
-    }
-    // The offset: a channel by the path's importance, then q_c; each
-    // channel's weight over the mixture of the channels' densities.
     const Rgb p = spreadChannelProbabilities(in);
     const size_t cell = exitOffsetCell(yarn.wi);
-    const int channel = uSpread[0] < p.r ? 0 : uSpread[0] < p.r + p.g ? 1 : 2;
-    const ExitOffsetTable::Offset o = exitOffset_->sample(cell, channel, uSpread[1], uSpread[2]);
+    const int channel = u[0] < p.r ? 0 : u[0] < p.r + p.g ? 1 : 2;
+    const ExitOffsetTable::Offset o = exitOffset_->sample(cell, channel, u[1], u[2]);
     Rgb q;
     double mixture = 0;
     for (int c = 0; c < 3; ++c) {
         q[c] = c == channel ? o.pdf : exitOffset_->pdf(cell, c, o.dz, o.dpsi);
         mixture += p[c] * q[c];
     }
-    if (!(mixture > 0)) return event;  // cannot happen: the picked channel's q is positive
-    event.spread = true;
-    event.dz = o.dz;
-    event.dpsi = o.dpsi;
-    event.weight = q / (mixture * (1.0 - yarn.pickT) * (1.0 - rhoS));
-    return event;
+    SpreadOffset offset;
+    offset.dz = o.dz;
+    offset.dpsi = o.dpsi;
+    offset.weight = mixture > 0 ? q / mixture : Rgb(0.0);
+    return offset;
+}
+
+BsdfEval YarnBsdf::evalSurface(const BsdfIncident& in, const Vec3& wo) const {
+    const YarnIncident& yarn = in.get<YarnIncident>();
+    BsdfEval e;
+    evalPart(yarn, wo, false, &e.value, &e.pdf);
+    e.pdf *= surfaceBranch(yarn);
+    return e;
 }
 
 BsdfEval YarnBsdf::evalSpread(const BsdfIncident& in, const Vec3& woExit) const {
     const YarnIncident& yarn = in.get<YarnIncident>();
-    Rgb r, m;
-    double density;
-    evalParts(yarn, woExit, &r, &m, &density);
-    return {m, density / (1.0 - yarn.pickT)};
+    BsdfEval e;
+    evalPart(yarn, woExit, true, &e.value, &e.pdf);
+    e.pdf *= 1.0 - surfaceBranch(yarn);
+    return e;
 }
 
-BsdfSample YarnBsdf::sampleSpread(const BsdfIncident& in, const BsdfSampleInput& u,
-                                  Rng& rng) const {
+SpreadSample YarnBsdf::sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
+                                   Rng& rng) const {
     const YarnIncident& yarn = in.get<YarnIncident>();
-    const YarnDirectionSample d = sampler_->sample(yarn, branchInput(yarn, u, true), rng);
-    Rgb r, m;
-    double density;
-    evalParts(yarn, d.wo, &r, &m, &density);
-    return BsdfSample::fromEval(d.wo, {m, density / (1.0 - yarn.pickT)}, kLobeM);
+    SpreadSample out;
+    if (u[0] < yarn.pickT) {
+        out.sample = transmissionSample(in);
+        return out;
+    }
+    // The rest of u[0] picks the branch; rescaled onto [pickT, 1) again, it
+    // drives the sampler as in sample().
+    const double rhoS = surfaceBranch(yarn);
+    const double v = std::clamp((u[0] - yarn.pickT) / (1.0 - yarn.pickT), 0.0, kOneMinusEpsilon);
+    out.spread = v >= rhoS;
+    const double w = out.spread ? (v - rhoS) / (1.0 - rhoS) : v / rhoS;
+    const BsdfSampleInput branch = {
+        yarn.pickT + (1.0 - yarn.pickT) * std::clamp(w, 0.0, kOneMinusEpsilon), u[1], u[2]};
+    const YarnDirectionSample d = sampler_->sample(yarn, branch, rng);
+    BsdfEval e;
+    evalPart(yarn, d.wo, out.spread, &e.value, &e.pdf);
+    e.pdf *= out.spread ? 1.0 - rhoS : rhoS;
+    out.sample = BsdfSample::fromEval(d.wo, e, out.spread ? kLobeM : kLobeR);
+    return out;
 }
 
 }  // namespace weft

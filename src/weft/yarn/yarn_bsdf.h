@@ -26,16 +26,17 @@
 // whose cell has M light in some channel, the event splits: the surface
 // part S_T + S_R at the hit, the M part S_M at an exit point drawn from the
 // table, S_M(wi, wo) with wo in the exit point's frame (the model's M lobe
-// was fitted so). The branches: T with P_T as sample() picks it; of the
-// continuous rest, the surface one with rho_S = YarnIncident::surfaceShare
-// (clamped to [0.05, 0.95]), drawing wo from the sampler and weighting S_R;
-// the spread one with 1 - rho_S, the offset's channel c picked in proportion
-// to the path's importance among the channels with M light there, the
-// offset from q_c, each channel weighted by q_c / sum_c' p_c' q_c' (one-sample
-// MIS over channels), and wo at the exit from the sampler, weighting S_M.
-// Either branch's sampler density is the whole continuous one: each weight is
-// that part's value over it. Mirrored incidents (from inside), cells without
-// M light and models without the table keep today's event.
+// was fitted so). The offset: a channel c picked in proportion to the
+// path's importance among the channels with M light there, the offset from
+// q_c, each channel weighted by q_c / sum_c' p_c' q_c' (one-sample MIS over
+// channels). The continuation: T with P_T as sample() picks it; of the
+// continuous rest, the surface branch with rho_S = YarnIncident::
+// surfaceShare (clamped to [0.05, 0.95]) and the spread branch with 1 -
+// rho_S, both drawing wo from the whole continuous sampler and weighting
+// their part: S_R / (rho_S pdf), S_M / ((1 - rho_S) pdf), pdf the sampler's
+// continuous density (so evalSurface's density is rho_S pdf, evalSpread's
+// (1 - rho_S) pdf). Mirrored incidents (from inside), cells without M light
+// and models without the table keep today's event.
 //
 // Incident directions below the surface (wi.z < 0): the networks were trained
 // on the upper hemisphere only and a ply is never lit from inside, so the BSDF
@@ -104,13 +105,12 @@ class YarnBsdf final : public Bsdf, public ExitSpread {
     const ExitSpread* exitSpread() const override { return exitOffset_ ? this : nullptr; }
 
     // ExitSpread (above; core/bsdf.h).
-    double spreadProbability(const BsdfIncident& in) const override;
+    bool splits(const BsdfIncident& in) const override;
+    SpreadOffset sampleOffset(const BsdfIncident& in, const BsdfSampleInput& u) const override;
     BsdfEval evalSurface(const BsdfIncident& in, const Vec3& wo) const override;
-    SpreadEvent sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
-                            const BsdfSampleInput& uSpread, Rng& rng) const override;
     BsdfEval evalSpread(const BsdfIncident& in, const Vec3& woExit) const override;
-    BsdfSample sampleSpread(const BsdfIncident& in, const BsdfSampleInput& u,
-                            Rng& rng) const override;
+    SpreadSample sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
+                             Rng& rng) const override;
     // The model's exit-offset table, or nullptr.
     const ExitOffsetTable* exitOffsets() const { return exitOffset_.get(); }
 
@@ -151,14 +151,12 @@ class YarnBsdf final : public Bsdf, public ExitSpread {
     // both are computed. `m`: S_M at (in.wi, wo) when a batch computed it.
     void evalAndPdf(const YarnIncident& in, const Vec3& wo, Rgb* value, double* density,
                     const Rgb* m = nullptr) const;
-    // S_R and S_M apart at wo (upper side), and the continuous density.
-    void evalParts(const YarnIncident& in, const Vec3& wo, Rgb* r, Rgb* m, double* density) const;
-    // The spread branch's channel probabilities at `in` (all 0: not split).
+    // S_R (`m` null: without running the M network) or S_M at wo (upper
+    // side), and the continuous density.
+    void evalPart(const YarnIncident& in, const Vec3& wo, bool spread, Rgb* value,
+                  double* density) const;
+    // The offset's channel probabilities at `in` (all 0: no split).
     Rgb spreadChannelProbabilities(const BsdfIncident& in) const;
-    // The sampler's input for a branch: u[0] rescaled from the branch's part
-    // of [pickT, 1) onto all of it.
-    BsdfSampleInput branchInput(const YarnIncident& in, const BsdfSampleInput& u,
-                                bool spread) const;
 
     // Immutable once built, so copies of the BSDF share them (the tabulated
     // sampler keeps the evaluator too).

@@ -117,12 +117,13 @@ def main():
     import weft
 
     models = dict(m.split("=", 1) for m in a.models)
-    results = {"date": now(), "spp": a.spp, "size": a.size, "patch": a.patch,
+    results = {"date": now(), "spp": a.spp, "size": a.size, "patch": a.patch, "models": a.models,
                "weft": binary_digest(a.weft), "rows": []}
     lines = [
         "# The exit spread against the fibers",
         "",
-        f"`bench/exit_spread.py --spp {a.spp} --size {a.size}` ({results['date']}): each "
+        f"`bench/exit_spread.py --models {' '.join(a.models)} --spp {a.spp} --size {a.size}` "
+        f"({results['date']}): each "
         f"scene as bench/table2.py makes it (`weft scene KIND --size {a.patch}`, {a.size} x "
         f"{a.size} px), {a.spp} spp per render, two seeds per mode; *today*: neural mode with "
         "models/PRESET.json, *exit*: with the model fitted with exit offsets "

@@ -77,14 +77,17 @@ YarnIncident YarnBsdf::incident(const Vec3& wi, double pT) const {
 }
 
 void YarnBsdf::evalAndPdf(const YarnIncident& in, const Vec3& wo, Rgb* value, double* density,
-                          const Rgb* m) const {
+                          const Rgb* m, Part part) const {
     const FiberBcsdf::Angles out =
         value || sampler_->pdfNeedsOutAngles() ? model_->outAngles(wo) : FiberBcsdf::Angles{};
     if (value) {
+        // S_R alone takes S_M as 0: the M network is not run.
+        const Rgb noM(0.0);
+        if (part == Part::Surface) m = &noM;
         const YarnComponents parts =
             m ? model_->components(in, wo, out, *m) : model_->components(wo, in, out);
-        *value = parts.m;
-        if (model_->hasReflection()) *value += parts.r;
+        *value = part == Part::Surface ? Rgb(0.0) : parts.m;
+        if (model_->hasReflection() && part != Part::Spread) *value += parts.r;
     }
     if (density) *density = sampler_->pdf(in, wo, out);
 }
@@ -223,18 +226,6 @@ double surfaceBranch(const YarnIncident& in) {
 
 }  // namespace
 
-void YarnBsdf::evalPart(const YarnIncident& in, const Vec3& wo, bool spread, Rgb* value,
-                        double* density) const {
-    const FiberBcsdf::Angles out = model_->outAngles(wo);
-    if (spread) {
-        *value = model_->components(wo, in, out).m;
-    } else {
-        // S_M given as 0: the M network is not run.
-        *value = model_->hasReflection() ? model_->components(in, wo, out, Rgb(0.0)).r : Rgb(0.0);
-    }
-    *density = sampler_->pdf(in, wo, out);
-}
-
 Rgb YarnBsdf::spreadChannelProbabilities(const BsdfIncident& in) const {
     const YarnIncident& yarn = in.get<YarnIncident>();
     if (!exitOffset_ || yarn.mirrored || !(yarn.pickT < 1)) return Rgb(0.0);
@@ -273,7 +264,7 @@ SpreadOffset YarnBsdf::sampleOffset(const BsdfIncident& in, const BsdfSampleInpu
 BsdfEval YarnBsdf::evalSurface(const BsdfIncident& in, const Vec3& wo) const {
     const YarnIncident& yarn = in.get<YarnIncident>();
     BsdfEval e;
-    evalPart(yarn, wo, false, &e.value, &e.pdf);
+    evalAndPdf(yarn, wo, &e.value, &e.pdf, nullptr, Part::Surface);
     e.pdf *= surfaceBranch(yarn);
     return e;
 }
@@ -281,7 +272,7 @@ BsdfEval YarnBsdf::evalSurface(const BsdfIncident& in, const Vec3& wo) const {
 BsdfEval YarnBsdf::evalSpread(const BsdfIncident& in, const Vec3& woExit) const {
     const YarnIncident& yarn = in.get<YarnIncident>();
     BsdfEval e;
-    evalPart(yarn, woExit, true, &e.value, &e.pdf);
+    evalAndPdf(yarn, woExit, &e.value, &e.pdf, nullptr, Part::Spread);
     e.pdf *= 1.0 - surfaceBranch(yarn);
     return e;
 }
@@ -304,7 +295,7 @@ SpreadSample YarnBsdf::sampleEvent(const BsdfIncident& in, const BsdfSampleInput
         yarn.pickT + (1.0 - yarn.pickT) * std::clamp(w, 0.0, kOneMinusEpsilon), u[1], u[2]};
     const YarnDirectionSample d = sampler_->sample(yarn, branch, rng);
     BsdfEval e;
-    evalPart(yarn, d.wo, out.spread, &e.value, &e.pdf);
+    evalAndPdf(yarn, d.wo, &e.value, &e.pdf, nullptr, out.spread ? Part::Spread : Part::Surface);
     e.pdf *= out.spread ? 1.0 - rhoS : rhoS;
     out.sample = BsdfSample::fromEval(d.wo, e, out.spread ? kLobeM : kLobeR);
     return out;

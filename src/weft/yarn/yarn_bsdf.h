@@ -147,14 +147,13 @@ class YarnBsdf final : public Bsdf, public ExitSpread {
     YarnIncident incident(const Vec3& wi) const;
     // The same with P(T) given: pT = transmission(wi).
     YarnIncident incident(const Vec3& wi, double pT) const;
+    // Which part of the continuous value evalAndPdf gives: R + M, or (the
+    // exit spread's) S_R alone (without running the M network) or S_M alone.
+    enum class Part { Whole, Surface, Spread };
     // eval and pdf at wo (mirrored with the incident): the one place where
     // both are computed. `m`: S_M at (in.wi, wo) when a batch computed it.
     void evalAndPdf(const YarnIncident& in, const Vec3& wo, Rgb* value, double* density,
-                    const Rgb* m = nullptr) const;
-    // S_R (`m` null: without running the M network) or S_M at wo (upper
-    // side), and the continuous density.
-    void evalPart(const YarnIncident& in, const Vec3& wo, bool spread, Rgb* value,
-                  double* density) const;
+                    const Rgb* m = nullptr, Part part = Part::Whole) const;
     // The offset's channel probabilities at `in` (all 0: no split).
     Rgb spreadChannelProbabilities(const BsdfIncident& in) const;
 

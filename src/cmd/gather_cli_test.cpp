@@ -19,12 +19,12 @@
 #include <utility>
 #include <vector>
 
+#include "cli_test_util.h"
 #include "weft/core/curves.h"
 #include "weft/core/file.h"
 #include "weft/core/npy.h"
 #include "weft/core/test_util.h"
 #include "weft/gather/gather.h"
-#include "cli_test_util.h"
 
 namespace weft {
 namespace {
@@ -67,7 +67,7 @@ NpyArray readChecked(const std::string& dir, const std::string& name, const std:
 }
 
 class GatherCliTest : public testing::CliTestBase {
-protected:
+  protected:
     RunResult gather(const std::string& args) const { return run("gather " + args); }
 
     // Runs a gather that must succeed and returns its stdout.
@@ -84,7 +84,6 @@ protected:
     nlohmann::json meta(const std::string& out) const {
         return nlohmann::json::parse(readFile(path(out) + "/meta.json"));
     }
-
 };
 
 using testing::expectUserError;
@@ -102,6 +101,8 @@ TEST_F(GatherCliTest, WritesArraysOfTheDocumentedTypesAndShapes) {
     const auto pT = values<double>(readChecked(dir, "p_t.npy", "<f8", {ti, pi}));
     const auto rdmR = values<float>(readChecked(dir, "rdm_r.npy", "<f4", {ti, pi, to, po, 3}));
     const auto rdmM = values<float>(readChecked(dir, "rdm_m.npy", "<f4", {ti, pi, to, po, 3}));
+    const auto rdmMExit =
+        values<float>(readChecked(dir, "rdm_m_exit.npy", "<f4", {ti, pi, to, po, 3}));
     const auto trunc = values<double>(readChecked(dir, "truncated.npy", "<f8", {ti, pi, 3}));
     const auto depth = values<int64_t>(readChecked(dir, "depth.npy", "<i8", {1002}));
     const auto offsets =
@@ -130,6 +131,7 @@ TEST_F(GatherCliTest, WritesArraysOfTheDocumentedTypesAndShapes) {
     }
     for (float v : rdmR) EXPECT_TRUE(std::isfinite(v) && v >= 0) << v;
     for (float v : rdmM) EXPECT_TRUE(std::isfinite(v) && v >= 0) << v;
+    for (float v : rdmMExit) EXPECT_TRUE(std::isfinite(v) && v >= 0) << v;
     for (double v : trunc) EXPECT_TRUE(std::isfinite(v) && v >= 0) << v;
     // Fleece scatters: some R and some M energy is recorded.
     EXPECT_GT(*std::max_element(rdmR.begin(), rdmR.end()), 0.0f);
@@ -151,10 +153,10 @@ TEST_F(GatherCliTest, WritesArraysOfTheDocumentedTypesAndShapes) {
     std::vector<std::string> files;
     for (const auto& e : fs::directory_iterator(dir)) files.push_back(e.path().filename());
     std::sort(files.begin(), files.end());
-    EXPECT_EQ(files,
-              (std::vector<std::string>{
-                  "count.npy", "count_t.npy", "depth.npy", "exit_distance.npy", "exit_offset.npy",
-                  "meta.json", "p_t.npy", "ply.txt", "rdm_m.npy", "rdm_r.npy", "truncated.npy"}));
+    EXPECT_EQ(files, (std::vector<std::string>{"count.npy", "count_t.npy", "depth.npy",
+                                               "exit_distance.npy", "exit_offset.npy", "meta.json",
+                                               "p_t.npy", "ply.txt", "rdm_m.npy", "rdm_m_exit.npy",
+                                               "rdm_r.npy", "truncated.npy"}));
 }
 
 TEST_F(GatherCliTest, MetaJsonAndPly) {
@@ -242,10 +244,9 @@ TEST_F(GatherCliTest, BitIdenticalForAnyThreadCount) {
 TEST_F(GatherCliTest, ShardsMergeToTheUnshardedGather) {
     gatherOk("--preset fleece " + kSmall + " --seed 3 --out whole");
     for (int k = 0; k < 4; ++k) {
-        const std::string out = gatherOk("--preset fleece " + kSmall + " --seed 3 --shard " +
-                                         std::to_string(k) + "/4 --threads " +
-                                         std::to_string(1 + k % 2) + " --out part" +
-                                         std::to_string(k));
+        const std::string out = gatherOk(
+            "--preset fleece " + kSmall + " --seed 3 --shard " + std::to_string(k) +
+            "/4 --threads " + std::to_string(1 + k % 2) + " --out part" + std::to_string(k));
         EXPECT_TRUE(contains(out, "\"shard\": \"" + std::to_string(k) + "/4\"")) << out;
         EXPECT_EQ(meta("part" + std::to_string(k)).at("format"), "weft-gather-part");
     }
@@ -266,7 +267,8 @@ TEST_F(GatherCliTest, ShardsMergeToTheUnshardedGather) {
 
     // Sets of parts that are not one gather, and a damaged part: nothing is written.
     expectUserError(run("gather merge part0 part1 part3 --out bad"), {"missing", "2/4"});
-    expectUserError(run("gather merge part0 part1 part1 part2 part3 --out bad"), {"both shard 1/4"});
+    expectUserError(run("gather merge part0 part1 part1 part2 part3 --out bad"),
+                    {"both shard 1/4"});
     gatherOk("--preset silk " + kSmall + " --seed 3 --shard 2/4 --out silk2");
     expectUserError(run("gather merge part0 part1 silk2 part3 --out bad"),
                     {"silk2/meta.json", "\"material\""});
@@ -276,9 +278,11 @@ TEST_F(GatherCliTest, ShardsMergeToTheUnshardedGather) {
     expectUserError(run("gather merge part0 part1 part2 part3 --out bad"), {"part3/sum_m.npy"});
     for (const std::string& name : listing()) EXPECT_TRUE(name.rfind("bad", 0) != 0) << name;
     // Bad shards.
-    expectUserError(gather("--preset fleece " + kSmall + " --shard 4/4 --out x"), {"--shard", "4/4"});
+    expectUserError(gather("--preset fleece " + kSmall + " --shard 4/4 --out x"),
+                    {"--shard", "4/4"});
     expectUserError(gather("--preset fleece --paths 3 --shard 0/4 --out x"), {"--shard", "N <= 3"});
-    expectUserError(gather("--preset fleece " + kSmall + " --shard 1-4 --out x"), {"--shard", "K/N"});
+    expectUserError(gather("--preset fleece " + kSmall + " --shard 1-4 --out x"),
+                    {"--shard", "K/N"});
     expectUserError(gather("--preset fleece --out x"), {"--paths"});
 }
 
@@ -321,8 +325,7 @@ TEST_F(GatherCliTest, AnyColourGatherRecoloursToAnyCTT) {
         EXPECT_TRUE(readFile(path("ac") + "/" + name) == readFile(path("acmerged") + "/" + name))
             << name;
     gatherOk("--preset fleece " + kSmall + " --seed 3 --shard 0/2 --out plainpart0");
-    expectUserError(run("gather merge acpart1 plainpart0 --out bad"),
-                    {"\"any_colour\" is false"});
+    expectUserError(run("gather merge acpart1 plainpart0 --out bad"), {"\"any_colour\" is false"});
 
     // Refused: an ordinary gather, bad colours, a missing gather, damaged records.
     gatherOk("--preset fleece " + kSmall + " --seed 3 --out plain");
@@ -422,7 +425,8 @@ void rewriteNpy(const std::string& file, const std::function<void(std::vector<T>
 // Item 3: a record's weight of 3e38 gave rdm_m.npy values of -13,664,891 with exit 0.
 TEST_F(GatherCliTest, RecolourAndMergeRefuseWeightsTheFixedPointSumsCannotHold) {
     gatherOk("--preset fleece " + kSmall + " --seed 3 --any-colour --out ac");
-    rewriteNpy<float>(path("ac/paths_weight.npy"), [](std::vector<float>& w) { w[3 * 5 + 1] = 3e38f; });
+    rewriteNpy<float>(path("ac/paths_weight.npy"),
+                      [](std::vector<float>& w) { w[3 * 5 + 1] = 3e38f; });
     expectUserError(run("gather recolour ac --c-tt 0.5,0.5,0.5 --out bad"),
                     {"ac/paths_weight.npy", "row 5", "channel 1", "3e+38", "< 2^31"});
     // (A short fit, should the check ever be lost.)
@@ -449,12 +453,12 @@ TEST_F(GatherCliTest, MergeRefusesPartsThatAreNotShardsOfOneTracedGather) {
     const std::string meta = readFile(path("p1/meta.json"));
     const auto merge = [&] { return run("gather merge p0 p1 --out bad"); };
     // Each field with one of the damages (gather_merge_test.cpp tries them all).
-    for (const auto& [field, how] : std::initializer_list<std::pair<const char*, const char*>>{
-             {"radius", "0"},
-             {"segments", "-1"},
-             {"period", "1e30"},
-             {"fiber_radius", "removed"},
-             {"radius", "string"}}) {
+    for (const auto& [field, how] :
+         std::initializer_list<std::pair<const char*, const char*>>{{"radius", "0"},
+                                                                    {"segments", "-1"},
+                                                                    {"period", "1e30"},
+                                                                    {"fiber_radius", "removed"},
+                                                                    {"radius", "string"}}) {
         nlohmann::json m = nlohmann::json::parse(meta);
         nlohmann::json& v = m.at("ply").at(field);
         if (how == std::string("removed"))
@@ -505,7 +509,9 @@ TEST_F(GatherCliTest, FitRefusesADamagedTruncatedOrDepthArray) {
     gatherOk("--preset fleece " + kSmall + " --seed 3 --out g");
     writeText("tiny.json", R"({"t_net": {"steps": 20, "restarts": 1, "batch": 64},
                                "m_net": {"hidden": [8], "steps": 20, "batch": 64}})");
-    const auto fit = [&] { return run("fit --rdm g --out m.json --config tiny.json --no-report --quiet"); };
+    const auto fit = [&] {
+        return run("fit --rdm g --out m.json --config tiny.json --no-report --quiet");
+    };
     const std::string truncated = readFile(path("g/truncated.npy")),
                       depth = readFile(path("g/depth.npy"));
     rewriteNpy<double>(path("g/truncated.npy"), [](std::vector<double>& t) { t[4] = NAN; });
@@ -544,8 +550,8 @@ TEST_F(GatherCliTest, ATwistTooLargeOrTooSmallForTheTracedPlyIsRefused) {
         expectUserError(gather("--params fiber.json --fibers 5 --density 0.3 --twist " +
                                std::string(twist) + " " + kSmall + " --out x"),
                         {"points"});
-    expectUserError(gather("--params fiber.json --fibers 5 --density 0.3 --twist 1e-310 " +
-                           kSmall + " --out x"),
+    expectUserError(gather("--params fiber.json --fibers 5 --density 0.3 --twist 1e-310 " + kSmall +
+                           " --out x"),
                     {"twist", "no finite twist period"});
     EXPECT_EQ(listing(), std::vector<std::string>{"fiber.json"});
 }

@@ -97,9 +97,9 @@ TEST(ColourModel, FileFormIsVersionTwoAndOldFilesStillLoad) {
     wrong["colour"]["functions"].erase(2);
     testing::expectInputError([&] { yarnModelFromJson(wrong, "model.json"); }, {"m_net"});
     nlohmann::json future = j;
-    future["version"] = 5;
+    future["version"] = 6;
     testing::expectInputError([&] { yarnModelFromJson(future, "model.json"); },
-                              {"unsupported version 5", "1 to 4"});
+                              {"unsupported version 6", "1 to 5"});
     testing::expectInputError([&] { plain.forColour(Rgb(0.5), "scene.json: yarns[0]"); },
                               {"scene.json: yarns[0]", "fitted for one colour", "--colour-range"});
     testing::expectInputError([&] { model.forColour(Rgb(0.5, 1.5, 0.5), "x"); },

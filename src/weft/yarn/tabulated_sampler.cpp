@@ -121,17 +121,15 @@ void TabulatedYarnSampler::prepare(const SurfaceFiberAngles& surface, YarnIncide
                table_.blend(in.table, peakMasking_);
     }
     // The table's M term, and its R term (the fiber's TT lobe inside S_R) per unit 1 - P(T).
-    const double rest =
-        table_.blend(in.table, tableEnergyM_) + (1.0 - pT) * table_.blend(in.table, tableEnergyR_);
+    const double restR = (1.0 - pT) * table_.blend(in.table, tableEnergyR_);
+    const double rest = table_.blend(in.table, tableEnergyM_) + restR;
     const double continuous = peak + rest;
     // q_R keeps a share wherever S_R may be positive, the table wherever S_M may be.
     in.pickR = hasReflection_ ? std::clamp(continuous > 0 ? peak / continuous : 0.5, kMinimumShare,
                                            1.0 - kMinimumShare)
                               : 0.0;
     in.pickT = pT > 0 ? std::min(pT / (pT + continuous), 1.0 - kMinimumShare) : 0.0;
-    in.surfaceShare = continuous > 0
-                          ? (peak + (1.0 - pT) * table_.blend(in.table, tableEnergyR_)) / continuous
-                          : 0.5;
+    in.surfaceShare = continuous > 0 ? (peak + restR) / continuous : 0.5;
 }
 
 double TabulatedYarnSampler::pdf(const YarnIncident& in, const Vec3& wo,

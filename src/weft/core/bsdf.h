@@ -275,6 +275,16 @@ class ExitSpread {
     // over its density (a delta's weight for the T lobe).
     virtual SpreadSample sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
                                      Rng& rng) const = 0;
+    // The last two for many incidents (as Bsdf's batches): out[k] is the
+    // single call's for query k, bit for bit.
+    virtual void evalSpreadBatch(const BsdfIncident* const* in, const Vec3* woExit, size_t count,
+                                 BsdfEval* out) const {
+        for (size_t k = 0; k < count; ++k) out[k] = evalSpread(*in[k], woExit[k]);
+    }
+    virtual void sampleEventBatch(const BsdfIncident* const* in, const BsdfSampleInput* u,
+                                  Rng* const* rng, size_t count, SpreadSample* out) const {
+        for (size_t k = 0; k < count; ++k) out[k] = sampleEvent(*in[k], u[k], *rng[k]);
+    }
 };
 
 }  // namespace weft

@@ -179,36 +179,67 @@ bool continuePath(PathState& p, const TubeHit& hit, const BsdfSample& s, int dep
     return true;
 }
 
-// The event at `hit` of a BSDF whose spread part leaves elsewhere
-// (ExitSpread, core/bsdf.h), after the light sample at the hit (`light`)
-// and the event's sample input `u`: three more numbers give the exit point;
-// next-event estimation at the hit with the surface part, and at the exit
-// point (one more light pick and light sample) with the spread part; then
-// the one continuation, from the hit or from the exit point. False when the
+// An event of a BSDF whose spread part leaves elsewhere (ExitSpread,
+// core/bsdf.h) between its halves: the exit offset, the exit point and its
+// frame, and the light sample there.
+struct SplitEvent {
+    SpreadOffset offset;
+    TubeHit exit;
+    Frame exitFrame;
+    LightSampleAtHit atExit;
+    Vec3 woExit;  // atExit.wi in the exit frame
+};
+
+// The split event's first half, after the light sample at the hit
+// (`light`) and the event's sample input: next-event estimation at the hit
+// with the surface part; three more numbers give the exit point; one more
+// light pick and light sample there.
+SplitEvent beginSplit(const Scene& scene, const ExitSpread& spread, const BsdfIncident& in,
+                      const Frame& frame, const TubeHit& hit, const LightSampleAtHit& light,
+                      PathState& p, bool nee, SampleStream& stream, PathCounters& counters) {
+    if (light.pending)
+        p.radiance +=
+            p.throughput * directLight(light, spread.evalSurface(in, frame.toLocal(light.wi)));
+    SplitEvent split;
+    const double uChannel = stream.get1D();
+    const std::array<double, 2> uOffset = stream.get2D();
+    split.offset = spread.sampleOffset(in, {uChannel, uOffset[0], uOffset[1]});
+    split.exit = scene.accel().exitPoint(hit, split.offset.dz, split.offset.dpsi);
+    split.exitFrame = scene.shadingFrame(split.exit);
+    if (nee) {
+        split.atExit = sampleLightAtHit(scene, split.exit, stream, counters);
+        if (split.atExit.pending) split.woExit = split.exitFrame.toLocal(split.atExit.wi);
+    }
+    return split;
+}
+
+// The second half, with the spread part at the exit point's light sample
+// (evalSpread at woExit; unused where that sample is not pending) and the
+// continuation (sampleEvent): next-event estimation at the exit point, then
+// the path goes on from the hit or from the exit point. False when the
 // path ends.
+bool finishSplit(const SplitEvent& split, const BsdfEval& spreadAtLight, SpreadSample next,
+                 const Frame& frame, const TubeHit& hit, PathState& p, int depth,
+                 SampleStream& stream, const PathTracerOptions& options, FirstHit* first) {
+    if (split.atExit.pending)
+        p.radiance += p.throughput * split.offset.weight * directLight(split.atExit, spreadAtLight);
+    next.sample.wo = normalize((next.spread ? split.exitFrame : frame).fromLocal(next.sample.wo));
+    if (!next.spread) return continuePath(p, hit, next.sample, depth, stream, options, first);
+    next.sample.weight *= split.offset.weight;
+    return continuePath(p, split.exit, next.sample, depth, stream, options, first);
+}
+
+// One split event of one path: both halves with the single calls.
 bool splitEvent(const Scene& scene, const ExitSpread& spread, const BsdfIncident& in,
                 const Frame& frame, const TubeHit& hit, const LightSampleAtHit& light,
                 const BsdfSampleInput& u, PathState& p, int depth, bool nee, SampleStream& stream,
                 const PathTracerOptions& options, PathCounters& counters, FirstHit* first) {
-    if (light.pending)
-        p.radiance +=
-            p.throughput * directLight(light, spread.evalSurface(in, frame.toLocal(light.wi)));
-    const double uChannel = stream.get1D();
-    const std::array<double, 2> uOffset = stream.get2D();
-    const SpreadOffset offset = spread.sampleOffset(in, {uChannel, uOffset[0], uOffset[1]});
-    const TubeHit exit = scene.accel().exitPoint(hit, offset.dz, offset.dpsi);
-    const Frame exitFrame = scene.shadingFrame(exit);
-    if (nee) {
-        const LightSampleAtHit atExit = sampleLightAtHit(scene, exit, stream, counters);
-        if (atExit.pending)
-            p.radiance += p.throughput * offset.weight *
-                          directLight(atExit, spread.evalSpread(in, exitFrame.toLocal(atExit.wi)));
-    }
-    SpreadSample next = spread.sampleEvent(in, u, stream.rng());
-    next.sample.wo = normalize((next.spread ? exitFrame : frame).fromLocal(next.sample.wo));
-    if (!next.spread) return continuePath(p, hit, next.sample, depth, stream, options, first);
-    next.sample.weight *= offset.weight;
-    return continuePath(p, exit, next.sample, depth, stream, options, first);
+    const SplitEvent split =
+        beginSplit(scene, spread, in, frame, hit, light, p, nee, stream, counters);
+    const BsdfEval spreadAtLight =
+        split.atExit.pending ? spread.evalSpread(in, split.woExit) : BsdfEval{};
+    return finishSplit(split, spreadAtLight, spread.sampleEvent(in, u, stream.rng()), frame, hit, p,
+                       depth, stream, options, first);
 }
 
 // The ExitSpread of a prepared incident's BSDF where its event splits, else null.
@@ -264,7 +295,10 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
         BsdfEval eval;
         BsdfSampleInput u;
         BsdfSample sample;
-        const ExitSpread* spread = nullptr;  // the event splits (ExitSpread): done per path
+        const ExitSpread* spread = nullptr;  // the event splits (ExitSpread)
+        SplitEvent split;
+        BsdfEval spreadAtLight;
+        SpreadSample next;
     };
     const size_t n = queries.size();
     std::vector<PathState> paths(n);
@@ -286,6 +320,7 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
     std::vector<BsdfSampleInput> inputs;
     std::vector<Rng*> rngs;
     std::vector<BsdfSample> samples;
+    std::vector<SpreadSample> spreadSamples;
     std::vector<size_t> pending;
     for (int depth = 0; !alive.empty(); ++depth) {
         // Every path's next ray, and its BSDF.
@@ -366,13 +401,53 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
                              samples.data());
             for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].sample = samples[j];
         });
+        // The split events: each path's exit point and light sample there,
+        // then each group's spread parts and continuations in batches.
+        for (const size_t k : alive) {
+            Event& e = events[k];
+            if (e.spread)
+                e.split = beginSplit(scene, *e.spread, e.incident, e.frame, e.hit,
+                                     nee ? e.light : LightSampleAtHit{}, paths[k], nee,
+                                     *queries[k].stream, counters);
+        }
+        forEachGroup([&](const Bsdf& bsdf, const std::vector<size_t>& members) {
+            const ExitSpread* spread = bsdf.exitSpread();
+            if (!spread) return;
+            vecs.clear();
+            constIncidents.clear();
+            pending.clear();
+            for (const size_t k : members) {
+                if (!events[k].spread || !events[k].split.atExit.pending) continue;
+                pending.push_back(k);
+                vecs.push_back(events[k].split.woExit);
+                constIncidents.push_back(&events[k].incident);
+            }
+            evals.resize(pending.size());
+            spread->evalSpreadBatch(constIncidents.data(), vecs.data(), pending.size(),
+                                    evals.data());
+            for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].spreadAtLight = evals[j];
+            constIncidents.clear();
+            inputs.clear();
+            rngs.clear();
+            pending.clear();
+            for (const size_t k : members) {
+                if (!events[k].spread) continue;
+                pending.push_back(k);
+                constIncidents.push_back(&events[k].incident);
+                inputs.push_back(events[k].u);
+                rngs.push_back(&queries[k].stream->rng());
+            }
+            spreadSamples.resize(pending.size());
+            spread->sampleEventBatch(constIncidents.data(), inputs.data(), rngs.data(),
+                                     pending.size(), spreadSamples.data());
+            for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].next = spreadSamples[j];
+        });
         kept = 0;
         for (const size_t k : alive) {
             Event& e = events[k];
             if (e.spread) {
-                if (splitEvent(scene, *e.spread, e.incident, e.frame, e.hit,
-                               nee ? e.light : LightSampleAtHit{}, e.u, paths[k], depth, nee,
-                               *queries[k].stream, options, counters, queries[k].first))
+                if (finishSplit(e.split, e.spreadAtLight, e.next, e.frame, e.hit, paths[k], depth,
+                                *queries[k].stream, options, queries[k].first))
                     alive[kept++] = k;
                 continue;
             }

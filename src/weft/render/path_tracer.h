@@ -95,8 +95,9 @@ struct PathQuery {
 
 // pathRadiance for many paths at once (issue 45): the paths advance one
 // scattering event at a time together, and each event's BSDF calls are made
-// in one batch per BSDF (Bsdf::prepareBatch, evalPdfBatch, sampleBatch: the
-// yarn BSDF's networks then run a query per SIMD lane). Each path draws the
+// in one batch per BSDF (Bsdf::prepareBatch, evalPdfBatch, sampleBatch, and
+// a split event's ExitSpread::evalSpreadBatch, sampleEventBatch: the yarn
+// BSDF's networks then run a query per SIMD lane). Each path draws the
 // same numbers from its stream in the same order as pathRadiance, and the
 // batches give the single calls' bits, so every query's radiance and first
 // hit, and the counters' totals, are bit for bit pathRadiance's

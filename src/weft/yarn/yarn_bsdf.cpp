@@ -92,7 +92,11 @@ void YarnBsdf::evalAndPdf(const YarnIncident& in, const Vec3& wo, Rgb* value, do
     if (density) *density = sampler_->pdf(in, wo, out);
 }
 
-void YarnBsdf::prepare(const Vec3& wi, BsdfIncident& in) const { in.emplace(wi, incident(wi)); }
+void YarnBsdf::prepare(const Vec3& wi, BsdfIncident& in) const {
+    YarnIncident yarn = incident(wi);
+    prepareSpread(in.importance(), yarn);
+    in.emplace(wi, yarn);
+}
 
 BsdfEval YarnBsdf::evalPdf(const BsdfIncident& in, const Vec3& wo) const {
     const YarnIncident& yarn = in.get<YarnIncident>();
@@ -155,8 +159,11 @@ void YarnBsdf::prepareBatch(const Vec3* wi, BsdfIncident* const* in, size_t coun
         for (size_t k = 0; k < n; ++k)
             upper[k] = wi[first + k].z < 0 ? mirrored(wi[first + k]) : wi[first + k];
         model_->transmissionBatch(upper, n, pT);
-        for (size_t k = 0; k < n; ++k)
-            in[first + k]->emplace(wi[first + k], incident(wi[first + k], pT[k]));
+        for (size_t k = 0; k < n; ++k) {
+            YarnIncident yarn = incident(wi[first + k], pT[k]);
+            prepareSpread(in[first + k]->importance(), yarn);
+            in[first + k]->emplace(wi[first + k], yarn);
+        }
     }
 }
 
@@ -226,26 +233,27 @@ double surfaceBranch(const YarnIncident& in) {
 
 }  // namespace
 
-Rgb YarnBsdf::spreadChannelProbabilities(const BsdfIncident& in) const {
-    const YarnIncident& yarn = in.get<YarnIncident>();
-    if (!exitOffset_ || yarn.mirrored || !(yarn.pickT < 1)) return Rgb(0.0);
-    const size_t cell = exitOffsetCell(yarn.wi);
+void YarnBsdf::prepareSpread(const Rgb& importance, YarnIncident& in) const {
+    in.spreadChannel = Rgb(0.0);
+    if (!exitOffset_ || in.mirrored || !(in.pickT < 1)) return;
+    in.exitCell = static_cast<int>(exitOffsetCell(in.wi));
     Rgb p;
-    for (int c = 0; c < 3; ++c) p[c] = exitOffset_->hasDensity(cell, c) ? in.importance()[c] : 0.0;
+    for (int c = 0; c < 3; ++c)
+        p[c] = exitOffset_->hasDensity(static_cast<size_t>(in.exitCell), c) ? importance[c] : 0.0;
     const double sum = p.r + p.g + p.b;
-    return sum > 0 ? p / sum : Rgb(0.0);
+    if (sum > 0) in.spreadChannel = p / sum;
 }
 
 bool YarnBsdf::splits(const BsdfIncident& in) const {
-    return spreadChannelProbabilities(in).maxComponent() > 0;
+    return in.get<YarnIncident>().spreadChannel.maxComponent() > 0;
 }
 
 SpreadOffset YarnBsdf::sampleOffset(const BsdfIncident& in, const BsdfSampleInput& u) const {
     // A channel by the path's importance, then q_c; each channel's weight
     // over the mixture of the channels' densities.
     const YarnIncident& yarn = in.get<YarnIncident>();
-    const Rgb p = spreadChannelProbabilities(in);
-    const size_t cell = exitOffsetCell(yarn.wi);
+    const Rgb& p = yarn.spreadChannel;
+    const size_t cell = static_cast<size_t>(yarn.exitCell);
     const int channel = u[0] < p.r ? 0 : u[0] < p.r + p.g ? 1 : 2;
     const ExitOffsetTable::Offset o = exitOffset_->sample(cell, channel, u[1], u[2]);
     Rgb q;
@@ -269,36 +277,102 @@ BsdfEval YarnBsdf::evalSurface(const BsdfIncident& in, const Vec3& wo) const {
     return e;
 }
 
-BsdfEval YarnBsdf::evalSpread(const BsdfIncident& in, const Vec3& woExit) const {
-    const YarnIncident& yarn = in.get<YarnIncident>();
+BsdfEval YarnBsdf::spreadPart(const YarnIncident& in, const Vec3& woExit, const Rgb* m) const {
     BsdfEval e;
-    evalAndPdf(yarn, woExit, &e.value, &e.pdf, nullptr, Part::Spread);
-    e.pdf *= 1.0 - surfaceBranch(yarn);
+    evalAndPdf(in, woExit, &e.value, &e.pdf, m, Part::Spread);
+    e.pdf *= 1.0 - surfaceBranch(in);
     return e;
+}
+
+BsdfEval YarnBsdf::evalSpread(const BsdfIncident& in, const Vec3& woExit) const {
+    return spreadPart(in.get<YarnIncident>(), woExit, nullptr);
+}
+
+bool YarnBsdf::eventDirection(const YarnIncident& in, const BsdfSampleInput& u, Rng& rng,
+                              bool* spread, YarnDirectionSample* d) const {
+    *spread = false;
+    if (u[0] < in.pickT) return false;
+    // The rest of u[0] picks the branch; rescaled onto [pickT, 1) again, it
+    // drives the sampler as in sample().
+    const double rhoS = surfaceBranch(in);
+    const double v = std::clamp((u[0] - in.pickT) / (1.0 - in.pickT), 0.0, kOneMinusEpsilon);
+    *spread = v >= rhoS;
+    const double w = *spread ? (v - rhoS) / (1.0 - rhoS) : v / rhoS;
+    const BsdfSampleInput branch = {
+        in.pickT + (1.0 - in.pickT) * std::clamp(w, 0.0, kOneMinusEpsilon), u[1], u[2]};
+    *d = sampler_->sample(in, branch, rng);
+    return true;
+}
+
+SpreadSample YarnBsdf::eventSample(const YarnIncident& in, bool spread,
+                                   const YarnDirectionSample& d, const Rgb* m) const {
+    BsdfEval e;
+    if (spread) {
+        e = spreadPart(in, d.wo, m);
+    } else {
+        evalAndPdf(in, d.wo, &e.value, &e.pdf, nullptr, Part::Surface);
+        e.pdf *= surfaceBranch(in);
+    }
+    SpreadSample out;
+    out.spread = spread;
+    out.sample = BsdfSample::fromEval(d.wo, e, spread ? kLobeM : kLobeR);
+    return out;
 }
 
 SpreadSample YarnBsdf::sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
                                    Rng& rng) const {
     const YarnIncident& yarn = in.get<YarnIncident>();
-    SpreadSample out;
-    if (u[0] < yarn.pickT) {
-        out.sample = transmissionSample(in);
-        return out;
+    bool spread;
+    YarnDirectionSample d;
+    if (!eventDirection(yarn, u, rng, &spread, &d)) return {false, transmissionSample(in)};
+    return eventSample(yarn, spread, d, nullptr);
+}
+
+void YarnBsdf::evalSpreadBatch(const BsdfIncident* const* in, const Vec3* woExit, size_t count,
+                               BsdfEval* out) const {
+    Vec3 wiUpper[kBatchChunk];
+    Rgb m[kBatchChunk];
+    for (size_t first = 0; first < count; first += kBatchChunk) {
+        const size_t n = std::min(kBatchChunk, count - first);
+        for (size_t k = 0; k < n; ++k) wiUpper[k] = in[first + k]->get<YarnIncident>().wi;
+        model_->evalMBatch(wiUpper, woExit + first, n, m);
+        for (size_t k = 0; k < n; ++k)
+            out[first + k] =
+                spreadPart(in[first + k]->get<YarnIncident>(), woExit[first + k], &m[k]);
     }
-    // The rest of u[0] picks the branch; rescaled onto [pickT, 1) again, it
-    // drives the sampler as in sample().
-    const double rhoS = surfaceBranch(yarn);
-    const double v = std::clamp((u[0] - yarn.pickT) / (1.0 - yarn.pickT), 0.0, kOneMinusEpsilon);
-    out.spread = v >= rhoS;
-    const double w = out.spread ? (v - rhoS) / (1.0 - rhoS) : v / rhoS;
-    const BsdfSampleInput branch = {
-        yarn.pickT + (1.0 - yarn.pickT) * std::clamp(w, 0.0, kOneMinusEpsilon), u[1], u[2]};
-    const YarnDirectionSample d = sampler_->sample(yarn, branch, rng);
-    BsdfEval e;
-    evalAndPdf(yarn, d.wo, &e.value, &e.pdf, nullptr, out.spread ? Part::Spread : Part::Surface);
-    e.pdf *= out.spread ? 1.0 - rhoS : rhoS;
-    out.sample = BsdfSample::fromEval(d.wo, e, out.spread ? kLobeM : kLobeR);
-    return out;
+}
+
+void YarnBsdf::sampleEventBatch(const BsdfIncident* const* in, const BsdfSampleInput* u,
+                                Rng* const* rng, size_t count, SpreadSample* out) const {
+    // The branches and directions first (each from its own generator), then
+    // S_M at the spread branch's directions in one batch.
+    size_t index[kBatchChunk];
+    bool spread[kBatchChunk];
+    YarnDirectionSample d[kBatchChunk];
+    Vec3 wiUpper[kBatchChunk], woUpper[kBatchChunk];
+    Rgb m[kBatchChunk];
+    for (size_t first = 0; first < count; first += kBatchChunk) {
+        const size_t n = std::min(kBatchChunk, count - first);
+        size_t continuous = 0, spreading = 0;
+        for (size_t k = 0; k < n; ++k) {
+            const YarnIncident& yarn = in[first + k]->get<YarnIncident>();
+            if (!eventDirection(yarn, u[first + k], *rng[first + k], &spread[continuous],
+                                &d[continuous])) {
+                out[first + k] = {false, transmissionSample(*in[first + k])};
+                continue;
+            }
+            index[continuous] = first + k;
+            if (spread[continuous]) {
+                wiUpper[spreading] = yarn.wi;
+                woUpper[spreading++] = d[continuous].wo;
+            }
+            ++continuous;
+        }
+        model_->evalMBatch(wiUpper, woUpper, spreading, m);
+        for (size_t c = 0, s = 0; c < continuous; ++c)
+            out[index[c]] = eventSample(in[index[c]]->get<YarnIncident>(), spread[c], d[c],
+                                        spread[c] ? &m[s++] : nullptr);
+    }
 }
 
 }  // namespace weft

@@ -111,6 +111,11 @@ class YarnBsdf final : public Bsdf, public ExitSpread {
     BsdfEval evalSpread(const BsdfIncident& in, const Vec3& woExit) const override;
     SpreadSample sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
                              Rng& rng) const override;
+    // Their batches run the M network one query per SIMD lane.
+    void evalSpreadBatch(const BsdfIncident* const* in, const Vec3* woExit, size_t count,
+                         BsdfEval* out) const override;
+    void sampleEventBatch(const BsdfIncident* const* in, const BsdfSampleInput* u, Rng* const* rng,
+                          size_t count, SpreadSample* out) const override;
     // The model's exit-offset table, or nullptr.
     const ExitOffsetTable* exitOffsets() const { return exitOffset_.get(); }
 
@@ -154,8 +159,19 @@ class YarnBsdf final : public Bsdf, public ExitSpread {
     // both are computed. `m`: S_M at (in.wi, wo) when a batch computed it.
     void evalAndPdf(const YarnIncident& in, const Vec3& wo, Rgb* value, double* density,
                     const Rgb* m = nullptr, Part part = Part::Whole) const;
-    // The offset's channel probabilities at `in` (all 0: no split).
-    Rgb spreadChannelProbabilities(const BsdfIncident& in) const;
+    // The incident's exit-offset cell and channel probabilities (YarnIncident)
+    // for a path of this importance.
+    void prepareSpread(const Rgb& importance, YarnIncident& in) const;
+    // The spread part at woExit from S_M (`m`, or the M network's), with
+    // evalSpread's density.
+    BsdfEval spreadPart(const YarnIncident& in, const Vec3& woExit, const Rgb* m) const;
+    // sampleEvent in two halves: the branch and direction (false: the T
+    // lobe), then the branch's value and weight (`m`: S_M at d.wo, or the M
+    // network's).
+    bool eventDirection(const YarnIncident& in, const BsdfSampleInput& u, Rng& rng, bool* spread,
+                        YarnDirectionSample* d) const;
+    SpreadSample eventSample(const YarnIncident& in, bool spread, const YarnDirectionSample& d,
+                             const Rgb* m) const;
 
     // Immutable once built, so copies of the BSDF share them (the tabulated
     // sampler keeps the evaluator too).

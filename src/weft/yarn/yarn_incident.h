@@ -48,6 +48,12 @@ struct YarnIncident {
     // offsets (yarn_bsdf.h, ExitSpread), the probability of the surface
     // branch among the continuous ones.
     double surfaceShare = 0.5;
+    // With exit offsets: the probability of each channel for the exit
+    // offset (in proportion to the path's importance among the channels
+    // with M light in wi's cell; all 0 where the event does not split), and
+    // that cell. Set by YarnBsdf::prepare, which sees the importance.
+    Rgb spreadChannel{0.0};
+    int exitCell = 0;
 };
 
 }  // namespace weft

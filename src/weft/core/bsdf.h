@@ -275,8 +275,12 @@ class ExitSpread {
     // over its density (a delta's weight for the T lobe).
     virtual SpreadSample sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
                                      Rng& rng) const = 0;
-    // The last two for many incidents (as Bsdf's batches): out[k] is the
+    // The last three for many incidents (as Bsdf's batches): out[k] is the
     // single call's for query k, bit for bit.
+    virtual void evalSurfaceBatch(const BsdfIncident* const* in, const Vec3* wo, size_t count,
+                                  BsdfEval* out) const {
+        for (size_t k = 0; k < count; ++k) out[k] = evalSurface(*in[k], wo[k]);
+    }
     virtual void evalSpreadBatch(const BsdfIncident* const* in, const Vec3* woExit, size_t count,
                                  BsdfEval* out) const {
         for (size_t k = 0; k < count; ++k) out[k] = evalSpread(*in[k], woExit[k]);

@@ -191,15 +191,15 @@ struct SplitEvent {
 };
 
 // The split event's first half, after the light sample at the hit
-// (`light`) and the event's sample input: next-event estimation at the hit
-// with the surface part; three more numbers give the exit point; one more
-// light pick and light sample there.
+// (`light`; `surfaceAtLight`: evalSurface at its direction, unused where it
+// is not pending) and the event's sample input: next-event estimation at the
+// hit with the surface part; three more numbers give the exit point; one
+// more light pick and light sample there.
 SplitEvent beginSplit(const Scene& scene, const ExitSpread& spread, const BsdfIncident& in,
-                      const Frame& frame, const TubeHit& hit, const LightSampleAtHit& light,
-                      PathState& p, bool nee, SampleStream& stream, PathCounters& counters) {
-    if (light.pending)
-        p.radiance +=
-            p.throughput * directLight(light, spread.evalSurface(in, frame.toLocal(light.wi)));
+                      const TubeHit& hit, const LightSampleAtHit& light,
+                      const BsdfEval& surfaceAtLight, PathState& p, bool nee, SampleStream& stream,
+                      PathCounters& counters) {
+    if (light.pending) p.radiance += p.throughput * directLight(light, surfaceAtLight);
     SplitEvent split;
     const double uChannel = stream.get1D();
     const std::array<double, 2> uOffset = stream.get2D();
@@ -234,8 +234,10 @@ bool splitEvent(const Scene& scene, const ExitSpread& spread, const BsdfIncident
                 const Frame& frame, const TubeHit& hit, const LightSampleAtHit& light,
                 const BsdfSampleInput& u, PathState& p, int depth, bool nee, SampleStream& stream,
                 const PathTracerOptions& options, PathCounters& counters, FirstHit* first) {
+    const BsdfEval surfaceAtLight =
+        light.pending ? spread.evalSurface(in, frame.toLocal(light.wi)) : BsdfEval{};
     const SplitEvent split =
-        beginSplit(scene, spread, in, frame, hit, light, p, nee, stream, counters);
+        beginSplit(scene, spread, in, hit, light, surfaceAtLight, p, nee, stream, counters);
     const BsdfEval spreadAtLight =
         split.atExit.pending ? spread.evalSpread(in, split.woExit) : BsdfEval{};
     return finishSplit(split, spreadAtLight, spread.sampleEvent(in, u, stream.rng()), frame, hit, p,
@@ -364,18 +366,28 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
                 if (e.light.pending) e.woLocal = e.frame.toLocal(e.light.wi);
             }
             forEachGroup([&](const Bsdf& bsdf, const std::vector<size_t>& members) {
-                vecs.clear();
-                constIncidents.clear();
-                pending.clear();
-                for (const size_t k : members) {
-                    if (!events[k].light.pending || events[k].spread) continue;
-                    pending.push_back(k);
-                    vecs.push_back(events[k].woLocal);
-                    constIncidents.push_back(&events[k].incident);
+                // Whole events with evalPdf, split ones with their surface part.
+                for (const bool split : {false, true}) {
+                    vecs.clear();
+                    constIncidents.clear();
+                    pending.clear();
+                    for (const size_t k : members) {
+                        if (!events[k].light.pending || (events[k].spread != nullptr) != split)
+                            continue;
+                        pending.push_back(k);
+                        vecs.push_back(events[k].woLocal);
+                        constIncidents.push_back(&events[k].incident);
+                    }
+                    if (pending.empty()) continue;
+                    evals.resize(pending.size());
+                    if (split)
+                        bsdf.exitSpread()->evalSurfaceBatch(constIncidents.data(), vecs.data(),
+                                                            pending.size(), evals.data());
+                    else
+                        bsdf.evalPdfBatch(constIncidents.data(), vecs.data(), pending.size(),
+                                          evals.data());
+                    for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].eval = evals[j];
                 }
-                evals.resize(pending.size());
-                bsdf.evalPdfBatch(constIncidents.data(), vecs.data(), pending.size(), evals.data());
-                for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].eval = evals[j];
             });
             for (const size_t k : alive) {
                 const Event& e = events[k];
@@ -406,8 +418,8 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
         for (const size_t k : alive) {
             Event& e = events[k];
             if (e.spread)
-                e.split = beginSplit(scene, *e.spread, e.incident, e.frame, e.hit,
-                                     nee ? e.light : LightSampleAtHit{}, paths[k], nee,
+                e.split = beginSplit(scene, *e.spread, e.incident, e.hit,
+                                     nee ? e.light : LightSampleAtHit{}, e.eval, paths[k], nee,
                                      *queries[k].stream, counters);
         }
         forEachGroup([&](const Bsdf& bsdf, const std::vector<size_t>& members) {

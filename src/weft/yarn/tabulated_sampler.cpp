@@ -129,7 +129,6 @@ void TabulatedYarnSampler::prepare(const SurfaceFiberAngles& surface, YarnIncide
                                            1.0 - kMinimumShare)
                               : 0.0;
     in.pickT = pT > 0 ? std::min(pT / (pT + continuous), 1.0 - kMinimumShare) : 0.0;
-    in.surfaceShare = continuous > 0 ? (peak + restR) / continuous : 0.5;
 }
 
 double TabulatedYarnSampler::pdf(const YarnIncident& in, const Vec3& wo,

@@ -51,9 +51,6 @@ class TabulatedYarnSampler final : public YarnSampler {
     YarnDirectionSample sample(const YarnIncident& in, const BsdfSampleInput& u,
                                Rng& rng) const override;
     YarnLobeProbabilities lobeProbabilities(const YarnIncident& in) const override;
-    // S_R's share from the energies prepare() estimates (q_R's and the
-    // table's R term), kept in the incident by prepare().
-    void prepareSurfaceShare(YarnIncident&) const override {}
     size_t memoryBytes() const override;
 
     const SamplingTable& table() const { return table_; }

@@ -72,22 +72,18 @@ YarnIncident YarnBsdf::incident(const Vec3& wi, double pT) const {
     const SurfaceFiberAngles surface = model_->surfaceAngles(in.wi);
     model_->prepare(surface, in);
     sampler_->prepare(surface, in);
-    sampler_->prepareSurfaceShare(in);
     return in;
 }
 
 void YarnBsdf::evalAndPdf(const YarnIncident& in, const Vec3& wo, Rgb* value, double* density,
-                          const Rgb* m, Part part) const {
+                          const Rgb* m) const {
     const FiberBcsdf::Angles out =
         value || sampler_->pdfNeedsOutAngles() ? model_->outAngles(wo) : FiberBcsdf::Angles{};
     if (value) {
-        // S_R alone takes S_M as 0: the M network is not run.
-        const Rgb noM(0.0);
-        if (part == Part::Surface) m = &noM;
         const YarnComponents parts =
             m ? model_->components(in, wo, out, *m) : model_->components(wo, in, out);
-        *value = part == Part::Surface ? Rgb(0.0) : parts.m;
-        if (model_->hasReflection() && part != Part::Spread) *value += parts.r;
+        *value = parts.m;
+        if (model_->hasReflection()) *value += parts.r;
     }
     if (density) *density = sampler_->pdf(in, wo, out);
 }
@@ -227,14 +223,15 @@ namespace {
 // Both branches keep a share, so that each part's weight stays bounded.
 constexpr double kMinimumBranch = 0.05;
 
-double surfaceBranch(const YarnIncident& in) {
-    return std::clamp(in.surfaceShare, kMinimumBranch, 1.0 - kMinimumBranch);
+double weightedSum(const Rgb& weight, const Rgb& x) {
+    return weight.r * x.r + weight.g * x.g + weight.b * x.b;
 }
 
 }  // namespace
 
 void YarnBsdf::prepareSpread(const Rgb& importance, YarnIncident& in) const {
     in.spreadChannel = Rgb(0.0);
+    in.importance = importance;
     if (!exitOffset_ || in.mirrored || !(in.pickT < 1)) return;
     in.exitCell = static_cast<int>(exitOffsetCell(in.wi));
     Rgb p;
@@ -269,109 +266,112 @@ SpreadOffset YarnBsdf::sampleOffset(const BsdfIncident& in, const BsdfSampleInpu
     return offset;
 }
 
-BsdfEval YarnBsdf::evalSurface(const BsdfIncident& in, const Vec3& wo) const {
-    const YarnIncident& yarn = in.get<YarnIncident>();
+YarnBsdf::SplitParts YarnBsdf::splitParts(const YarnIncident& in, const Vec3& wo,
+                                          const Rgb* m) const {
+    const FiberBcsdf::Angles out = model_->outAngles(wo);
+    const YarnComponents parts =
+        m ? model_->components(in, wo, out, *m) : model_->components(wo, in, out);
+    SplitParts split;
+    split.r = model_->hasReflection() ? parts.r : Rgb(0.0);
+    split.m = parts.m;
+    split.pdf = sampler_->pdf(in, wo, out);
+    // The surface branch's probability at wo: S_R's share of S_R + S_M,
+    // channels weighted by the path's importance.
+    const double r = weightedSum(in.importance, split.r);
+    const double all = r + weightedSum(in.importance, split.m);
+    split.surface = std::clamp(all > 0 ? r / all : 0.5, kMinimumBranch, 1.0 - kMinimumBranch);
+    return split;
+}
+
+BsdfEval YarnBsdf::SplitParts::part(bool spread) const {
     BsdfEval e;
-    evalAndPdf(yarn, wo, &e.value, &e.pdf, nullptr, Part::Surface);
-    e.pdf *= surfaceBranch(yarn);
+    e.value = spread ? m : r;
+    e.pdf = pdf * (spread ? 1.0 - surface : surface);
     return e;
 }
 
-BsdfEval YarnBsdf::spreadPart(const YarnIncident& in, const Vec3& woExit, const Rgb* m) const {
-    BsdfEval e;
-    evalAndPdf(in, woExit, &e.value, &e.pdf, m, Part::Spread);
-    e.pdf *= 1.0 - surfaceBranch(in);
-    return e;
+BsdfEval YarnBsdf::evalSurface(const BsdfIncident& in, const Vec3& wo) const {
+    return splitParts(in.get<YarnIncident>(), wo, nullptr).part(false);
 }
 
 BsdfEval YarnBsdf::evalSpread(const BsdfIncident& in, const Vec3& woExit) const {
-    return spreadPart(in.get<YarnIncident>(), woExit, nullptr);
+    return splitParts(in.get<YarnIncident>(), woExit, nullptr).part(true);
 }
 
 bool YarnBsdf::eventDirection(const YarnIncident& in, const BsdfSampleInput& u, Rng& rng,
-                              bool* spread, YarnDirectionSample* d) const {
-    *spread = false;
+                              YarnDirectionSample* d) const {
     if (u[0] < in.pickT) return false;
-    // The rest of u[0] picks the branch; rescaled onto [pickT, 1) again, it
-    // drives the sampler as in sample().
-    const double rhoS = surfaceBranch(in);
-    const double v = std::clamp((u[0] - in.pickT) / (1.0 - in.pickT), 0.0, kOneMinusEpsilon);
-    *spread = v >= rhoS;
-    const double w = *spread ? (v - rhoS) / (1.0 - rhoS) : v / rhoS;
-    const BsdfSampleInput branch = {
-        in.pickT + (1.0 - in.pickT) * std::clamp(w, 0.0, kOneMinusEpsilon), u[1], u[2]};
-    *d = sampler_->sample(in, branch, rng);
+    *d = sampler_->sample(in, u, rng);
     return true;
 }
 
-SpreadSample YarnBsdf::eventSample(const YarnIncident& in, bool spread,
-                                   const YarnDirectionSample& d, const Rgb* m) const {
-    BsdfEval e;
-    if (spread) {
-        e = spreadPart(in, d.wo, m);
-    } else {
-        evalAndPdf(in, d.wo, &e.value, &e.pdf, nullptr, Part::Surface);
-        e.pdf *= surfaceBranch(in);
-    }
+SpreadSample YarnBsdf::eventSample(const YarnIncident& in, const YarnDirectionSample& d,
+                                   const Rgb* m, Rng& rng) const {
+    const SplitParts split = splitParts(in, d.wo, m);
     SpreadSample out;
-    out.spread = spread;
-    out.sample = BsdfSample::fromEval(d.wo, e, spread ? kLobeM : kLobeR);
+    out.spread = rng.uniform() >= split.surface;
+    out.sample = BsdfSample::fromEval(d.wo, split.part(out.spread), out.spread ? kLobeM : kLobeR);
     return out;
 }
 
 SpreadSample YarnBsdf::sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
                                    Rng& rng) const {
     const YarnIncident& yarn = in.get<YarnIncident>();
-    bool spread;
     YarnDirectionSample d;
-    if (!eventDirection(yarn, u, rng, &spread, &d)) return {false, transmissionSample(in)};
-    return eventSample(yarn, spread, d, nullptr);
+    if (!eventDirection(yarn, u, rng, &d)) return {false, transmissionSample(in)};
+    return eventSample(yarn, d, nullptr, rng);
 }
 
-void YarnBsdf::evalSpreadBatch(const BsdfIncident* const* in, const Vec3* woExit, size_t count,
-                               BsdfEval* out) const {
+void YarnBsdf::evalPartBatch(const BsdfIncident* const* in, const Vec3* wo, size_t count,
+                             bool spread, BsdfEval* out) const {
     Vec3 wiUpper[kBatchChunk];
     Rgb m[kBatchChunk];
     for (size_t first = 0; first < count; first += kBatchChunk) {
         const size_t n = std::min(kBatchChunk, count - first);
         for (size_t k = 0; k < n; ++k) wiUpper[k] = in[first + k]->get<YarnIncident>().wi;
-        model_->evalMBatch(wiUpper, woExit + first, n, m);
+        model_->evalMBatch(wiUpper, wo + first, n, m);
         for (size_t k = 0; k < n; ++k)
             out[first + k] =
-                spreadPart(in[first + k]->get<YarnIncident>(), woExit[first + k], &m[k]);
+                splitParts(in[first + k]->get<YarnIncident>(), wo[first + k], &m[k]).part(spread);
     }
+}
+
+void YarnBsdf::evalSurfaceBatch(const BsdfIncident* const* in, const Vec3* wo, size_t count,
+                                BsdfEval* out) const {
+    evalPartBatch(in, wo, count, false, out);
+}
+
+void YarnBsdf::evalSpreadBatch(const BsdfIncident* const* in, const Vec3* woExit, size_t count,
+                               BsdfEval* out) const {
+    evalPartBatch(in, woExit, count, true, out);
 }
 
 void YarnBsdf::sampleEventBatch(const BsdfIncident* const* in, const BsdfSampleInput* u,
                                 Rng* const* rng, size_t count, SpreadSample* out) const {
-    // The branches and directions first (each from its own generator), then
-    // S_M at the spread branch's directions in one batch.
+    // The directions first (each from its own generator), then S_M at them
+    // in one batch, then each branch (from the same generator).
     size_t index[kBatchChunk];
-    bool spread[kBatchChunk];
     YarnDirectionSample d[kBatchChunk];
     Vec3 wiUpper[kBatchChunk], woUpper[kBatchChunk];
     Rgb m[kBatchChunk];
     for (size_t first = 0; first < count; first += kBatchChunk) {
         const size_t n = std::min(kBatchChunk, count - first);
-        size_t continuous = 0, spreading = 0;
+        size_t continuous = 0;
         for (size_t k = 0; k < n; ++k) {
             const YarnIncident& yarn = in[first + k]->get<YarnIncident>();
-            if (!eventDirection(yarn, u[first + k], *rng[first + k], &spread[continuous],
-                                &d[continuous])) {
+            if (!eventDirection(yarn, u[first + k], *rng[first + k], &d[continuous])) {
                 out[first + k] = {false, transmissionSample(*in[first + k])};
                 continue;
             }
             index[continuous] = first + k;
-            if (spread[continuous]) {
-                wiUpper[spreading] = yarn.wi;
-                woUpper[spreading++] = d[continuous].wo;
-            }
+            wiUpper[continuous] = yarn.wi;
+            woUpper[continuous] = d[continuous].wo;
             ++continuous;
         }
-        model_->evalMBatch(wiUpper, woUpper, spreading, m);
-        for (size_t c = 0, s = 0; c < continuous; ++c)
-            out[index[c]] = eventSample(in[index[c]]->get<YarnIncident>(), spread[c], d[c],
-                                        spread[c] ? &m[s++] : nullptr);
+        model_->evalMBatch(wiUpper, woUpper, continuous, m);
+        for (size_t c = 0; c < continuous; ++c)
+            out[index[c]] =
+                eventSample(in[index[c]]->get<YarnIncident>(), d[c], &m[c], *rng[index[c]]);
     }
 }
 

@@ -29,14 +29,16 @@
 // was fitted so). The offset: a channel c picked in proportion to the
 // path's importance among the channels with M light there, the offset from
 // q_c, each channel weighted by q_c / sum_c' p_c' q_c' (one-sample MIS over
-// channels). The continuation: T with P_T as sample() picks it; of the
-// continuous rest, the surface branch with rho_S = YarnIncident::
-// surfaceShare (clamped to [0.05, 0.95]) and the spread branch with 1 -
-// rho_S, both drawing wo from the whole continuous sampler and weighting
-// their part: S_R / (rho_S pdf), S_M / ((1 - rho_S) pdf), pdf the sampler's
-// continuous density (so evalSurface's density is rho_S pdf, evalSpread's
-// (1 - rho_S) pdf). Mirrored incidents (from inside), cells without M light
-// and models without the table keep today's event.
+// channels). The continuation: T with P_T as sample() picks it; otherwise
+// a direction wo from the whole continuous sampler (density pdf), then the
+// surface branch with probability rho_S(wo) = S_R / (S_R + S_M) at wo
+// (channels weighted by the path's importance; clamped to [0.05, 0.95]) or
+// the spread branch, each weighting its part: S_R / (rho_S pdf), S_M / ((1
+// - rho_S) pdf). So evalSurface's density is rho_S(wo) pdf(wo) and
+// evalSpread's (1 - rho_S(wo)) pdf(wo), and where S_R and S_M have one
+// colour the continuation's weight is sample()'s (R + M) / pdf. Mirrored
+// incidents (from inside), cells without M light and models without the
+// table keep today's event.
 //
 // Incident directions below the surface (wi.z < 0): the networks were trained
 // on the upper hemisphere only and a ply is never lit from inside, so the BSDF
@@ -112,6 +114,8 @@ class YarnBsdf final : public Bsdf, public ExitSpread {
     SpreadSample sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
                              Rng& rng) const override;
     // Their batches run the M network one query per SIMD lane.
+    void evalSurfaceBatch(const BsdfIncident* const* in, const Vec3* wo, size_t count,
+                          BsdfEval* out) const override;
     void evalSpreadBatch(const BsdfIncident* const* in, const Vec3* woExit, size_t count,
                          BsdfEval* out) const override;
     void sampleEventBatch(const BsdfIncident* const* in, const BsdfSampleInput* u, Rng* const* rng,
@@ -152,26 +156,32 @@ class YarnBsdf final : public Bsdf, public ExitSpread {
     YarnIncident incident(const Vec3& wi) const;
     // The same with P(T) given: pT = transmission(wi).
     YarnIncident incident(const Vec3& wi, double pT) const;
-    // Which part of the continuous value evalAndPdf gives: R + M, or (the
-    // exit spread's) S_R alone (without running the M network) or S_M alone.
-    enum class Part { Whole, Surface, Spread };
     // eval and pdf at wo (mirrored with the incident): the one place where
     // both are computed. `m`: S_M at (in.wi, wo) when a batch computed it.
     void evalAndPdf(const YarnIncident& in, const Vec3& wo, Rgb* value, double* density,
-                    const Rgb* m = nullptr, Part part = Part::Whole) const;
+                    const Rgb* m = nullptr) const;
     // The incident's exit-offset cell and channel probabilities (YarnIncident)
     // for a path of this importance.
     void prepareSpread(const Rgb& importance, YarnIncident& in) const;
-    // The spread part at woExit from S_M (`m`, or the M network's), with
-    // evalSpread's density.
-    BsdfEval spreadPart(const YarnIncident& in, const Vec3& woExit, const Rgb* m) const;
-    // sampleEvent in two halves: the branch and direction (false: the T
-    // lobe), then the branch's value and weight (`m`: S_M at d.wo, or the M
-    // network's).
-    bool eventDirection(const YarnIncident& in, const BsdfSampleInput& u, Rng& rng, bool* spread,
+    // A split event's parts at wo (the hit's or the exit point's frame, as
+    // the incident's): S_R, S_M (`m`, or the M network's), the sampler's
+    // continuous density, and the surface branch's probability there.
+    struct SplitParts {
+        Rgb r, m;
+        double pdf = 0, surface = 0.5;
+        // One branch's value and its density of reaching wo.
+        BsdfEval part(bool spread) const;
+    };
+    SplitParts splitParts(const YarnIncident& in, const Vec3& wo, const Rgb* m) const;
+    // evalSurfaceBatch or evalSpreadBatch.
+    void evalPartBatch(const BsdfIncident* const* in, const Vec3* wo, size_t count, bool spread,
+                       BsdfEval* out) const;
+    // sampleEvent in two halves: the direction (false: the T lobe), then
+    // the branch (one number from rng), its value and weight.
+    bool eventDirection(const YarnIncident& in, const BsdfSampleInput& u, Rng& rng,
                         YarnDirectionSample* d) const;
-    SpreadSample eventSample(const YarnIncident& in, bool spread, const YarnDirectionSample& d,
-                             const Rgb* m) const;
+    SpreadSample eventSample(const YarnIncident& in, const YarnDirectionSample& d, const Rgb* m,
+                             Rng& rng) const;
 
     // Immutable once built, so copies of the BSDF share them (the tabulated
     // sampler keeps the evaluator too).

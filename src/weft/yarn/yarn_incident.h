@@ -44,16 +44,15 @@ struct YarnIncident {
     // table laid out at wi.
     double pickT = 0, pickR = 0, thetaI = 0;
     SamplingTable::Layout table;
-    // S_R's estimated share of the continuous part's energy: with exit
-    // offsets (yarn_bsdf.h, ExitSpread), the probability of the surface
-    // branch among the continuous ones.
-    double surfaceShare = 0.5;
-    // With exit offsets: the probability of each channel for the exit
-    // offset (in proportion to the path's importance among the channels
-    // with M light in wi's cell; all 0 where the event does not split), and
-    // that cell. Set by YarnBsdf::prepare, which sees the importance.
+    // With exit offsets (yarn_bsdf.h, ExitSpread), set by YarnBsdf::prepare,
+    // which sees the path's importance (core/bsdf.h): the probability of each
+    // channel for the exit offset (in proportion to the importance among the
+    // channels with M light in wi's cell; all 0 where the event does not
+    // split), that cell, and the importance itself (the split event's
+    // branches are picked by it).
     Rgb spreadChannel{0.0};
     int exitCell = 0;
+    Rgb importance{1.0};
 };
 
 }  // namespace weft

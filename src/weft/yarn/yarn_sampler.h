@@ -78,13 +78,6 @@ class YarnSampler {
     virtual YarnDirectionSample sample(const YarnIncident& in, const BsdfSampleInput& u,
                                        Rng& rng) const = 0;
     virtual YarnLobeProbabilities lobeProbabilities(const YarnIncident& in) const = 0;
-    // Sets in.surfaceShare (yarn_incident.h), after prepare(): here R's
-    // share of the continuous lobe probabilities; a sampler that knows the
-    // parts' energies better overrides it.
-    virtual void prepareSurfaceShare(YarnIncident& in) const {
-        const YarnLobeProbabilities p = lobeProbabilities(in);
-        in.surfaceShare = p.r + p.m > 0 ? p.r / (p.r + p.m) : 0.5;
-    }
 
     // Bytes of the sampler's tables.
     virtual size_t memoryBytes() const = 0;

@@ -5,7 +5,9 @@ one run.
 For each preset given a model with an exit-offset table (`weft fit` with
 "exit_offset": true, docs/exit-point.md) and each scene kind, the Table 2
 scene (`weft scene KIND` of models/PRESET.json, as bench/table2.py makes it)
-is rendered at the same spp:
+is rendered at the same spp (swatch-knit and swatch-woven: the real
+swatches of data/curves as bench/shared_data.py lights and draws them, under
+a sky and one sphere light):
   Fa, Fb  fiber mode, seeds 1 and 2 (the reference)
   Na, Nb  neural mode with models/PRESET.json (today's model), seeds 1 and 2
   Ea, Eb  neural mode with the exit model, seeds 1 and 2
@@ -25,7 +27,8 @@ not follow the noise they weigh):
   s/spp       render seconds per sample, and exit / today's ratio.
 
     bench/exit_spread.py --models fleece=FLEECE-EXIT.json [polyester=...]
-        [--scenes weave knit] [--spp 256] [--size 128] [--weft build/release/weft]
+        [--scenes weave knit swatch-knit swatch-woven] [--spp 256] [--size 128]
+        [--weft build/release/weft]
         [--out bench/results/exit-spread.md]
 """
 import argparse
@@ -39,16 +42,43 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 from benchlib import binary_digest, now, table2_scene, write_results  # noqa: E402
 from fidelity_budget import REL_MSE_EPSILON, blocks  # noqa: E402
+import shared_data  # noqa: E402
 
 SCALES = (1, 4)
 
 
 def render(weft, scene, mode, spp, seed, threads, out):
-    """Renders and returns the render's seconds."""
-    line = subprocess.run([weft, "render", scene, "--mode", mode, "--spp", str(spp), "--seed",
-                           str(seed), "--threads", str(threads), "--quiet", "--out", out],
-                          check=True, stdout=subprocess.PIPE, text=True).stdout
-    return json.loads(line.strip().splitlines()[-1])["seconds"]
+    """Renders (unless `out` and its image.json are there from an earlier run
+    with --work) and returns the render's seconds."""
+    stats = os.path.splitext(out)[0] + ".json"
+    done = os.path.exists(out) and os.path.exists(stats)
+    if done:
+        with open(stats) as f:
+            done = not json.load(f).get("partial", False)  # stopped early (SIGTERM)
+    if not done:
+        subprocess.run([weft, "render", scene, "--mode", mode, "--spp", str(spp), "--seed",
+                        str(seed), "--threads", str(threads), "--quiet", "--out", out],
+                       check=True, stdout=subprocess.DEVNULL)
+    with open(stats) as f:
+        return json.load(f)["seconds"]
+
+
+def make_scene(weft, preset, kind, folder, size, patch):
+    """The scene of `kind` with models/PRESET.json: a Table 2 scene, or
+    swatch-SWATCH of bench/shared_data.py; returns its scene.json."""
+    if not kind.startswith("swatch-"):
+        return table2_scene(weft, preset, kind, folder, size, patch)
+    files = dict(shared_data.SWATCHES)
+    swatch = kind[len("swatch-"):]
+    if swatch not in files:
+        sys.exit(f"bench/exit_spread: unknown scene {kind} (swatch-" +
+                 ", swatch-".join(files) + ")")
+    os.makedirs(folder, exist_ok=True)
+    bcc = os.path.join(shared_data.SHARED, files[swatch])
+    radius = shared_data.swatch_radius(weft, bcc, folder)
+    scene = shared_data.swatch_scene(folder, "scene", bcc,
+                                     os.path.join(ROOT, "models", preset + ".json"), size, 1, radius)
+    return scene
 
 
 def with_model(scene, model, out):
@@ -111,7 +141,14 @@ def main():
     p.add_argument("--patch", type=int, default=3)
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("--out", default=os.path.join(ROOT, "bench", "results", "exit-spread.md"))
+    p.add_argument("--work", help="keep the renders in this folder and reuse those already "
+                   "there (same settings: the folder is not checked)")
+    p.add_argument("--fiber-only", action="store_true",
+                   help="render the fiber references only (into --work) and stop: they may run "
+                   "beside other work, the neural renders, which are timed, not")
     a = p.parse_args()
+    if a.fiber_only and not a.work:
+        sys.exit("bench/exit_spread: --fiber-only needs --work")
     sys.path.insert(0, a.python)
     import numpy as np
     import weft
@@ -125,7 +162,9 @@ def main():
         f"`bench/exit_spread.py --models {' '.join(a.models)} --spp {a.spp} --size {a.size}` "
         f"({results['date']}): each "
         f"scene as bench/table2.py makes it (`weft scene KIND --size {a.patch}`, {a.size} x "
-        f"{a.size} px), {a.spp} spp per render, two seeds per mode; *today*: neural mode with "
+        f"{a.size} px; swatch-*: a swatch of data/curves as bench/shared_data.py draws it, "
+        f"under a sky and one sphere light), {a.spp} spp per render, two seeds per mode; "
+        "*today*: neural mode with "
         "models/PRESET.json, *exit*: with the model fitted with exit offsets "
         "(docs/exit-point.md). *error*: one neural render against one fiber render less both "
         "renders' noise (Table 2's relMSE minus noise), at full resolution and over 4 x 4 px "
@@ -135,11 +174,15 @@ def main():
         "SSIM 4x4 px | s/spp |",
         "| --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
-    with tempfile.TemporaryDirectory(prefix="weft-exit-spread-") as work:
+    with tempfile.TemporaryDirectory(prefix="weft-exit-spread-") as tmp:
+        work = a.work or tmp
+        os.makedirs(work, exist_ok=True)
         for preset, exit_model in models.items():
             for kind in a.scenes:
                 folder = os.path.join(work, f"{preset}-{kind}")
-                scene = table2_scene(a.weft, preset, kind, folder, a.size, a.patch)
+                scene = os.path.join(folder, "scene.json")
+                if not os.path.exists(scene):
+                    scene = make_scene(a.weft, preset, kind, folder, a.size, a.patch)
                 exit_scene = with_model(scene, exit_model, os.path.join(folder, "exit.json"))
                 img, seconds = {}, {"N": [], "E": []}
                 for key, mode, path, seed in (("Fa", "fiber", scene, 1), ("Fb", "fiber", scene, 2),
@@ -147,12 +190,16 @@ def main():
                                               ("Ea", "neural", exit_scene, 1),
                                               ("Nb", "neural", scene, 2),
                                               ("Eb", "neural", exit_scene, 2)):
+                    if a.fiber_only and mode != "fiber":
+                        break
                     out = os.path.join(folder, key + ".exr")
                     s = render(a.weft, path, mode, a.spp, seed, a.threads, out)
                     if mode == "neural":
                         seconds[key[0]].append(s / a.spp)
                     img[key] = np.asarray(weft.read_image(out), dtype=np.float64)
                     print(f"[exit_spread] {preset} {kind} {key}", flush=True)
+                if a.fiber_only:
+                    continue
                 # Seed means, for SSIM.
                 for key in ("F", "N", "E"):
                     weft.save_image(os.path.join(folder, key + ".exr"),
@@ -172,6 +219,8 @@ def main():
                         f"{m['seconds_per_spp']:.4f} |")
                 row["seconds_ratio"] = row["exit"]["seconds_per_spp"] / row["today"]["seconds_per_spp"]
                 results["rows"].append(row)
+    if a.fiber_only:
+        return
     lines += ["", "Exit / today's s/spp: " + ", ".join(
         f"{r['preset']} {r['scene']} {r['seconds_ratio']:.2f}" for r in results["rows"]), ""]
     write_results(a.out, lines, results)

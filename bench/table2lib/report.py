@@ -191,7 +191,9 @@ def time_lines(cells):
     lines = ["", "## Time at equal quality (relative MSE %.2f) and memory" % TARGET_REL_MSE, "",
              "Memory of these 3 x 3 patches; the neural material (about 1 MB per yarn model) "
              "does not grow with the cloth, the geometry does: bench/memory_scale.py gives the "
-             "same ratio at `weft scene --size` 6 and 12 ([memory-scale.md](memory-scale.md)).",
+             "same ratio at `weft scene --size` 6 and 12 ([memory-scale.md](memory-scale.md)). "
+             "s/spp: the ladder's renders' (spp-weighted), which run alone; the references' "
+             "wall clock can carry other work.",
              "",
              "| material | scene | fiber s (EQ) | neural s (EQ) | speed-up | fiber s/spp "
              "| neural s/spp | fiber build s | fiber MB | neural MB | memory ratio | RSS ratio |",
@@ -202,8 +204,8 @@ def time_lines(cells):
             "| %s | %s | %.1f | %.2f | **%.1fx** | %.3f | %.3f | %.1f | %s | %s | **%.0fx** "
             "| %.1fx |" % (
                 c.preset, c.scene, f.equal_quality.seconds_to_target,
-                n.equal_quality.seconds_to_target, c.speedup, f.seconds_per_spp,
-                n.seconds_per_spp, f.build_seconds, mb(f.embree_bytes + f.material_bytes),
+                n.equal_quality.seconds_to_target, c.speedup, f.equal_quality.seconds_per_spp,
+                n.equal_quality.seconds_per_spp, f.build_seconds, mb(f.embree_bytes + f.material_bytes),
                 mb(n.embree_bytes + n.material_bytes), c.memory_ratio, c.rss_ratio))
     return lines
 

@@ -170,9 +170,9 @@ def main():
         "renders' noise (Table 2's relMSE minus noise), at full resolution and over 4 x 4 px "
         "blocks; SSIM of the seed means; s/spp of the neural renders, made alternately.",
         "",
-        "| scene | model | neural / fiber means r / g / b | error | error 4x4 px | SSIM | "
+        "| scene | model | neural / fiber means r / g / b | error | error 4x4 px | noise | SSIM | "
         "SSIM 4x4 px | s/spp |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     with tempfile.TemporaryDirectory(prefix="weft-exit-spread-") as tmp:
         work = a.work or tmp
@@ -215,14 +215,23 @@ def main():
                         f"| {preset} {kind} | {label} | " +
                         " / ".join(f"{x:.3f}" for x in m["means"]) +
                         f" | {m['by_scale'][1]['error']:.4f} | {m['by_scale'][4]['error']:.4f} | "
+                        f"{m['by_scale'][1]['noise']:.5f} | "
                         f"{m['ssim']['1']:.3f} | {m['ssim']['4']:.3f} | "
                         f"{m['seconds_per_spp']:.4f} |")
                 row["seconds_ratio"] = row["exit"]["seconds_per_spp"] / row["today"]["seconds_per_spp"]
+                row["noise_ratio"] = (row["exit"]["by_scale"][1]["noise"] /
+                                      row["today"]["by_scale"][1]["noise"])
                 results["rows"].append(row)
     if a.fiber_only:
         return
-    lines += ["", "Exit / today's s/spp: " + ", ".join(
-        f"{r['preset']} {r['scene']} {r['seconds_ratio']:.2f}" for r in results["rows"]), ""]
+    lines += ["", "*noise*: of one render at full resolution (the weighted mean square "
+              "difference of its two seeds, over 2). Exit / today's s/spp: " + ", ".join(
+                  f"{r['preset']} {r['scene']} {r['seconds_ratio']:.2f}" for r in results["rows"]),
+              "", "Exit / today's noise: " + ", ".join(
+                  f"{r['preset']} {r['scene']} {r['noise_ratio']:.2f}" for r in results["rows"]),
+              "", "Exit / today's noise x s/spp (time to equal noise): " + ", ".join(
+                  f"{r['preset']} {r['scene']} {r['noise_ratio'] * r['seconds_ratio']:.2f}"
+                  for r in results["rows"]), ""]
     write_results(a.out, lines, results)
 
 

@@ -28,6 +28,38 @@ BsdfSample transmissionSample(const BsdfIncident& in) {
 // The batches gather the networks' inputs in chunks of this many on the stack.
 constexpr size_t kBatchChunk = 64;
 
+// The sample batches' common part: per chunk, each query's continuous
+// direction first, in order, each from its own generator (the T lobe:
+// finish(query, nullptr, nullptr) at once), then S_M at those directions in
+// one batch, then finish(query, &direction, &m) for each of them.
+template <typename Finish>
+void sampleInChunks(const YarnSampler& sampler, const YarnEvaluator& model,
+                    const BsdfIncident* const* in, const BsdfSampleInput* u, Rng* const* rng,
+                    size_t count, Finish finish) {
+    size_t index[kBatchChunk];
+    YarnDirectionSample d[kBatchChunk];
+    Vec3 wiUpper[kBatchChunk], woUpper[kBatchChunk];
+    Rgb m[kBatchChunk];
+    for (size_t first = 0; first < count; first += kBatchChunk) {
+        const size_t n = std::min(kBatchChunk, count - first);
+        size_t continuous = 0;
+        for (size_t k = 0; k < n; ++k) {
+            const YarnIncident& yarn = in[first + k]->get<YarnIncident>();
+            if (u[first + k][0] < yarn.pickT) {
+                finish(first + k, nullptr, nullptr);
+                continue;
+            }
+            d[continuous] = sampler.sample(yarn, u[first + k], *rng[first + k]);
+            index[continuous] = first + k;
+            wiUpper[continuous] = yarn.wi;
+            woUpper[continuous] = d[continuous].wo;
+            ++continuous;
+        }
+        model.evalMBatch(wiUpper, woUpper, continuous, m);
+        for (size_t c = 0; c < continuous; ++c) finish(index[c], &d[c], &m[c]);
+    }
+}
+
 }  // namespace
 
 YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
@@ -183,37 +215,18 @@ void YarnBsdf::evalPdfBatch(const BsdfIncident* const* in, const Vec3* wo, size_
 
 void YarnBsdf::sampleBatch(const BsdfIncident* const* in, const BsdfSampleInput* u, Rng* const* rng,
                            size_t count, BsdfSample* out) const {
-    // The directions first (each from its own generator, in order), then S_M
-    // at the continuous lobes' directions in one batch.
-    size_t index[kBatchChunk];
-    int lobe[kBatchChunk];
-    Vec3 wiUpper[kBatchChunk], woUpper[kBatchChunk];
-    Rgb m[kBatchChunk];
-    for (size_t first = 0; first < count; first += kBatchChunk) {
-        const size_t n = std::min(kBatchChunk, count - first);
-        size_t continuous = 0;
-        for (size_t k = 0; k < n; ++k) {
-            const YarnIncident& yarn = in[first + k]->get<YarnIncident>();
-            if (u[first + k][0] < yarn.pickT) {
-                out[first + k] = transmissionSample(*in[first + k]);
-                continue;
-            }
-            const YarnDirectionSample d = sampler_->sample(yarn, u[first + k], *rng[first + k]);
-            index[continuous] = first + k;
-            lobe[continuous] = d.lobe;
-            wiUpper[continuous] = yarn.wi;
-            woUpper[continuous] = d.wo;
-            ++continuous;
-        }
-        model_->evalMBatch(wiUpper, woUpper, continuous, m);
-        for (size_t c = 0; c < continuous; ++c) {
-            const YarnIncident& yarn = in[index[c]]->get<YarnIncident>();
-            BsdfEval e;
-            evalAndPdf(yarn, woUpper[c], &e.value, &e.pdf, &m[c]);
-            out[index[c]] =
-                BsdfSample::fromEval(yarn.mirrored ? mirrored(woUpper[c]) : woUpper[c], e, lobe[c]);
-        }
-    }
+    sampleInChunks(*sampler_, *model_, in, u, rng, count,
+                   [&](size_t k, const YarnDirectionSample* d, const Rgb* m) {
+                       if (!d) {
+                           out[k] = transmissionSample(*in[k]);
+                           return;
+                       }
+                       const YarnIncident& yarn = in[k]->get<YarnIncident>();
+                       BsdfEval e;
+                       evalAndPdf(yarn, d->wo, &e.value, &e.pdf, m);
+                       out[k] = BsdfSample::fromEval(yarn.mirrored ? mirrored(d->wo) : d->wo, e,
+                                                     d->lobe);
+                   });
 }
 
 // The exit spread (yarn_bsdf.h, "Exit offsets").
@@ -231,7 +244,6 @@ double weightedSum(const Rgb& weight, const Rgb& x) {
 
 void YarnBsdf::prepareSpread(const Rgb& importance, YarnIncident& in) const {
     in.spreadChannel = Rgb(0.0);
-    in.importance = importance;
     if (!exitOffset_ || in.mirrored || !(in.pickT < 1)) return;
     in.exitCell = static_cast<int>(exitOffsetCell(in.wi));
     Rgb p;
@@ -266,8 +278,9 @@ SpreadOffset YarnBsdf::sampleOffset(const BsdfIncident& in, const BsdfSampleInpu
     return offset;
 }
 
-YarnBsdf::SplitParts YarnBsdf::splitParts(const YarnIncident& in, const Vec3& wo,
+YarnBsdf::SplitParts YarnBsdf::splitParts(const BsdfIncident& incident, const Vec3& wo,
                                           const Rgb* m) const {
+    const YarnIncident& in = incident.get<YarnIncident>();
     const FiberBcsdf::Angles out = model_->outAngles(wo);
     const YarnComponents parts =
         m ? model_->components(in, wo, out, *m) : model_->components(wo, in, out);
@@ -277,8 +290,8 @@ YarnBsdf::SplitParts YarnBsdf::splitParts(const YarnIncident& in, const Vec3& wo
     split.pdf = sampler_->pdf(in, wo, out);
     // The surface branch's probability at wo: S_R's share of S_R + S_M,
     // channels weighted by the path's importance.
-    const double r = weightedSum(in.importance, split.r);
-    const double all = r + weightedSum(in.importance, split.m);
+    const double r = weightedSum(incident.importance(), split.r);
+    const double all = r + weightedSum(incident.importance(), split.m);
     split.surface = std::clamp(all > 0 ? r / all : 0.5, kMinimumBranch, 1.0 - kMinimumBranch);
     return split;
 }
@@ -291,21 +304,14 @@ BsdfEval YarnBsdf::SplitParts::part(bool spread) const {
 }
 
 BsdfEval YarnBsdf::evalSurface(const BsdfIncident& in, const Vec3& wo) const {
-    return splitParts(in.get<YarnIncident>(), wo, nullptr).part(false);
+    return splitParts(in, wo, nullptr).part(false);
 }
 
 BsdfEval YarnBsdf::evalSpread(const BsdfIncident& in, const Vec3& woExit) const {
-    return splitParts(in.get<YarnIncident>(), woExit, nullptr).part(true);
+    return splitParts(in, woExit, nullptr).part(true);
 }
 
-bool YarnBsdf::eventDirection(const YarnIncident& in, const BsdfSampleInput& u, Rng& rng,
-                              YarnDirectionSample* d) const {
-    if (u[0] < in.pickT) return false;
-    *d = sampler_->sample(in, u, rng);
-    return true;
-}
-
-SpreadSample YarnBsdf::eventSample(const YarnIncident& in, const YarnDirectionSample& d,
+SpreadSample YarnBsdf::eventSample(const BsdfIncident& in, const YarnDirectionSample& d,
                                    const Rgb* m, Rng& rng) const {
     const SplitParts split = splitParts(in, d.wo, m);
     SpreadSample out;
@@ -317,9 +323,8 @@ SpreadSample YarnBsdf::eventSample(const YarnIncident& in, const YarnDirectionSa
 SpreadSample YarnBsdf::sampleEvent(const BsdfIncident& in, const BsdfSampleInput& u,
                                    Rng& rng) const {
     const YarnIncident& yarn = in.get<YarnIncident>();
-    YarnDirectionSample d;
-    if (!eventDirection(yarn, u, rng, &d)) return {false, transmissionSample(in)};
-    return eventSample(yarn, d, nullptr, rng);
+    if (u[0] < yarn.pickT) return {false, transmissionSample(in)};
+    return eventSample(in, sampler_->sample(yarn, u, rng), nullptr, rng);
 }
 
 void YarnBsdf::evalPartBatch(const BsdfIncident* const* in, const Vec3* wo, size_t count,
@@ -331,8 +336,7 @@ void YarnBsdf::evalPartBatch(const BsdfIncident* const* in, const Vec3* wo, size
         for (size_t k = 0; k < n; ++k) wiUpper[k] = in[first + k]->get<YarnIncident>().wi;
         model_->evalMBatch(wiUpper, wo + first, n, m);
         for (size_t k = 0; k < n; ++k)
-            out[first + k] =
-                splitParts(in[first + k]->get<YarnIncident>(), wo[first + k], &m[k]).part(spread);
+            out[first + k] = splitParts(*in[first + k], wo[first + k], &m[k]).part(spread);
     }
 }
 
@@ -348,31 +352,12 @@ void YarnBsdf::evalSpreadBatch(const BsdfIncident* const* in, const Vec3* woExit
 
 void YarnBsdf::sampleEventBatch(const BsdfIncident* const* in, const BsdfSampleInput* u,
                                 Rng* const* rng, size_t count, SpreadSample* out) const {
-    // The directions first (each from its own generator), then S_M at them
-    // in one batch, then each branch (from the same generator).
-    size_t index[kBatchChunk];
-    YarnDirectionSample d[kBatchChunk];
-    Vec3 wiUpper[kBatchChunk], woUpper[kBatchChunk];
-    Rgb m[kBatchChunk];
-    for (size_t first = 0; first < count; first += kBatchChunk) {
-        const size_t n = std::min(kBatchChunk, count - first);
-        size_t continuous = 0;
-        for (size_t k = 0; k < n; ++k) {
-            const YarnIncident& yarn = in[first + k]->get<YarnIncident>();
-            if (!eventDirection(yarn, u[first + k], *rng[first + k], &d[continuous])) {
-                out[first + k] = {false, transmissionSample(*in[first + k])};
-                continue;
-            }
-            index[continuous] = first + k;
-            wiUpper[continuous] = yarn.wi;
-            woUpper[continuous] = d[continuous].wo;
-            ++continuous;
-        }
-        model_->evalMBatch(wiUpper, woUpper, continuous, m);
-        for (size_t c = 0; c < continuous; ++c)
-            out[index[c]] =
-                eventSample(in[index[c]]->get<YarnIncident>(), d[c], &m[c], *rng[index[c]]);
-    }
+    // The branch after S_M's batch, from the query's own generator.
+    sampleInChunks(*sampler_, *model_, in, u, rng, count,
+                   [&](size_t k, const YarnDirectionSample* d, const Rgb* m) {
+                       out[k] = d ? eventSample(*in[k], *d, m, *rng[k])
+                                  : SpreadSample{false, transmissionSample(*in[k])};
+                   });
 }
 
 }  // namespace weft

@@ -172,15 +172,13 @@ class YarnBsdf final : public Bsdf, public ExitSpread {
         // One branch's value and its density of reaching wo.
         BsdfEval part(bool spread) const;
     };
-    SplitParts splitParts(const YarnIncident& in, const Vec3& wo, const Rgb* m) const;
+    SplitParts splitParts(const BsdfIncident& in, const Vec3& wo, const Rgb* m) const;
     // evalSurfaceBatch or evalSpreadBatch.
     void evalPartBatch(const BsdfIncident* const* in, const Vec3* wo, size_t count, bool spread,
                        BsdfEval* out) const;
-    // sampleEvent in two halves: the direction (false: the T lobe), then
-    // the branch (one number from rng), its value and weight.
-    bool eventDirection(const YarnIncident& in, const BsdfSampleInput& u, Rng& rng,
-                        YarnDirectionSample* d) const;
-    SpreadSample eventSample(const YarnIncident& in, const YarnDirectionSample& d, const Rgb* m,
+    // sampleEvent after its continuous direction d: the branch (one number
+    // from rng), its value and weight (`m`: S_M at d.wo, or the M network's).
+    SpreadSample eventSample(const BsdfIncident& in, const YarnDirectionSample& d, const Rgb* m,
                              Rng& rng) const;
 
     // Immutable once built, so copies of the BSDF share them (the tabulated

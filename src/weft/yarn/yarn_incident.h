@@ -48,11 +48,9 @@ struct YarnIncident {
     // which sees the path's importance (core/bsdf.h): the probability of each
     // channel for the exit offset (in proportion to the importance among the
     // channels with M light in wi's cell; all 0 where the event does not
-    // split), that cell, and the importance itself (the split event's
-    // branches are picked by it).
+    // split), and that cell.
     Rgb spreadChannel{0.0};
     int exitCell = 0;
-    Rgb importance{1.0};
 };
 
 }  // namespace weft

@@ -324,6 +324,46 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
     std::vector<BsdfSample> samples;
     std::vector<SpreadSample> spreadSamples;
     std::vector<size_t> pending;
+    // One group's members whose event wo(event) gives a direction, in one
+    // call(incidents, directions, count, results); each result into its
+    // event's `result`.
+    auto evalBatch = [&](const std::vector<size_t>& members, auto&& wo, auto&& call,
+                         BsdfEval Event::*result) {
+        vecs.clear();
+        constIncidents.clear();
+        pending.clear();
+        for (const size_t k : members)
+            if (const Vec3* w = wo(events[k])) {
+                pending.push_back(k);
+                vecs.push_back(*w);
+                constIncidents.push_back(&events[k].incident);
+            }
+        if (pending.empty()) return;
+        evals.resize(pending.size());
+        call(constIncidents.data(), vecs.data(), pending.size(), evals.data());
+        for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].*result = evals[j];
+    };
+    // One group's members whose event splits (or not), with their sample
+    // inputs and generators, in one call(incidents, inputs, generators,
+    // count, scratch); each sample into its event's `result`.
+    auto sampleBatch = [&](const std::vector<size_t>& members, bool split, auto&& call,
+                           auto& scratch, auto Event::*result) {
+        constIncidents.clear();
+        inputs.clear();
+        rngs.clear();
+        pending.clear();
+        for (const size_t k : members) {
+            if ((events[k].spread != nullptr) != split) continue;
+            pending.push_back(k);
+            constIncidents.push_back(&events[k].incident);
+            inputs.push_back(events[k].u);
+            rngs.push_back(&queries[k].stream->rng());
+        }
+        if (pending.empty()) return;
+        scratch.resize(pending.size());
+        call(constIncidents.data(), inputs.data(), rngs.data(), pending.size(), scratch.data());
+        for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].*result = scratch[j];
+    };
     for (int depth = 0; !alive.empty(); ++depth) {
         // Every path's next ray, and its BSDF.
         for (auto& group : groups) group.second.clear();
@@ -367,27 +407,19 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
             }
             forEachGroup([&](const Bsdf& bsdf, const std::vector<size_t>& members) {
                 // Whole events with evalPdf, split ones with their surface part.
-                for (const bool split : {false, true}) {
-                    vecs.clear();
-                    constIncidents.clear();
-                    pending.clear();
-                    for (const size_t k : members) {
-                        if (!events[k].light.pending || (events[k].spread != nullptr) != split)
-                            continue;
-                        pending.push_back(k);
-                        vecs.push_back(events[k].woLocal);
-                        constIncidents.push_back(&events[k].incident);
-                    }
-                    if (pending.empty()) continue;
-                    evals.resize(pending.size());
-                    if (split)
-                        bsdf.exitSpread()->evalSurfaceBatch(constIncidents.data(), vecs.data(),
-                                                            pending.size(), evals.data());
-                    else
-                        bsdf.evalPdfBatch(constIncidents.data(), vecs.data(), pending.size(),
-                                          evals.data());
-                    for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].eval = evals[j];
-                }
+                evalBatch(
+                    members,
+                    [](const Event& e) {
+                        return e.light.pending && !e.spread ? &e.woLocal : nullptr;
+                    },
+                    [&](auto... args) { bsdf.evalPdfBatch(args...); }, &Event::eval);
+                evalBatch(
+                    members,
+                    [](const Event& e) {
+                        return e.light.pending && e.spread ? &e.woLocal : nullptr;
+                    },
+                    [&](auto... args) { bsdf.exitSpread()->evalSurfaceBatch(args...); },
+                    &Event::eval);
             });
             for (const size_t k : alive) {
                 const Event& e = events[k];
@@ -397,21 +429,9 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
         }
         for (const size_t k : alive) events[k].u = bsdfSampleInput(*queries[k].stream);
         forEachGroup([&](const Bsdf& bsdf, const std::vector<size_t>& members) {
-            constIncidents.clear();
-            inputs.clear();
-            rngs.clear();
-            pending.clear();
-            for (const size_t k : members) {
-                if (events[k].spread) continue;
-                pending.push_back(k);
-                constIncidents.push_back(&events[k].incident);
-                inputs.push_back(events[k].u);
-                rngs.push_back(&queries[k].stream->rng());
-            }
-            samples.resize(pending.size());
-            bsdf.sampleBatch(constIncidents.data(), inputs.data(), rngs.data(), pending.size(),
-                             samples.data());
-            for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].sample = samples[j];
+            sampleBatch(
+                members, false, [&](auto... args) { bsdf.sampleBatch(args...); }, samples,
+                &Event::sample);
         });
         // The split events: each path's exit point and light sample there,
         // then each group's spread parts and continuations in batches.
@@ -425,34 +445,15 @@ void pathRadianceBatch(const Scene& scene, std::span<PathQuery> queries,
         forEachGroup([&](const Bsdf& bsdf, const std::vector<size_t>& members) {
             const ExitSpread* spread = bsdf.exitSpread();
             if (!spread) return;
-            vecs.clear();
-            constIncidents.clear();
-            pending.clear();
-            for (const size_t k : members) {
-                if (!events[k].spread || !events[k].split.atExit.pending) continue;
-                pending.push_back(k);
-                vecs.push_back(events[k].split.woExit);
-                constIncidents.push_back(&events[k].incident);
-            }
-            evals.resize(pending.size());
-            spread->evalSpreadBatch(constIncidents.data(), vecs.data(), pending.size(),
-                                    evals.data());
-            for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].spreadAtLight = evals[j];
-            constIncidents.clear();
-            inputs.clear();
-            rngs.clear();
-            pending.clear();
-            for (const size_t k : members) {
-                if (!events[k].spread) continue;
-                pending.push_back(k);
-                constIncidents.push_back(&events[k].incident);
-                inputs.push_back(events[k].u);
-                rngs.push_back(&queries[k].stream->rng());
-            }
-            spreadSamples.resize(pending.size());
-            spread->sampleEventBatch(constIncidents.data(), inputs.data(), rngs.data(),
-                                     pending.size(), spreadSamples.data());
-            for (size_t j = 0; j < pending.size(); ++j) events[pending[j]].next = spreadSamples[j];
+            evalBatch(
+                members,
+                [](const Event& e) {
+                    return e.spread && e.split.atExit.pending ? &e.split.woExit : nullptr;
+                },
+                [&](auto... args) { spread->evalSpreadBatch(args...); }, &Event::spreadAtLight);
+            sampleBatch(
+                members, true, [&](auto... args) { spread->sampleEventBatch(args...); },
+                spreadSamples, &Event::next);
         });
         kept = 0;
         for (const size_t k : alive) {

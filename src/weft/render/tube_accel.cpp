@@ -78,10 +78,18 @@ Vec3 TubeAccel::smoothTangent(const GeometryInfo& info, uint32_t segment, float 
     // the flags say it has them, are one vertex before and after.
     const float* v0 = info.vertices + 4 * static_cast<size_t>(info.indices[segment]);
     const auto point = [&](int k) { return Vec3{v0[4 * k], v0[4 * k + 1], v0[4 * k + 2]}; };
-    const Vec3 along = normalizeAnyLength(point(1) - point(0));
     const unsigned char flags = info.flags[segment];
     const bool left = flags & RTC_CURVE_FLAG_NEIGHBOR_LEFT;
     const bool right = flags & RTC_CURVE_FLAG_NEIGHBOR_RIGHT;
+    const double w = std::clamp(static_cast<double>(u), 0.0, 1.0);
+    // At a joint (exitPoint walks from joint to joint) only that vertex's
+    // tangent: the blend below with the other one's weight 0.
+    if ((w == 0 && left) || (w == 1 && right)) {
+        const Vec3 t = w == 0 ? normalizeAnyLength(point(1) - point(-1))
+                              : normalizeAnyLength(point(2) - point(0));
+        return dot(t, t) > 1e-12 ? normalize(t) : normalizeAnyLength(point(1) - point(0));
+    }
+    const Vec3 along = normalizeAnyLength(point(1) - point(0));
     Vec3 t0 = left ? normalizeAnyLength(point(1) - point(-1)) : along;
     Vec3 t1 = right ? normalizeAnyLength(point(2) - point(0)) : along;
     // At an open end, the end tangent of the parabola through the last three
@@ -93,7 +101,6 @@ Vec3 TubeAccel::smoothTangent(const GeometryInfo& info, uint32_t segment, float 
     };
     if (!left && right) t0 = endTangent(t1);
     if (left && !right) t1 = endTangent(t0);
-    const double w = std::clamp(static_cast<double>(u), 0.0, 1.0);
     const Vec3 t = t0 * (1 - w) + t1 * w;
     // A hairpin (the neighbours on opposite sides) has no smooth tangent there.
     return dot(t, t) > 1e-12 ? normalize(t) : along;
@@ -308,10 +315,9 @@ TubeHit TubeAccel::exitPoint(const TubeHit& hit, double axial, double around) co
         *radius = r0 + (r1 - r0) * u;
         return p0 + (p1 - p0) * u;
     };
-    // Carries the normal onto the cross-section at (segment, u): projected
-    // onto the plane orthogonal to the smooth tangent there.
-    const auto carry = [&](const Vec3& n, uint32_t segment, double u) {
-        const Vec3 t = smoothTangent(info, segment, static_cast<float>(u));
+    // Carries the normal onto the cross-section whose smooth tangent is t:
+    // projected onto the plane orthogonal to it.
+    const auto carry = [](const Vec3& n, const Vec3& t) {
         const Vec3 projected = n - t * dot(n, t);
         return dot(projected, projected) > 1e-12 ? normalize(projected) : n;
     };
@@ -341,7 +347,7 @@ TubeHit TubeAccel::exitPoint(const TubeHit& hit, double axial, double around) co
             break;
         }
         u = forward ? 0.0 : 1.0;
-        normal = carry(normal, segment, u);
+        normal = carry(normal, smoothTangent(info, segment, static_cast<float>(u)));
     }
     u = std::clamp(u, 0.0, 1.0);
 
@@ -349,7 +355,7 @@ TubeHit TubeAccel::exitPoint(const TubeHit& hit, double axial, double around) co
     exit.segment = segment;
     exit.u = static_cast<float>(u);
     exit.tangent = smoothTangent(info, segment, exit.u);
-    exit.normal = carry(normal, segment, u);
+    exit.normal = carry(normal, exit.tangent);
     exit.point = centre(segment, u, &radius) + exit.normal * radius;
     if (!info.materialAlong.empty()) exit.material = info.materialAlong[segment - first];
     return exit;

@@ -246,6 +246,8 @@ ExitOffsetTable::Offset ExitOffsetTable::sample(size_t cell, int channel, double
     o.dz = std::min(o.dz, std::nextafter(edges_.dz[i + 1], edges_.dz[i]));
     o.dpsi = std::min(o.dpsi, std::nextafter(dpsiEdges_[j + 1], dpsiEdges_[j]));
     o.pdf = mass / running[n] / binArea(i, j);
+    o.axialBin = i;
+    o.aroundBin = j;
     return o;
 }
 
@@ -260,7 +262,12 @@ double ExitOffsetTable::pdf(size_t cell, int channel, double dz, double dpsi) co
     const int j = static_cast<int>(std::upper_bound(dpsiEdges_.begin(), dpsiEdges_.end(), dpsi) -
                                    dpsiEdges_.begin()) -
                   1;
-    return probability(cell, channel, i, j) / binArea(i, j);
+    return binDensity(cell, channel, i, j);
+}
+
+double ExitOffsetTable::binDensity(size_t cell, int channel, int axialBin, int aroundBin) const {
+    if (axialBin < 0 || aroundBin < 0) return 0.0;  // a sample without density
+    return probability(cell, channel, axialBin, aroundBin) / binArea(axialBin, aroundBin);
 }
 
 size_t ExitOffsetTable::memoryBytes() const {

@@ -74,10 +74,14 @@ class ExitOffsetTable {
     struct Offset {
         double dz = 0, dpsi = 0;
         double pdf = 0;  // per unit dz dpsi; 0 for a cell without density (offset 0)
+        int axialBin = -1, aroundBin = -1;  // the bin it lies in (-1 without density)
     };
     // u1 picks the bin and dz within it, u2 dpsi within it; both in [0, 1).
     Offset sample(size_t cell, int channel, double u1, double u2) const;
     double pdf(size_t cell, int channel, double dz, double dpsi) const;
+    // pdf() within one bin, found once: every channel's bins are the same, so
+    // a sample's bin gives the other channels' densities at it without a search.
+    double binDensity(size_t cell, int channel, int axialBin, int aroundBin) const;
 
     size_t memoryBytes() const;
 

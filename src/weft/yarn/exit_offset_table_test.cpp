@@ -136,6 +136,10 @@ TEST(ExitOffsetTable, SamplesFollowThePdf) {
         const ExitOffsetTable::Offset o = t.sample(5, 1, rng.uniform(), rng.uniform());
         ASSERT_GT(o.pdf, 0.0);
         ASSERT_EQ(o.pdf, t.pdf(5, 1, o.dz, o.dpsi)) << o.dz << " " << o.dpsi;
+        // The sample's bin gives every channel's density there (sampleOffset's MIS).
+        for (int c = 0; c < 3; ++c)
+            ASSERT_EQ(t.binDensity(5, c, o.axialBin, o.aroundBin), t.pdf(5, c, o.dz, o.dpsi))
+                << c << " " << o.dz << " " << o.dpsi;
         const int i =
             static_cast<int>(std::upper_bound(e.dz.begin(), e.dz.end(), o.dz) - e.dz.begin()) - 1;
         const int j =

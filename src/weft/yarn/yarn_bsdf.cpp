@@ -268,7 +268,7 @@ SpreadOffset YarnBsdf::sampleOffset(const BsdfIncident& in, const BsdfSampleInpu
     Rgb q;
     double mixture = 0;
     for (int c = 0; c < 3; ++c) {
-        q[c] = c == channel ? o.pdf : exitOffset_->pdf(cell, c, o.dz, o.dpsi);
+        q[c] = c == channel ? o.pdf : exitOffset_->binDensity(cell, c, o.axialBin, o.aroundBin);
         mixture += p[c] * q[c];
     }
     SpreadOffset offset;

@@ -27,7 +27,8 @@ not follow the noise they weigh):
   s/spp       render seconds per sample, and exit / today's ratio.
 
     bench/exit_spread.py --models fleece=FLEECE-EXIT.json [polyester=...]
-        [--scenes weave knit swatch-knit swatch-woven] [--spp 256] [--size 128]
+        [--scenes weave knit weave-1ply closeup closeup-1ply swatch-knit swatch-woven]
+        [--spp 256] [--size 128]
         [--weft build/release/weft]
         [--out bench/results/exit-spread.md]
 """
@@ -64,10 +65,16 @@ def render(weft, scene, mode, spp, seed, threads, out):
 
 
 def make_scene(weft, preset, kind, folder, size, patch):
-    """The scene of `kind` with models/PRESET.json: a Table 2 scene, or
+    """The scene of `kind` with models/PRESET.json: a Table 2 scene (KIND or
+    KIND-Nply, `weft scene KIND --plies N`, as bench/fidelity_budget.py's
+    scenes with fewer contacts), or
     swatch-SWATCH of bench/shared_data.py; returns its scene.json."""
     if not kind.startswith("swatch-"):
-        return table2_scene(weft, preset, kind, folder, size, patch)
+        base, _, plies = kind.partition("-")
+        if plies and not (plies.endswith("ply") and plies[:-3].isdigit()):
+            sys.exit(f"bench/exit_spread: unknown scene {kind} (KIND or KIND-Nply)")
+        return table2_scene(weft, preset, base, folder, size, patch,
+                            ["--plies", plies[:-3]] if plies else [])
     files = dict(shared_data.SWATCHES)
     swatch = kind[len("swatch-"):]
     if swatch not in files:

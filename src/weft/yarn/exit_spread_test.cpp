@@ -208,48 +208,29 @@ TEST(ExitSpread, BatchesGiveTheSingleCallsBits) {
     const YarnBsdf bsdf(spreadModel());
     Rng rng(31, 3);
     for (const size_t count : {size_t(1), size_t(15), size_t(70), size_t(200)}) {
-        std::vector<Vec3> wi(count), wo(count);
-        std::vector<BsdfSampleInput> u(count), uOffset(count);
-        std::vector<BsdfIncident> single(count), batch(count);
-        std::vector<BsdfIncident*> batchPtr(count);
-        std::vector<const BsdfIncident*> batchConst(count);
-        for (size_t k = 0; k < count; ++k) {
-            wi[k] = sampleUniformSphere(rng.uniform(), rng.uniform());
-            wo[k] = sampleUniformSphere(rng.uniform(), rng.uniform());
-            u[k] = {rng.uniform(), rng.uniform(), rng.uniform()};
-            uOffset[k] = {rng.uniform(), rng.uniform(), rng.uniform()};
-            const Rgb importance(rng.uniform(), rng.uniform(), rng.uniform());
-            single[k].setImportance(importance);
-            batch[k].setImportance(importance);
-            bsdf.prepare(wi[k], single[k]);
-            batchPtr[k] = &batch[k];
-            batchConst[k] = &batch[k];
-        }
-        bsdf.prepareBatch(wi.data(), batchPtr.data(), count);
+        testing::BatchQueries q(bsdf, count, rng, 9);
+        std::vector<BsdfSampleInput> uOffset(count);
+        for (auto& v : uOffset) v = {rng.uniform(), rng.uniform(), rng.uniform()};
         std::vector<BsdfEval> evals(count);
-        bsdf.evalSpreadBatch(batchConst.data(), wo.data(), count, evals.data());
-        std::vector<Rng> rngSingle, rngBatch;
-        for (size_t k = 0; k < count; ++k) rngSingle.push_back(Rng(k, 9));
-        rngBatch = rngSingle;
-        std::vector<Rng*> rngPtr(count);
-        for (size_t k = 0; k < count; ++k) rngPtr[k] = &rngBatch[k];
+        bsdf.evalSpreadBatch(q.batchConst.data(), q.wo.data(), count, evals.data());
         std::vector<SpreadSample> samples(count);
-        bsdf.sampleEventBatch(batchConst.data(), u.data(), rngPtr.data(), count, samples.data());
+        bsdf.sampleEventBatch(q.batchConst.data(), q.u.data(), q.rngPtr.data(), count,
+                              samples.data());
         int spreads = 0;
         for (size_t k = 0; k < count; ++k) {
             SCOPED_TRACE("query " + std::to_string(k) + " of " + std::to_string(count));
-            ASSERT_EQ(bsdf.splits(batch[k]), bsdf.splits(single[k]));
-            ASSERT_EQ(bsdf.splits(single[k]), wi[k].z >= 0);
-            if (!bsdf.splits(single[k])) continue;
-            const SpreadOffset o = bsdf.sampleOffset(single[k], uOffset[k]);
-            const SpreadOffset ob = bsdf.sampleOffset(batch[k], uOffset[k]);
+            ASSERT_EQ(bsdf.splits(q.batch[k]), bsdf.splits(q.single[k]));
+            ASSERT_EQ(bsdf.splits(q.single[k]), q.wi[k].z >= 0);
+            if (!bsdf.splits(q.single[k])) continue;
+            const SpreadOffset o = bsdf.sampleOffset(q.single[k], uOffset[k]);
+            const SpreadOffset ob = bsdf.sampleOffset(q.batch[k], uOffset[k]);
             ASSERT_EQ(ob.dz, o.dz);
             ASSERT_EQ(ob.dpsi, o.dpsi);
             ASSERT_EQ(ob.weight, o.weight);
-            const BsdfEval want = bsdf.evalSpread(single[k], wo[k]);
+            const BsdfEval want = bsdf.evalSpread(q.single[k], q.wo[k]);
             ASSERT_EQ(evals[k].value, want.value);
             ASSERT_EQ(evals[k].pdf, want.pdf);
-            const SpreadSample s = bsdf.sampleEvent(single[k], u[k], rngSingle[k]);
+            const SpreadSample s = bsdf.sampleEvent(q.single[k], q.u[k], q.rngSingle[k]);
             spreads += s.spread;
             ASSERT_EQ(samples[k].spread, s.spread);
             ASSERT_EQ(samples[k].sample.lobe, s.sample.lobe);
@@ -257,7 +238,7 @@ TEST(ExitSpread, BatchesGiveTheSingleCallsBits) {
             ASSERT_EQ(samples[k].sample.weight, s.sample.weight);
             ASSERT_EQ(samples[k].sample.pdf, s.sample.pdf);
             ASSERT_EQ(samples[k].sample.isDelta, s.sample.isDelta);
-            ASSERT_EQ(rngBatch[k].nextU32(), rngSingle[k].nextU32());
+            ASSERT_EQ(q.rngBatch[k].nextU32(), q.rngSingle[k].nextU32());
         }
         if (count >= 70) {
             EXPECT_GT(spreads, 0);

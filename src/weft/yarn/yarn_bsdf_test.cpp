@@ -597,51 +597,30 @@ TEST(YarnBsdf, BatchesGiveTheSingleCallsBits) {
                 const YarnBsdf bsdf(testModel(name), name, YarnBsdfOptions{guard, sampling});
                 Rng rng(11, 3);
                 for (const size_t count : {size_t(1), size_t(15), size_t(70), size_t(200)}) {
-                    std::vector<Vec3> wi(count), wo(count);
-                    std::vector<BsdfSampleInput> u(count);
-                    std::vector<BsdfIncident> single(count), batch(count);
-                    std::vector<BsdfIncident*> batchPtr(count);
-                    std::vector<const BsdfIncident*> batchConst(count);
-                    for (size_t k = 0; k < count; ++k) {
-                        wi[k] = randomUnitVector(rng);
-                        wo[k] = randomUnitVector(rng);
-                        u[k] = {rng.uniform(), rng.uniform(), rng.uniform()};
-                        const Rgb importance(rng.uniform(), rng.uniform(), rng.uniform());
-                        single[k].setImportance(importance);
-                        batch[k].setImportance(importance);
-                        bsdf.prepare(wi[k], single[k]);
-                        batchPtr[k] = &batch[k];
-                        batchConst[k] = &batch[k];
-                    }
-                    bsdf.prepareBatch(wi.data(), batchPtr.data(), count);
+                    testing::BatchQueries q(bsdf, count, rng, 5);
                     std::vector<BsdfEval> evals(count);
-                    bsdf.evalPdfBatch(batchConst.data(), wo.data(), count, evals.data());
-                    std::vector<Rng> rngSingle, rngBatch;
-                    for (size_t k = 0; k < count; ++k) rngSingle.push_back(Rng(k, 5));
-                    rngBatch = rngSingle;
-                    std::vector<Rng*> rngPtr(count);
-                    for (size_t k = 0; k < count; ++k) rngPtr[k] = &rngBatch[k];
+                    bsdf.evalPdfBatch(q.batchConst.data(), q.wo.data(), count, evals.data());
                     std::vector<BsdfSample> samples(count);
-                    bsdf.sampleBatch(batchConst.data(), u.data(), rngPtr.data(), count,
+                    bsdf.sampleBatch(q.batchConst.data(), q.u.data(), q.rngPtr.data(), count,
                                      samples.data());
                     for (size_t k = 0; k < count; ++k) {
                         SCOPED_TRACE(std::string(name) + " sampling " +
                                      std::to_string(static_cast<int>(sampling)) + " guard " +
                                      std::to_string(guard) + " query " + std::to_string(k) +
                                      " of " + std::to_string(count));
-                        const BsdfEval want = bsdf.evalPdf(single[k], wo[k]);
+                        const BsdfEval want = bsdf.evalPdf(q.single[k], q.wo[k]);
                         ASSERT_EQ(evals[k].value, want.value);
                         ASSERT_EQ(evals[k].pdf, want.pdf);
                         // The prepared incidents agree too: the same values at another wo.
-                        ASSERT_EQ(bsdf.evalPdf(batch[k], -wo[k]).value,
-                                  bsdf.evalPdf(single[k], -wo[k]).value);
-                        const BsdfSample s = bsdf.sample(single[k], u[k], rngSingle[k]);
+                        ASSERT_EQ(bsdf.evalPdf(q.batch[k], -q.wo[k]).value,
+                                  bsdf.evalPdf(q.single[k], -q.wo[k]).value);
+                        const BsdfSample s = bsdf.sample(q.single[k], q.u[k], q.rngSingle[k]);
                         ASSERT_EQ(samples[k].lobe, s.lobe);
                         ASSERT_EQ(samples[k].wo, s.wo);
                         ASSERT_EQ(samples[k].weight, s.weight);
                         ASSERT_EQ(samples[k].pdf, s.pdf);
                         ASSERT_EQ(samples[k].isDelta, s.isDelta);
-                        ASSERT_EQ(rngBatch[k].nextU32(), rngSingle[k].nextU32());
+                        ASSERT_EQ(q.rngBatch[k].nextU32(), q.rngSingle[k].nextU32());
                     }
                 }
             }

@@ -10,6 +10,7 @@
 
 #include "weft/core/chi2.h"
 #include "weft/core/rng.h"
+#include "weft/core/sampling.h"
 #include "weft/yarn/yarn_bsdf.h"
 #include "weft/yarn/yarn_model.h"
 
@@ -51,5 +52,46 @@ inline Chi2Result yarnSamplingChi2(const YarnBsdf& bsdf, const Vec3& wi, const S
     expected.push_back(static_cast<double>(n) * bsdf.lobeProbabilities(wi).t);
     return chi2Test(observed, expected);
 }
+
+// `count` random queries of `bsdf` for the batch tests (the batches must
+// give the single calls' bits): wi and wo uniform on the sphere, sample
+// inputs, an importance per query; each incident prepared alone (`single`)
+// and by one prepareBatch (`batch`); a generator per query for the single
+// calls and a copy of it for the batch (`rngSingle`, `rngBatch` and
+// `rngPtr`, on stream `rngStream`).
+struct BatchQueries {
+    std::vector<Vec3> wi, wo;
+    std::vector<BsdfSampleInput> u;
+    std::vector<BsdfIncident> single, batch;
+    std::vector<const BsdfIncident*> batchConst;
+    std::vector<Rng> rngSingle, rngBatch;
+    std::vector<Rng*> rngPtr;
+
+    BatchQueries(const Bsdf& bsdf, size_t count, Rng& rng, uint64_t rngStream)
+        : wi(count),
+          wo(count),
+          u(count),
+          single(count),
+          batch(count),
+          batchConst(count),
+          rngPtr(count) {
+        std::vector<BsdfIncident*> batchPtr(count);
+        for (size_t k = 0; k < count; ++k) {
+            wi[k] = sampleUniformSphere(rng.uniform(), rng.uniform());
+            wo[k] = sampleUniformSphere(rng.uniform(), rng.uniform());
+            u[k] = {rng.uniform(), rng.uniform(), rng.uniform()};
+            const Rgb importance(rng.uniform(), rng.uniform(), rng.uniform());
+            single[k].setImportance(importance);
+            batch[k].setImportance(importance);
+            bsdf.prepare(wi[k], single[k]);
+            batchPtr[k] = &batch[k];
+            batchConst[k] = &batch[k];
+            rngSingle.push_back(Rng(k, rngStream));
+        }
+        bsdf.prepareBatch(wi.data(), batchPtr.data(), count);
+        rngBatch = rngSingle;
+        for (size_t k = 0; k < count; ++k) rngPtr[k] = &rngBatch[k];
+    }
+};
 
 }  // namespace weft::testing

@@ -166,10 +166,11 @@ def main():
     lines = [
         "# The exit spread against the fibers",
         "",
-        f"`bench/exit_spread.py --models {' '.join(a.models)} --spp {a.spp} --size {a.size}` "
+        f"`bench/exit_spread.py --models {' '.join(a.models)} --scenes {' '.join(a.scenes)} "
+        f"--spp {a.spp} --size {a.size}` "
         f"({results['date']}): each "
-        f"scene as bench/table2.py makes it (`weft scene KIND --size {a.patch}`, {a.size} x "
-        f"{a.size} px; swatch-*: a swatch of data/curves as bench/shared_data.py draws it, "
+        f"scene as bench/table2.py makes it (`weft scene KIND --size {a.patch}`, KIND-Nply "
+        f"with `--plies N`, {a.size} x {a.size} px; swatch-*: a swatch of data/curves as bench/shared_data.py draws it, "
         f"under a sky and one sphere light), {a.spp} spp per render, two seeds per mode; "
         "*today*: neural mode with "
         "models/PRESET.json, *exit*: with the model fitted with exit offsets "

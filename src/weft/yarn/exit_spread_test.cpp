@@ -199,6 +199,47 @@ TEST(ExitSpread, BranchDirectionsFollowTheirDensities) {
     }
 }
 
+// The offset's channel probabilities: 3/4 by the M light each channel
+// carries at wi (importance x E_M x the factor on S_M; E_M here by Monte
+// Carlo over the sphere, the BSDF's own by a Fibonacci rule), 1/4 by the
+// importance alone; every channel with M light keeps a share.
+TEST(ExitSpread, ChannelProbabilitiesFollowTheLightEachChannelCarries) {
+    const YarnBsdf bsdf(spreadModel());
+    const int n = static_cast<int>(scaled(200000));
+    for (const Rgb& importance : {Rgb(1.0), kImportance}) {
+        for (const Vec3& direction : kIncident) {
+            // The cell's central direction (where the BSDF integrates E_M).
+            const double theta = std::acos(direction.z), phi = std::atan2(direction.y, direction.x);
+            const int i = std::min(3, static_cast<int>(theta / (kHalfPi / 4)));
+            const int j = std::min(7, static_cast<int>((phi + kPi) / (kTwoPi / 8)));
+            const double thetaC = (i + 0.5) * kHalfPi / 4, phiC = -kPi + (j + 0.5) * kTwoPi / 8;
+            const Vec3 wi{std::sin(thetaC) * std::cos(phiC), std::sin(thetaC) * std::sin(phiC),
+                          std::cos(thetaC)};
+            Rgb albedo(0.0);
+            Rng rng(7, 11);
+            for (int k = 0; k < n; ++k) {
+                const Vec3 wo = sampleUniformSphere(rng.uniform(), rng.uniform());
+                albedo += bsdf.model().evalM(wi, wo) * std::abs(wo.z);
+            }
+            albedo = albedo * (4 * kPi / n);
+            BsdfIncident in;
+            in.setImportance(importance);
+            bsdf.prepare(wi, in);
+            const YarnIncident& yarn = in.get<YarnIncident>();
+            const Rgb carried = importance * albedo * yarn.mScale;
+            const double total = carried.r + carried.g + carried.b;
+            const double sum = importance.r + importance.g + importance.b;
+            const Rgb& p = yarn.spreadChannel;
+            EXPECT_NEAR(p.r + p.g + p.b, 1.0, 1e-12);
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_NEAR(p[c], 0.75 * carried[c] / total + 0.25 * importance[c] / sum, 0.01)
+                    << "wi " << wi << " channel " << c;
+                EXPECT_GE(p[c], 0.25 * importance[c] / sum - 1e-12);
+            }
+        }
+    }
+}
+
 // The spread batches (evalSpreadBatch, sampleEventBatch) give every query
 // the single call's bits, and prepareBatch the same split decisions and
 // offsets as prepare: incidents from both sides (mirrored ones do not

@@ -1,6 +1,8 @@
 #include "weft/yarn/yarn_bsdf.h"
 
 #include <algorithm>
+#include <cmath>
+#include <vector>
 
 #include "weft/core/math.h"
 #include "weft/yarn/tabulated_sampler.h"
@@ -60,6 +62,34 @@ void sampleInChunks(const YarnSampler& sampler, const YarnEvaluator& model,
     }
 }
 
+// E_M per exit-offset cell (the M network's albedo, no calibration or guard,
+// at the cell's central incident direction): how much light each channel's
+// offset carries there, for the offset's channel probabilities.
+std::vector<Rgb> exitCellAlbedoM(const YarnEvaluator& model) {
+    constexpr int kPoints = 2048;  // a Fibonacci sphere: S_M spans both hemispheres
+    std::vector<Vec3> wo(kPoints);
+    for (int k = 0; k < kPoints; ++k) {
+        const double z = 1.0 - (2.0 * k + 1.0) / kPoints;
+        const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+        const double phi = k * kPi * (3.0 - std::sqrt(5.0));
+        wo[k] = {r * std::cos(phi), r * std::sin(phi), z};
+    }
+    std::vector<Rgb> albedo(kExitOffsetCells);
+    std::vector<Rgb> m(kPoints);
+    for (int i = 0; i < kExitOffsetTheta; ++i)
+        for (int j = 0; j < kExitOffsetPhi; ++j) {
+            const double theta = (i + 0.5) * kHalfPi / kExitOffsetTheta;
+            const double phi = -kPi + (j + 0.5) * 2.0 * kPi / kExitOffsetPhi;
+            const Vec3 wi{std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                          std::cos(theta)};
+            model.evalMBatch(wi, wo.data(), kPoints, m.data());
+            Rgb sum(0.0);
+            for (int k = 0; k < kPoints; ++k) sum += m[k] * std::abs(wo[k].z);
+            albedo[exitOffsetCell(wi)] = sum * (4.0 * kPi / kPoints);
+        }
+    return albedo;
+}
+
 }  // namespace
 
 YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
@@ -73,7 +103,10 @@ YarnBsdf::YarnBsdf(const YarnModel& model, const std::string& source,
     : model_(new YarnEvaluator(model, source, options.energyGuard)),
       sampler_(makeYarnSampler(options.sampling, model, model_)),
       exitOffset_(model.exitOffset ? std::make_shared<const ExitOffsetTable>(*model.exitOffset)
-                                   : nullptr) {}
+                                   : nullptr) {
+    if (exitOffset_)
+        exitCellM_ = std::make_shared<const std::vector<Rgb>>(exitCellAlbedoM(*model_));
+}
 
 std::unique_ptr<YarnBsdf> YarnBsdf::withTabulatedSampling() const {
     auto bsdf = std::make_unique<YarnBsdf>(*this);
@@ -235,6 +268,10 @@ namespace {
 
 // Both branches keep a share, so that each part's weight stays bounded.
 constexpr double kMinimumBranch = 0.05;
+// The exit offset's channel probabilities: this share by the importance alone
+// (prepareSpread). Measured (docs/exit-point.md): 0 and 0.25 give the same
+// noise within 5 %; 1 (the importance alone) 1.2-1.9 times as much.
+constexpr double kDefensiveChannelShare = 0.25;
 
 double weightedSum(const Rgb& weight, const Rgb& x) {
     return weight.r * x.r + weight.g * x.g + weight.b * x.b;
@@ -246,11 +283,21 @@ void YarnBsdf::prepareSpread(const Rgb& importance, YarnIncident& in) const {
     in.spreadChannel = Rgb(0.0);
     if (!exitOffset_ || in.mirrored || !(in.pickT < 1)) return;
     in.exitCell = static_cast<int>(exitOffsetCell(in.wi));
+    // Each channel in proportion to the M light it carries at wi (the path's
+    // importance times E_M in wi's cell times the incident's factor on S_M),
+    // mixed with the importance alone (a defensive share: every channel with
+    // M light keeps a probability, so the channels' one-sample MIS stays
+    // unbiased where E_M's estimate is low).
     Rgb p;
     for (int c = 0; c < 3; ++c)
         p[c] = exitOffset_->hasDensity(static_cast<size_t>(in.exitCell), c) ? importance[c] : 0.0;
     const double sum = p.r + p.g + p.b;
-    if (sum > 0) in.spreadChannel = p / sum;
+    if (!(sum > 0)) return;
+    const Rgb carried = p * (*exitCellM_)[static_cast<size_t>(in.exitCell)] * in.mScale;
+    const double total = carried.r + carried.g + carried.b;
+    in.spreadChannel = total > 0 ? carried / total * (1.0 - kDefensiveChannelShare) +
+                                       p / sum * kDefensiveChannelShare
+                                 : p / sum;
 }
 
 bool YarnBsdf::splits(const BsdfIncident& in) const {

@@ -26,14 +26,15 @@
 // whose cell has M light in some channel, the event splits: the surface
 // part S_T + S_R at the hit, the M part S_M at an exit point drawn from the
 // table, S_M(wi, wo) with wo in the exit point's frame (the model's M lobe
-// was fitted so). The offset: a channel c picked in proportion to the
-// path's importance among the channels with M light there, the offset from
-// q_c, each channel weighted by q_c / sum_c' p_c' q_c' (one-sample MIS over
-// channels). The continuation: T with P_T as sample() picks it; otherwise
-// a direction wo from the whole continuous sampler (density pdf), then the
-// surface branch with probability rho_S(wo) = S_R / (S_R + S_M) at wo
-// (channels weighted by the path's importance; clamped to [0.05, 0.95]) or
-// the spread branch, each weighting its part: S_R / (rho_S pdf), S_M / ((1
+// was fitted so). The offset: a channel c picked with p_c, 3/4 in
+// proportion to the M light it carries (the path's importance times E_M in
+// wi's cell times the factor on S_M) and 1/4 to the importance alone, among
+// the channels with M light there; the offset from q_c, each channel
+// weighted by q_c / sum_c' p_c' q_c' (one-sample MIS over channels). The continuation: T with P_T
+// as sample() picks it; otherwise a direction wo from the whole continuous sampler (density pdf),
+// then the surface branch with probability rho_S(wo) = S_R / (S_R + S_M) at wo (channels weighted
+// by the path's importance; clamped to [0.05, 0.95]) or the spread branch, each weighting its part:
+// S_R / (rho_S pdf), S_M / ((1
 // - rho_S) pdf). So evalSurface's density is rho_S(wo) pdf(wo) and
 // evalSpread's (1 - rho_S(wo)) pdf(wo), and where S_R and S_M have one
 // colour the continuation's weight is sample()'s (R + M) / pdf. Mirrored
@@ -50,6 +51,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "weft/core/bsdf.h"
 #include "weft/core/rng.h"
@@ -186,6 +188,9 @@ class YarnBsdf final : public Bsdf, public ExitSpread {
     std::shared_ptr<const YarnEvaluator> model_;
     std::shared_ptr<const YarnSampler> sampler_;
     std::shared_ptr<const ExitOffsetTable> exitOffset_;  // the model's, or none
+    // With the table: E_M per exit-offset cell (the M network's albedo at the
+    // cell's central wi), for the offset's channel probabilities.
+    std::shared_ptr<const std::vector<Rgb>> exitCellM_;
 };
 
 }  // namespace weft

@@ -46,9 +46,9 @@ struct YarnIncident {
     SamplingTable::Layout table;
     // With exit offsets (yarn_bsdf.h, ExitSpread), set by YarnBsdf::prepare,
     // which sees the path's importance (core/bsdf.h): the probability of each
-    // channel for the exit offset (in proportion to the importance among the
-    // channels with M light in wi's cell; all 0 where the event does not
-    // split), and that cell.
+    // channel for the exit offset (mostly in proportion to the M light each
+    // carries, among the channels with M light in wi's cell, yarn_bsdf.h; all
+    // 0 where the event does not split), and that cell.
     Rgb spreadChannel{0.0};
     int exitCell = 0;
 };

@@ -30,16 +30,17 @@
 // proportion to the M light it carries (the path's importance times E_M in
 // wi's cell times the factor on S_M) and 1/4 to the importance alone, among
 // the channels with M light there; the offset from q_c, each channel
-// weighted by q_c / sum_c' p_c' q_c' (one-sample MIS over channels). The continuation: T with P_T
-// as sample() picks it; otherwise a direction wo from the whole continuous sampler (density pdf),
-// then the surface branch with probability rho_S(wo) = S_R / (S_R + S_M) at wo (channels weighted
-// by the path's importance; clamped to [0.05, 0.95]) or the spread branch, each weighting its part:
-// S_R / (rho_S pdf), S_M / ((1
-// - rho_S) pdf). So evalSurface's density is rho_S(wo) pdf(wo) and
-// evalSpread's (1 - rho_S(wo)) pdf(wo), and where S_R and S_M have one
-// colour the continuation's weight is sample()'s (R + M) / pdf. Mirrored
-// incidents (from inside), cells without M light and models without the
-// table keep today's event.
+// weighted by q_c / sum_c' p_c' q_c' (one-sample MIS over channels). The
+// continuation: T with P_T as sample() picks it; otherwise a direction wo
+// from the whole continuous sampler (density pdf), then the surface branch
+// with probability rho_S(wo) = S_R / (S_R + S_M) at wo (channels weighted by
+// the path's importance; clamped to [0.05, 0.95]) or the spread branch, each
+// weighting its part: S_R / (rho_S pdf), S_M / ((1 - rho_S) pdf). So
+// evalSurface's density is rho_S(wo) pdf(wo) and evalSpread's (1 -
+// rho_S(wo)) pdf(wo), and where S_R and S_M have one colour the
+// continuation's weight is sample()'s (R + M) / pdf. Mirrored incidents
+// (from inside), cells without M light and models without the table keep
+// today's event.
 //
 // Incident directions below the surface (wi.z < 0): the networks were trained
 // on the upper hemisphere only and a ply is never lit from inside, so the BSDF

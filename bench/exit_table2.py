@@ -25,13 +25,12 @@ exit_spread.md).
 import argparse
 import json
 import os
-import subprocess
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 from benchlib import binary_digest, now, write_results  # noqa: E402
-from exit_spread import render, with_model  # noqa: E402
+from exit_spread import compare, render, with_model  # noqa: E402
 from fidelity_budget import REL_MSE_EPSILON  # noqa: E402
 
 SEEDS = (21, 22)
@@ -42,12 +41,6 @@ def mean_noise(a, b, reference, np):
     the mean of two independent renders a and b of the same image."""
     w = 1.0 / (reference * reference + REL_MSE_EPSILON)
     return float(np.mean(w * (a - b) ** 2)) / 4.0
-
-
-def compare(weft, a, b, scale):
-    line = subprocess.run([weft, "compare", a, b, "--scale", str(scale)], check=True,
-                          stdout=subprocess.PIPE, text=True).stdout
-    return json.loads(line)
 
 
 def main():

@@ -35,17 +35,13 @@ EnergyGuard::EnergyGuard(const YarnEvaluator& model) {
     const RLobe& rLobe = model.rLobe();
     const double betaR = radians(rLobe.fiber().params().betaRDeg);
     // Outgoing rules in the surface fiber frame (sphere_rule.h; yarn_integrals.h
-    // uses the finer one of the checks): M, 8 x 8 panels over the sphere (4 x
-    // 4 panels missed up to 0.36 of a shipped model's E_M; 16 x 16 moves it by
-    // up to 0.07, at 4 times the load time); R lives on the upper half cone
-    // |phi| < pi/2, within a few beta_R of theta = -theta_i for the fiber's R
-    // lobe, wider for its TT lobe: 6 + 5 x 2 panels hold E_R within 1e-3 of
-    // twice as many per axis, at a quarter of the load time.
-    std::vector<double> thetaEdgesM, phiEdgesM, phiEdgesR;
-    uniformEdges(-kHalfPi, kHalfPi, 8, &thetaEdgesM);
-    uniformEdges(-kPi, kPi, 8, &phiEdgesM);
+    // uses the finer one of the checks): M, mLobeSphereRule; R lives on the
+    // upper half cone |phi| < pi/2, within a few beta_R of theta = -theta_i
+    // for the fiber's R lobe, wider for its TT lobe: 6 + 5 x 2 panels hold
+    // E_R within 1e-3 of twice as many per axis, at a quarter of the load time.
+    std::vector<double> phiEdgesR;
     uniformEdges(-kHalfPi, kHalfPi, 2, &phiEdgesR);
-    const SphereRule ruleM = surfaceFiberRule(frame, thetaEdgesM, phiEdgesM);
+    const SphereRule ruleM = mLobeSphereRule(frame);
 
     const size_t fiberNodes = static_cast<size_t>(kFiber) * kFiber;
     const size_t nodes = static_cast<size_t>(kTheta) * kPhi;

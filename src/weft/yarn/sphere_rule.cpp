@@ -29,6 +29,13 @@ SphereRule surfaceFiberRule(const SurfaceFiberFrame& frame, const std::vector<do
     return rule;
 }
 
+SphereRule mLobeSphereRule(const SurfaceFiberFrame& frame) {
+    std::vector<double> thetaEdges, phiEdges;
+    uniformEdges(-kHalfPi, kHalfPi, 8, &thetaEdges);
+    uniformEdges(-kPi, kPi, 8, &phiEdges);
+    return surfaceFiberRule(frame, thetaEdges, phiEdges);
+}
+
 SphereRule surfaceFiberSphereRule(const SurfaceFiberFrame& frame, double betaR, const Vec3& wi,
                                   int refinement) {
     refinement = std::max(1, refinement);

@@ -1,10 +1,10 @@
 #include "weft/yarn/yarn_bsdf.h"
 
 #include <algorithm>
-#include <cmath>
 #include <vector>
 
 #include "weft/core/math.h"
+#include "weft/yarn/sphere_rule.h"
 #include "weft/yarn/tabulated_sampler.h"
 #include "weft/yarn/yarn_lobes.h"
 
@@ -63,29 +63,21 @@ void sampleInChunks(const YarnSampler& sampler, const YarnEvaluator& model,
 }
 
 // E_M per exit-offset cell (the M network's albedo, no calibration or guard,
-// at the cell's central incident direction): how much light each channel's
-// offset carries there, for the offset's channel probabilities.
+// at the cell's central incident direction; the energy guard's rule): how
+// much light each channel's offset carries there, for the offset's channel
+// probabilities.
 std::vector<Rgb> exitCellAlbedoM(const YarnEvaluator& model) {
-    constexpr int kPoints = 2048;  // a Fibonacci sphere: S_M spans both hemispheres
-    std::vector<Vec3> wo(kPoints);
-    for (int k = 0; k < kPoints; ++k) {
-        const double z = 1.0 - (2.0 * k + 1.0) / kPoints;
-        const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-        const double phi = k * kPi * (3.0 - std::sqrt(5.0));
-        wo[k] = {r * std::cos(phi), r * std::sin(phi), z};
-    }
+    const SphereRule rule = mLobeSphereRule(model.frame());
     std::vector<Rgb> albedo(kExitOffsetCells);
-    std::vector<Rgb> m(kPoints);
+    std::vector<Rgb> m(rule.directions.size());
     for (int i = 0; i < kExitOffsetTheta; ++i)
         for (int j = 0; j < kExitOffsetPhi; ++j) {
-            const double theta = (i + 0.5) * kHalfPi / kExitOffsetTheta;
-            const double phi = -kPi + (j + 0.5) * 2.0 * kPi / kExitOffsetPhi;
-            const Vec3 wi{std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
-                          std::cos(theta)};
-            model.evalMBatch(wi, wo.data(), kPoints, m.data());
+            const Vec3 wi = sphericalDirection((i + 0.5) * kHalfPi / kExitOffsetTheta,
+                                               -kPi + (j + 0.5) * kTwoPi / kExitOffsetPhi);
+            model.evalMBatch(wi, rule.directions.data(), m.size(), m.data());
             Rgb sum(0.0);
-            for (int k = 0; k < kPoints; ++k) sum += m[k] * std::abs(wo[k].z);
-            albedo[exitOffsetCell(wi)] = sum * (4.0 * kPi / kPoints);
+            for (size_t k = 0; k < m.size(); ++k) sum += m[k] * rule.weights[k];
+            albedo[exitOffsetCell(wi)] = sum;
         }
     return albedo;
 }

@@ -261,8 +261,9 @@ namespace {
 // Both branches keep a share, so that each part's weight stays bounded.
 constexpr double kMinimumBranch = 0.05;
 // The exit offset's channel probabilities: this share by the importance alone
-// (prepareSpread). Measured (docs/exit-point.md): 0 and 0.25 give the same
-// noise within 5 %; 1 (the importance alone) 1.2-1.9 times as much.
+// (prepareSpread). Measured (docs/exit-point.md, "The offset's channel"): 0
+// and 0.25 give the same noise within 6 %; 1 (the importance alone) 1.1-1.8
+// times as much as 0.25.
 constexpr double kDefensiveChannelShare = 0.25;
 
 double weightedSum(const Rgb& weight, const Rgb& x) {

@@ -48,18 +48,26 @@ import shared_data  # noqa: E402
 SCALES = (1, 4)
 
 
-def render(weft, scene, mode, spp, seed, threads, out):
+def render(weft, scene, mode, spp, seed, threads, out, made_by=None):
     """Renders (unless `out` and its image.json are there from an earlier run
-    with --work) and returns the render's seconds."""
+    with --work) and returns the render's seconds. With `made_by` (the
+    binary's digest, benchlib.binary_digest) a cached render counts only if
+    the same binary made it: OUT.made-by holds the digest of the one that did."""
     stats = os.path.splitext(out)[0] + ".json"
+    stamp = out + ".made-by"
     done = os.path.exists(out) and os.path.exists(stats)
     if done:
         with open(stats) as f:
             done = not json.load(f).get("partial", False)  # stopped early (SIGTERM)
+    if done and made_by is not None:
+        done = os.path.exists(stamp) and open(stamp).read().strip() == made_by
     if not done:
         subprocess.run([weft, "render", scene, "--mode", mode, "--spp", str(spp), "--seed",
                         str(seed), "--threads", str(threads), "--quiet", "--out", out],
                        check=True, stdout=subprocess.DEVNULL)
+        if made_by is not None:
+            with open(stamp, "w") as f:
+                f.write(made_by + "\n")
     with open(stats) as f:
         return json.load(f)["seconds"]
 

@@ -16,11 +16,15 @@ weights of weft compare's relative MSE), D(a, b) = mean(w (a - b)^2) and
 the noise of their mean D(a, b) / 4; the fiber reference's noise is the
 chunk's (table2.json). Today's columns are the chunk's in
 bench/results/table2.json. No time is measured here (s/spp: bench/
-exit_spread.md).
+exit_spread.md). An exit render is cached beside its scene with the digest
+of the binary that made it (exit-SEED.exr.made-by) and made again by
+another binary (--reuse-unstamped keeps those cached before the digest was
+recorded); each row records its renders' binary, and the table is written
+after every row.
 
     bench/exit_table2.py --chunks silk,weave polyester,knit ...
         [--work bench/work/table2] [--weft build/release/weft] [--spp N]
-        [--out bench/results/exit-table2.md]
+        [--reuse-unstamped] [--out bench/results/exit-table2.md]
 """
 import argparse
 import json
@@ -54,6 +58,9 @@ def main():
     p.add_argument("--spp", type=int, default=None,
                    help="spp of the exit render (default: the row's reference spp; less only "
                         "for a quick look: its noise is then estimated, not negligible)")
+    p.add_argument("--reuse-unstamped", action="store_true",
+                   help="reuse exit renders cached before renders recorded their binary "
+                        "(their rows say so) instead of rendering them again")
     p.add_argument("--out", default=os.path.join(ROOT, "bench", "results", "exit-table2.md"))
     a = p.parse_args()
     sys.path.insert(0, a.python)
@@ -62,7 +69,7 @@ def main():
 
     with open(os.path.join(ROOT, "bench", "results", "table2.json")) as f:
         cells = {(c["preset"], c["scene"]): c for c in json.load(f)["cells"]}
-    rows = []
+    rows, made_by = [], binary_digest(a.weft)
     for chunk in a.chunks:
         preset, _, kind = chunk.partition(",")
         cell = cells.get((preset, kind))
@@ -76,10 +83,14 @@ def main():
                      ", ".join(missing or ["bench/results/table2.json's cell"]))
         ref_spp = a.spp or cell["ref_spp"]
         exit_scene = with_model(scene, model, os.path.join(folder, "scene", "s", "exit.json"))
-        halves = []
+        halves, stamps = [], set()
         for seed in SEEDS:
             out = os.path.join(folder, f"exit-{seed}.exr")
-            render(a.weft, exit_scene, "neural", ref_spp // 2, seed, a.threads, out)
+            stamp = out + ".made-by"
+            reuse = a.reuse_unstamped and os.path.exists(out) and not os.path.exists(stamp)
+            render(a.weft, exit_scene, "neural", ref_spp // 2, seed, a.threads, out,
+                   None if reuse else made_by)
+            stamps.add(open(stamp).read().strip() if os.path.exists(stamp) else "unstamped")
             halves.append(np.asarray(weft.read_image(out), dtype=np.float64))
             print(f"[exit_table2] {preset} {kind} seed {seed}", flush=True)
         mean = os.path.join(folder, "exit-ref.exr")
@@ -90,6 +101,7 @@ def main():
         fiber_noise = cell["fiber"]["equal_quality"]["reference_noise"]
         rows.append({
             "preset": preset, "scene": kind, "size": cell["size"], "ref_spp": ref_spp,
+            "exit_made_by": " + ".join(sorted(stamps)),
             "today": {"mean_ratio": cell["mean_ratio"], "ssim": cell["ssim"],
                       "ssim_4": cell["ssim_scales"]["4"],
                       "rel_mse_minus_noise": cell["rel_mse_minus_noise"]},
@@ -97,9 +109,17 @@ def main():
                      "ssim_4": blocks["ssim"], "rel_mse": full["rel_mse"], "noise": exit_noise,
                      "rel_mse_minus_noise": full["rel_mse"] - fiber_noise - exit_noise}})
 
+        write_table(a, rows, made_by)
+
+
+def write_table(a, rows, made_by):
+    """exit-table2.md and .json of the rows measured so far (written after each row, so that a
+    run stopped early keeps what it measured)."""
     def means(m):
         return " / ".join(f"{x:.3f}" for x in m)
 
+    others = [f"{r['preset']} {r['scene']} ({r['exit_made_by']})" for r in rows
+              if r["exit_made_by"] != made_by]
     lines = ["# Table 2's weave and knit rows with the exit models (bench/exit_table2.py)", "",
              "Each row at its Table 2 size and reference spp, against the row's own converged "
              "fiber reference; today's columns from bench/results/table2.json, the exit "
@@ -117,7 +137,11 @@ def main():
             f"{means(t['mean_ratio'])} -> {means(e['mean_ratio'])} | "
             f"{t['ssim']:.3f} -> {e['ssim']:.3f} | {t['ssim_4']:.3f} -> {e['ssim_4']:.3f} | "
             f"{t['rel_mse_minus_noise']:.4f} -> {e['rel_mse_minus_noise']:.4f} |")
-    results = {"finished": now(), "weft_sha256": binary_digest(a.weft), "rows": rows}
+    if others:
+        lines += ["", "Exit renders made by another binary than this run's (" + made_by +
+                  "; *unstamped*: cached before renders recorded theirs): " +
+                  ", ".join(others) + "."]
+    results = {"finished": now(), "weft_sha256": made_by, "rows": rows}
     write_results(a.out, lines, results)
 
 

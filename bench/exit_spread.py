@@ -50,7 +50,8 @@ SCALES = (1, 4)
 
 def render(weft, scene, mode, spp, seed, threads, out, made_by=None):
     """Renders (unless `out` and its image.json are there from an earlier run
-    with --work) and returns the render's seconds. With `made_by` (the
+    with --work) and returns the render's statistics (weft render's JSON:
+    seconds, rays, ...). With `made_by` (the
     binary's digest, benchlib.binary_digest) a cached render counts only if
     the same binary made it: OUT.made-by holds the digest of the one that did."""
     stats = os.path.splitext(out)[0] + ".json"
@@ -69,7 +70,7 @@ def render(weft, scene, mode, spp, seed, threads, out, made_by=None):
             with open(stamp, "w") as f:
                 f.write(made_by + "\n")
     with open(stats) as f:
-        return json.load(f)["seconds"]
+        return json.load(f)
 
 
 def make_scene(weft, preset, kind, folder, size, patch):
@@ -201,7 +202,7 @@ def main():
                 if not os.path.exists(scene):
                     scene = make_scene(a.weft, preset, kind, folder, a.size, a.patch)
                 exit_scene = with_model(scene, exit_model, os.path.join(folder, "exit.json"))
-                img, seconds = {}, {"N": [], "E": []}
+                img, seconds, rays = {}, {"N": [], "E": []}, {"N": [], "E": []}
                 for key, mode, path, seed in (("Fa", "fiber", scene, 1), ("Fb", "fiber", scene, 2),
                                               ("Na", "neural", scene, 1),
                                               ("Ea", "neural", exit_scene, 1),
@@ -212,7 +213,8 @@ def main():
                     out = os.path.join(folder, key + ".exr")
                     s = render(a.weft, path, mode, a.spp, seed, a.threads, out)
                     if mode == "neural":
-                        seconds[key[0]].append(s / a.spp)
+                        seconds[key[0]].append(s["seconds"] / a.spp)
+                        rays[key[0]].append(s["rays"] / a.spp)
                     img[key] = np.asarray(weft.read_image(out), dtype=np.float64)
                     print(f"[exit_spread] {preset} {kind} {key}", flush=True)
                 if a.fiber_only:
@@ -228,6 +230,7 @@ def main():
                                                  os.path.join(folder, "F.exr"), k)["ssim"]
                                  for k in SCALES}
                     m["seconds_per_spp"] = sum(seconds[key]) / len(seconds[key])
+                    m["rays_per_spp"] = sum(rays[key]) / len(rays[key])
                     row[label] = m
                     lines.append(
                         f"| {preset} {kind} | {label} | " +
@@ -237,6 +240,7 @@ def main():
                         f"{m['ssim']['1']:.3f} | {m['ssim']['4']:.3f} | "
                         f"{m['seconds_per_spp']:.4f} |")
                 row["seconds_ratio"] = row["exit"]["seconds_per_spp"] / row["today"]["seconds_per_spp"]
+                row["rays_ratio"] = row["exit"]["rays_per_spp"] / row["today"]["rays_per_spp"]
                 row["noise_ratio"] = (row["exit"]["by_scale"][1]["noise"] /
                                       row["today"]["by_scale"][1]["noise"])
                 results["rows"].append(row)
@@ -245,6 +249,9 @@ def main():
     lines += ["", "*noise*: of one render at full resolution (the weighted mean square "
               "difference of its two seeds, over 2). Exit / today's s/spp: " + ", ".join(
                   f"{r['preset']} {r['scene']} {r['seconds_ratio']:.2f}" for r in results["rows"]),
+              "", "Exit / today's rays per spp (camera, continuation and shadow rays; the time "
+              "follows them): " + ", ".join(
+                  f"{r['preset']} {r['scene']} {r['rays_ratio']:.2f}" for r in results["rows"]),
               "", "Exit / today's noise: " + ", ".join(
                   f"{r['preset']} {r['scene']} {r['noise_ratio']:.2f}" for r in results["rows"]),
               "", "Exit / today's noise x s/spp (time to equal noise): " + ", ".join(

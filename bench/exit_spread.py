@@ -249,8 +249,7 @@ def main():
     lines += ["", "*noise*: of one render at full resolution (the weighted mean square "
               "difference of its two seeds, over 2). Exit / today's s/spp: " + ", ".join(
                   f"{r['preset']} {r['scene']} {r['seconds_ratio']:.2f}" for r in results["rows"]),
-              "", "Exit / today's rays per spp (camera, continuation and shadow rays; the time "
-              "follows them): " + ", ".join(
+              "", "Exit / today's rays per spp (closest-hit and shadow queries): " + ", ".join(
                   f"{r['preset']} {r['scene']} {r['rays_ratio']:.2f}" for r in results["rows"]),
               "", "Exit / today's noise: " + ", ".join(
                   f"{r['preset']} {r['scene']} {r['noise_ratio']:.2f}" for r in results["rows"]),

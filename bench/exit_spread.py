@@ -117,7 +117,9 @@ def smooth(image, np):
 
 def model_metrics(img, name, np):
     """Means ratio and the model's own error per block size for renders
-    img[name + 'a'], img[name + 'b'] against img['Fa'], img['Fb']."""
+    img[name + 'a'], img[name + 'b'] against img['Fa'], img['Fb']; also the
+    error with each channel of the neural renders scaled to the fibers' mean
+    ("matched": what no per-channel brightness can remove)."""
     fiber_mean = (img["Fa"].reshape(-1, 3).mean(axis=0) + img["Fb"].reshape(-1, 3).mean(axis=0))
     mine = img[name + "a"].reshape(-1, 3).mean(axis=0) + img[name + "b"].reshape(-1, 3).mean(axis=0)
     errors = {}
@@ -133,8 +135,11 @@ def model_metrics(img, name, np):
 
         noise_fiber = d(b["Fa"], b["Fb"]) / 2
         noise = d(b[name + "a"], b[name + "b"]) / 2
+        scale = fiber_mean / mine
         errors[k] = {"error": d(b[name + "a"], b["Fa"]) - noise - noise_fiber,
-                     "noise": noise, "noise_fiber": noise_fiber}
+                     "noise": noise, "noise_fiber": noise_fiber,
+                     "error_matched": d(b[name + "a"] * scale, b["Fa"]) -
+                     noise * float(np.mean(scale * scale)) - noise_fiber}
     return {"means": [float(x) for x in mine / fiber_mean], "by_scale": errors}
 
 
@@ -249,6 +254,12 @@ def main():
     lines += ["", "*noise*: of one render at full resolution (the weighted mean square "
               "difference of its two seeds, over 2). Exit / today's s/spp: " + ", ".join(
                   f"{r['preset']} {r['scene']} {r['seconds_ratio']:.2f}" for r in results["rows"]),
+              "", "The model's own error at full resolution with each channel's mean matched "
+              "to the fibers' (today -> exit; what no per-channel brightness removes): " +
+              ", ".join(f"{r['preset']} {r['scene']} "
+                        f"{r['today']['by_scale'][1]['error_matched']:.4f} -> "
+                        f"{r['exit']['by_scale'][1]['error_matched']:.4f}"
+                        for r in results["rows"]),
               "", "Exit / today's rays per spp (closest-hit and shadow queries): " + ", ".join(
                   f"{r['preset']} {r['scene']} {r['rays_ratio']:.2f}" for r in results["rows"]),
               "", "Exit / today's noise: " + ", ".join(

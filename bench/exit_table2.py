@@ -56,8 +56,9 @@ def main():
     p.add_argument("--python", default=os.path.join(ROOT, "build", "release", "python"))
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("--spp", type=int, default=None,
-                   help="spp of the exit render (default: the row's reference spp; less only "
-                        "for a quick look: its noise is then estimated, not negligible)")
+                   help="spp of the exit render (default: the row's reference spp; less for a "
+                        "quick look, more to see what of a difference is the exit render's "
+                        "noise; the noise column subtracts it either way)")
     p.add_argument("--reuse-unstamped", action="store_true",
                    help="reuse exit renders cached before renders recorded their binary "
                         "(their rows say so) instead of rendering them again")
@@ -83,9 +84,11 @@ def main():
                      ", ".join(missing or ["bench/results/table2.json's cell"]))
         ref_spp = a.spp or cell["ref_spp"]
         exit_scene = with_model(scene, model, os.path.join(folder, "scene", "s", "exit.json"))
+        # Renders at another spp than the row's own are cached under names of their own.
+        tag = "" if ref_spp == cell["ref_spp"] else f"{ref_spp}spp-"
         halves, stamps = [], set()
         for seed in SEEDS:
-            out = os.path.join(folder, f"exit-{seed}.exr")
+            out = os.path.join(folder, f"exit-{tag}{seed}.exr")
             stamp = out + ".made-by"
             reuse = a.reuse_unstamped and os.path.exists(out) and not os.path.exists(stamp)
             render(a.weft, exit_scene, "neural", ref_spp // 2, seed, a.threads, out,
@@ -93,7 +96,7 @@ def main():
             stamps.add(open(stamp).read().strip() if os.path.exists(stamp) else "unstamped")
             halves.append(np.asarray(weft.read_image(out), dtype=np.float64))
             print(f"[exit_table2] {preset} {kind} seed {seed}", flush=True)
-        mean = os.path.join(folder, "exit-ref.exr")
+        mean = os.path.join(folder, f"exit-{tag}ref.exr")
         weft.save_image(mean, ((halves[0] + halves[1]) / 2).astype(np.float32))
         reference = np.asarray(weft.read_image(fiber), dtype=np.float64)
         exit_noise = mean_noise(halves[0], halves[1], reference, np)

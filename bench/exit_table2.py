@@ -129,7 +129,7 @@ def write_table(a, rows, made_by):
              "model's (models/PRESET-exit.json) rendered here as two halves of ref_spp / 2 "
              "(seeds 21, 22). relMSE - noise: Table 2's relative MSE less both references' "
              "noise (the exit render's from its halves). Commands: `bench/exit_table2.py "
-             "--chunks " + " ".join(a.chunks) + "`.", "",
+             "--chunks " + " ".join(a.chunks) + (f" --spp {a.spp}" if a.spp else "") + "`.", "",
              "| row | px, ref spp | neural / fiber means r / g / b, today -> exit | "
              "SSIM today -> exit | SSIM 4 x 4 px today -> exit | relMSE - noise today -> exit |",
              "| --- | --- | --- | --- | --- | --- |"]

@@ -61,7 +61,7 @@ def render(weft, scene, mode, spp, seed, threads, out, made_by=None):
         with open(stats) as f:
             done = not json.load(f).get("partial", False)  # stopped early (SIGTERM)
     if done and made_by is not None:
-        done = os.path.exists(stamp) and open(stamp).read().strip() == made_by
+        done = made_by_of(out) == made_by
     if not done:
         subprocess.run([weft, "render", scene, "--mode", mode, "--spp", str(spp), "--seed",
                         str(seed), "--threads", str(threads), "--quiet", "--out", out],
@@ -71,6 +71,16 @@ def render(weft, scene, mode, spp, seed, threads, out, made_by=None):
                 f.write(made_by + "\n")
     with open(stats) as f:
         return json.load(f)
+
+
+def made_by_of(out):
+    """The digest of the binary that made the render `out` (render()'s OUT.made-by), or None
+    where it was not recorded."""
+    try:
+        with open(out + ".made-by") as f:
+            return f.read().strip()
+    except OSError:
+        return None
 
 
 def make_scene(weft, preset, kind, folder, size, patch):

@@ -34,7 +34,7 @@ import sys
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 from benchlib import binary_digest, now, write_results  # noqa: E402
-from exit_spread import compare, render, with_model  # noqa: E402
+from exit_spread import compare, made_by_of, render, with_model  # noqa: E402
 from fidelity_budget import REL_MSE_EPSILON  # noqa: E402
 
 SEEDS = (21, 22)
@@ -89,11 +89,10 @@ def main():
         halves, stamps = [], set()
         for seed in SEEDS:
             out = os.path.join(folder, f"exit-{tag}{seed}.exr")
-            stamp = out + ".made-by"
-            reuse = a.reuse_unstamped and os.path.exists(out) and not os.path.exists(stamp)
+            reuse = a.reuse_unstamped and os.path.exists(out) and made_by_of(out) is None
             render(a.weft, exit_scene, "neural", ref_spp // 2, seed, a.threads, out,
                    None if reuse else made_by)
-            stamps.add(open(stamp).read().strip() if os.path.exists(stamp) else "unstamped")
+            stamps.add(made_by_of(out) or "unstamped")
             halves.append(np.asarray(weft.read_image(out), dtype=np.float64))
             print(f"[exit_table2] {preset} {kind} seed {seed}", flush=True)
         mean = os.path.join(folder, f"exit-{tag}ref.exr")

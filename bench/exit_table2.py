@@ -15,7 +15,9 @@ halves: with weights w = 1 / (F^2 + 0.01), F the fiber reference (the
 weights of weft compare's relative MSE), D(a, b) = mean(w (a - b)^2) and
 the noise of their mean D(a, b) / 4; the fiber reference's noise is the
 chunk's (table2.json). Today's columns are the chunk's in
-bench/results/table2.json. No time is measured here (s/spp: bench/
+bench/results/table2.json, or with --today rendered here (Table 2's neural
+reference made again: seed 1, the row's reference spp) and scored against
+the same fiber reference by the same binary. No time is measured here (s/spp: bench/
 exit_spread.md). An exit render is cached beside its scene with the digest
 of the binary that made it (exit-SEED.exr.made-by) and made again by
 another binary (--reuse-unstamped keeps those cached before the digest was
@@ -24,7 +26,7 @@ after every row.
 
     bench/exit_table2.py --chunks silk,weave polyester,knit ...
         [--work bench/work/table2] [--weft build/release/weft] [--spp N]
-        [--reuse-unstamped] [--out bench/results/exit-table2.md]
+        [--today] [--reuse-unstamped] [--out bench/results/exit-table2.md]
 """
 import argparse
 import json
@@ -59,6 +61,11 @@ def main():
                    help="spp of the exit render (default: the row's reference spp; less for a "
                         "quick look, more to see what of a difference is the exit render's "
                         "noise; the noise column subtracts it either way)")
+    p.add_argument("--today", action="store_true",
+                   help="render today's model here too (Table 2's neural reference: seed 1, "
+                        "the row's reference spp) and score it against the same fiber reference "
+                        "with the same binary, instead of taking today's columns from "
+                        "table2.json (whose rows were made by several binaries)")
     p.add_argument("--reuse-unstamped", action="store_true",
                    help="reuse exit renders cached before renders recorded their binary "
                         "(their rows say so) instead of rendering them again")
@@ -101,12 +108,22 @@ def main():
         exit_noise = mean_noise(halves[0], halves[1], reference, np)
         full, blocks = compare(a.weft, mean, fiber, 1), compare(a.weft, mean, fiber, 4)
         fiber_noise = cell["fiber"]["equal_quality"]["reference_noise"]
+        today = {"mean_ratio": cell["mean_ratio"], "ssim": cell["ssim"],
+                 "ssim_4": cell["ssim_scales"]["4"],
+                 "rel_mse_minus_noise": cell["rel_mse_minus_noise"], "source": "table2.json"}
+        if a.today:
+            # Table 2's own neural reference, made again: its noise is the chunk's.
+            out = os.path.join(folder, f"today-{cell['ref_spp']}spp.exr")
+            render(a.weft, scene, "neural", cell["ref_spp"], 1, a.threads, out, made_by)
+            t_full, t_blocks = compare(a.weft, out, fiber, 1), compare(a.weft, out, fiber, 4)
+            today = {"mean_ratio": t_full["mean_ratio"], "ssim": t_full["ssim"],
+                     "ssim_4": t_blocks["ssim"],
+                     "rel_mse_minus_noise": t_full["rel_mse"] - fiber_noise -
+                     cell["neural"]["equal_quality"]["reference_noise"], "source": "rendered"}
         rows.append({
             "preset": preset, "scene": kind, "size": cell["size"], "ref_spp": ref_spp,
             "exit_made_by": " + ".join(sorted(stamps)),
-            "today": {"mean_ratio": cell["mean_ratio"], "ssim": cell["ssim"],
-                      "ssim_4": cell["ssim_scales"]["4"],
-                      "rel_mse_minus_noise": cell["rel_mse_minus_noise"]},
+            "today": today,
             "exit": {"mean_ratio": full["mean_ratio"], "ssim": full["ssim"],
                      "ssim_4": blocks["ssim"], "rel_mse": full["rel_mse"], "noise": exit_noise,
                      "rel_mse_minus_noise": full["rel_mse"] - fiber_noise - exit_noise}})
@@ -124,11 +141,16 @@ def write_table(a, rows, made_by):
               if r["exit_made_by"] != made_by]
     lines = ["# Table 2's weave and knit rows with the exit models (bench/exit_table2.py)", "",
              "Each row at its Table 2 size and reference spp, against the row's own converged "
-             "fiber reference; today's columns from bench/results/table2.json, the exit "
-             "model's (models/PRESET-exit.json) rendered here as two halves of ref_spp / 2 "
-             "(seeds 21, 22). relMSE - noise: Table 2's relative MSE less both references' "
-             "noise (the exit render's from its halves). Commands: `bench/exit_table2.py "
-             "--chunks " + " ".join(a.chunks) + (f" --spp {a.spp}" if a.spp else "") + "`.", "",
+             "fiber reference; today's columns " +
+             ("rendered here as Table 2 renders its neural reference (seed 1, the row's "
+              "reference spp), by the same binary" if a.today else
+              "from bench/results/table2.json") +
+             ", the exit model's (models/PRESET-exit.json) rendered here as two halves of "
+             "ref_spp / 2 (seeds 21, 22). relMSE - noise: Table 2's relative MSE less both "
+             "references' noise (the exit render's from its halves, today's the chunk's). "
+             "Commands: `bench/exit_table2.py "
+             "--chunks " + " ".join(a.chunks) + (f" --spp {a.spp}" if a.spp else "") +
+             (" --today" if a.today else "") + "`.", "",
              "| row | px, ref spp | neural / fiber means r / g / b, today -> exit | "
              "SSIM today -> exit | SSIM 4 x 4 px today -> exit | relMSE - noise today -> exit |",
              "| --- | --- | --- | --- | --- | --- |"]

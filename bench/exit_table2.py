@@ -106,8 +106,15 @@ def main():
         weft.save_image(mean, ((halves[0] + halves[1]) / 2).astype(np.float32))
         reference = np.asarray(weft.read_image(fiber), dtype=np.float64)
         exit_noise = mean_noise(halves[0], halves[1], reference, np)
-        full, blocks = compare(a.weft, mean, fiber, 1), compare(a.weft, mean, fiber, 4)
         fiber_noise = cell["fiber"]["equal_quality"]["reference_noise"]
+
+        def score(image, noise):
+            """Table 2's scores of `image` against the fiber reference, its own noise given."""
+            full, blocks = compare(a.weft, image, fiber, 1), compare(a.weft, image, fiber, 4)
+            return {"mean_ratio": full["mean_ratio"], "ssim": full["ssim"],
+                    "ssim_4": blocks["ssim"], "rel_mse": full["rel_mse"], "noise": noise,
+                    "rel_mse_minus_noise": full["rel_mse"] - fiber_noise - noise}
+
         today = {"mean_ratio": cell["mean_ratio"], "ssim": cell["ssim"],
                  "ssim_4": cell["ssim_scales"]["4"],
                  "rel_mse_minus_noise": cell["rel_mse_minus_noise"], "source": "table2.json"}
@@ -115,18 +122,12 @@ def main():
             # Table 2's own neural reference, made again: its noise is the chunk's.
             out = os.path.join(folder, f"today-{cell['ref_spp']}spp.exr")
             render(a.weft, scene, "neural", cell["ref_spp"], 1, a.threads, out, made_by)
-            t_full, t_blocks = compare(a.weft, out, fiber, 1), compare(a.weft, out, fiber, 4)
-            today = {"mean_ratio": t_full["mean_ratio"], "ssim": t_full["ssim"],
-                     "ssim_4": t_blocks["ssim"],
-                     "rel_mse_minus_noise": t_full["rel_mse"] - fiber_noise -
-                     cell["neural"]["equal_quality"]["reference_noise"], "source": "rendered"}
+            today = dict(score(out, cell["neural"]["equal_quality"]["reference_noise"]),
+                         source="rendered")
         rows.append({
             "preset": preset, "scene": kind, "size": cell["size"], "ref_spp": ref_spp,
             "exit_made_by": " + ".join(sorted(stamps)),
-            "today": today,
-            "exit": {"mean_ratio": full["mean_ratio"], "ssim": full["ssim"],
-                     "ssim_4": blocks["ssim"], "rel_mse": full["rel_mse"], "noise": exit_noise,
-                     "rel_mse_minus_noise": full["rel_mse"] - fiber_noise - exit_noise}})
+            "today": today, "exit": score(mean, exit_noise)})
 
         write_table(a, rows, made_by)
 

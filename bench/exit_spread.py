@@ -63,6 +63,8 @@ def render(weft, scene, mode, spp, seed, threads, out, made_by=None):
     if done and made_by is not None:
         done = made_by_of(out) == made_by
     if not done:
+        if os.path.exists(stamp):
+            os.remove(stamp)  # the render it named is replaced now
         subprocess.run([weft, "render", scene, "--mode", mode, "--spp", str(spp), "--seed",
                         str(seed), "--threads", str(threads), "--quiet", "--out", out],
                        check=True, stdout=subprocess.DEVNULL)

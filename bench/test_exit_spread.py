@@ -92,6 +92,10 @@ class CachedRenders(unittest.TestCase):
             os.remove(out + ".made-by")
             exit_spread.render(weft, "s.json", "neural", 4, 1, 0, out, "binary-b")
             self.assertEqual(runs(), 3)  # unstamped: made again
+            os.remove(out)
+            exit_spread.render(weft, "s.json", "neural", 4, 1, 0, out)
+            self.assertEqual(runs(), 4)  # made again without a binary named: no stamp left
+            self.assertIsNone(exit_spread.made_by_of(out))
 
 
 if __name__ == "__main__":
